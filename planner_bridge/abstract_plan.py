@@ -1,0 +1,74 @@
+"""The abstract plan: steps, causal links and orderings of a partial-order plan (Sec. 5.2, Fig. 5.6).
+
+Step ids are 1..n in a valid sequential order; producer 0 is the initial state; consumer "goal" is the goal.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Union
+
+INITIAL = 0
+GOAL = "goal"
+
+Consumer = Union[int, str]  # a step id, or GOAL
+
+
+@dataclass(frozen=True)
+class Step:
+    """One ground action of the plan, names as in the PDDL."""
+
+    id: int
+    action: str
+    args: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class CausalLink:
+    """`producer` achieves `fact` (predicate name, then arguments) for `consumer`."""
+
+    producer: int
+    fact: tuple[str, ...]
+    consumer: Consumer
+
+
+@dataclass(frozen=True)
+class AbstractPlan:
+    """A validated partial-order plan with its causal links."""
+
+    domain: str
+    problem: str
+    planner: str
+    steps: tuple[Step, ...]
+    links: tuple[CausalLink, ...]
+    orderings: tuple[tuple[int, int], ...]
+
+    def step(self, step_id: int) -> Step:
+        return self.steps[step_id - 1]
+
+    def links_to(self, consumer: Consumer) -> tuple[CausalLink, ...]:
+        return tuple(link for link in self.links if link.consumer == consumer)
+
+    def to_json(self) -> dict:
+        return {
+            "domain": self.domain,
+            "problem": self.problem,
+            "planner": self.planner,
+            "steps": [{"id": s.id, "action": s.action, "args": list(s.args)} for s in self.steps],
+            "links": [{"from": l.producer, "fact": list(l.fact), "to": l.consumer} for l in self.links],
+            "orderings": [list(o) for o in self.orderings],
+        }
+
+    @classmethod
+    def from_json(cls, data: dict) -> "AbstractPlan":
+        return cls(
+            domain=data["domain"],
+            problem=data["problem"],
+            planner=data["planner"],
+            steps=tuple(Step(int(s["id"]), s["action"], tuple(s["args"])) for s in data["steps"]),
+            links=tuple(
+                CausalLink(int(l["from"]), tuple(l["fact"]), l["to"] if l["to"] == GOAL else int(l["to"]))
+                for l in data["links"]
+            ),
+            orderings=tuple((int(a), int(b)) for a, b in data["orderings"]),
+        )
