@@ -1,0 +1,37 @@
+"""PDDL in, a validated partial-order plan with causal links out (Sec. 5.2 of the dissertation)."""
+
+from planner_bridge.abstract_plan import GOAL, INITIAL, AbstractPlan, CausalLink, Step
+from planner_bridge.bridge import DEFAULT_PLANNER, plan_files, plan_here
+from planner_bridge.bundled import bundled_domains, bundled_problems, resolve_problem
+from planner_bridge.errors import (
+    InputFileError,
+    NoPlanError,
+    PDDLSemanticError,
+    PDDLSyntaxError,
+    PlannerError,
+    PlannerTimeoutError,
+    PlannerUnavailableError,
+)
+from planner_bridge.text import render_text
+
+__all__ = [
+    "GOAL",
+    "INITIAL",
+    "DEFAULT_PLANNER",
+    "AbstractPlan",
+    "CausalLink",
+    "Step",
+    "plan_files",
+    "plan_here",
+    "render_text",
+    "resolve_problem",
+    "bundled_domains",
+    "bundled_problems",
+    "PlannerError",
+    "InputFileError",
+    "PDDLSyntaxError",
+    "PDDLSemanticError",
+    "NoPlanError",
+    "PlannerTimeoutError",
+    "PlannerUnavailableError",
+]

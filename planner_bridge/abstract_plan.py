@@ -49,6 +49,12 @@ class AbstractPlan:
     def links_to(self, consumer: Consumer) -> tuple[CausalLink, ...]:
         return tuple(link for link in self.links if link.consumer == consumer)
 
+    def to_text(self) -> str:
+        """The VHPOP-like text rendering of Fig. 5.6 (see planner_bridge.text)."""
+        from planner_bridge.text import render_text
+
+        return render_text(self)
+
     def to_json(self) -> dict:
         return {
             "domain": self.domain,

@@ -1,0 +1,46 @@
+"""The planner bridge read top to bottom: PDDL files in, a validated partial-order plan with causal links out."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Callable
+
+from planner_bridge.abstract_plan import AbstractPlan
+from planner_bridge.causal import partial_order
+from planner_bridge.reading import check_files, read_problem
+from planner_bridge.solving import solve
+
+DEFAULT_PLANNER = "pyperplan"
+
+
+def plan_files(
+    domain: str | Path, problem: str | Path, planner: str = DEFAULT_PLANNER, timeout: float | None = None
+) -> AbstractPlan:
+    """Plan the PDDL pair: the same files give the same plan on every run (it runs in a child process with a
+    fixed hash seed, see planner_bridge.worker); `timeout` limits the search, in seconds.
+
+    Raises the errors of planner_bridge.errors: InputFileError, PDDLSyntaxError, PDDLSemanticError, NoPlanError,
+    PlannerTimeoutError, PlannerUnavailableError (and PlannerError itself for an engine's failure).
+    """
+    from planner_bridge.worker import plan_in_worker
+
+    if timeout is not None and not timeout > 0:
+        raise ValueError(f"the timeout must be positive, not {timeout}")
+    domain, problem = Path(domain), Path(problem)
+    check_files(domain, problem)  # bad files fail here, fast, before a child process is started
+    return plan_in_worker(domain, problem, planner, timeout)
+
+
+def plan_here(
+    domain: str | Path, problem: str | Path, planner: str = DEFAULT_PLANNER, on_search: Callable[[], None] | None = None
+) -> AbstractPlan:
+    """The pipeline in this process: parse, solve (compiling away what the engine lacks), validate, link.
+
+    Without a fixed PYTHONHASHSEED, the engine may pick a different one of several valid plans on each run.
+    """
+    domain, problem = Path(domain), Path(problem)
+    parsed, domain_name = read_problem(domain, problem)
+    parsed.environment.credits_stream = None  # no engine credits on stdout: `--json` output must be pure JSON
+    sequential = solve(parsed, planner, str(problem), on_search)
+    steps, links, orderings = partial_order(parsed, sequential)
+    return AbstractPlan(domain_name, parsed.name, planner, steps, links, orderings)

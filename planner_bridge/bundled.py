@@ -1,0 +1,50 @@
+"""Find a domain/problem pair from file paths or from the names of a bundled domain and one of its problems."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from planner_bridge.errors import InputFileError
+
+DOMAINS_DIR = Path(__file__).resolve().parent.parent / "domains"  # packaged beside planner_bridge
+DOMAIN_FILE = "domain.pddl"
+PROBLEMS_DIR = "problems"
+
+
+def bundled_domains() -> list[str]:
+    """Names of the bundled domains (folders of `domains/` holding a domain.pddl)."""
+    if not DOMAINS_DIR.is_dir():
+        return []
+    return sorted(d.name for d in DOMAINS_DIR.iterdir() if (d / DOMAIN_FILE).is_file())
+
+
+def bundled_problems(domain: str) -> list[str]:
+    """Names of a bundled domain's problems (the stems of its problems/*.pddl)."""
+    return sorted(p.stem for p in (DOMAINS_DIR / domain / PROBLEMS_DIR).glob("*.pddl"))
+
+
+def _looks_like_path(arg: str) -> bool:
+    return "/" in arg or "\\" in arg or arg.endswith(".pddl")
+
+
+def resolve_problem(domain_arg: str | Path, problem_arg: str | Path) -> tuple[Path, Path]:
+    """(domain file, problem file) for `soccer score`, for two file paths, or for a domain file and the name of
+    a problem in the `problems/` folder beside it. An existing file always wins over a bundled name."""
+    domain_arg, problem_arg = str(domain_arg), str(problem_arg)
+    domain = Path(domain_arg)
+    if not domain.is_file() and not _looks_like_path(domain_arg):
+        if domain_arg not in bundled_domains():
+            raise InputFileError(
+                f"no such file or bundled domain (bundled: {', '.join(bundled_domains()) or 'none'})", domain_arg
+            )
+        domain = DOMAINS_DIR / domain_arg / DOMAIN_FILE
+    problem = Path(problem_arg)
+    if not problem.is_file() and not _looks_like_path(problem_arg):
+        candidate = domain.parent / PROBLEMS_DIR / f"{problem_arg}.pddl"
+        if not candidate.is_file():
+            known = sorted(p.stem for p in (domain.parent / PROBLEMS_DIR).glob("*.pddl"))
+            raise InputFileError(
+                f"no such file, nor a problem of {domain} (known: {', '.join(known) or 'none'})", problem_arg
+            )
+        problem = candidate
+    return domain, problem

@@ -1,0 +1,189 @@
+"""Causal links and ordering constraints of a partial-order plan, built from a valid sequential plan.
+
+For each positive precondition of each step (and each goal fact) the producer is the latest earlier step that
+adds the fact, or the initial state (0). The orderings keep every producer before its consumer and every step
+that deletes a linked fact outside the link (before the producer or after the consumer, on the side where the
+sequential plan has it); negative preconditions are protected the same way against steps that add the fact.
+Then no link is threatened and every linearization of the orderings is a valid plan (Sec. 5.2, Fig. 5.6).
+Plans of actions with conditional or quantified effects, or with conditions other than conjunctions of
+literals, keep their sequential order: a total order is a valid partial order and cannot threaten a link.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from planner_bridge.abstract_plan import GOAL, INITIAL, CausalLink, Consumer, Step
+
+Fact = tuple[str, ...]
+
+
+@dataclass
+class Needs:
+    """What a step (or the goal) requires: positive facts with their ground expressions, negated facts."""
+
+    positive: list[tuple[Fact, object]] = field(default_factory=list)
+    negative: list[Fact] = field(default_factory=list)
+    simple: bool = True  # a conjunction of literals only
+
+
+@dataclass
+class GroundStep:
+    step: Step
+    needs: Needs
+    adds: set[Fact]
+    deletes: set[Fact]
+    simple: bool
+
+
+def _fact(node) -> Fact | None:
+    if not node.is_fluent_exp() or not all(arg.is_object_exp() for arg in node.args):
+        return None
+    return (node.fluent().name, *(arg.object().name for arg in node.args))
+
+
+def _needs(node, needs: Needs) -> Needs:
+    """Collect the literals of a ground condition; anything else marks it as not simple."""
+    if node.is_and():
+        for arg in node.args:
+            _needs(arg, needs)
+    elif node.is_bool_constant() and node.bool_constant_value():
+        pass
+    elif _fact(node) is not None:
+        needs.positive.append((_fact(node), node))
+    elif node.is_not() and _fact(node.arg(0)) is not None:
+        needs.negative.append(_fact(node.arg(0)))
+    else:
+        needs.simple = False
+    return needs
+
+
+def ground_steps(plan) -> list[GroundStep]:
+    """Substitute each action instance's objects into its action's conditions and effects."""
+    steps = []
+    for number, instance in enumerate(plan.actions, start=1):
+        action = instance.action
+        manager = action.environment.expression_manager
+        binding = {manager.ParameterExp(p): v for p, v in zip(action.parameters, instance.actual_parameters)}
+        needs = Needs()
+        for condition in action.preconditions:
+            _needs(condition.substitute(binding), needs)
+        adds, deletes, simple = set(), set(), needs.simple
+        for effect in action.effects:
+            fact = _fact(effect.fluent.substitute(binding))
+            if effect.is_conditional() or effect.is_forall() or fact is None or not effect.value.is_bool_constant():
+                simple = False
+                continue
+            (adds if effect.value.bool_constant_value() else deletes).add(fact)
+        deletes -= adds  # PDDL applies deletes before adds
+        args = tuple(str(p.object().name) if p.is_object_exp() else str(p) for p in instance.actual_parameters)
+        steps.append(GroundStep(Step(number, action.name, args), needs, adds, deletes, simple))
+    return steps
+
+
+def _goal_needs(problem) -> Needs:
+    needs = Needs()
+    for goal in problem.goals:
+        _needs(goal, needs)
+    return needs
+
+
+def _unique(facts):
+    seen = []
+    for fact in facts:
+        if fact not in seen:
+            seen.append(fact)
+    return seen
+
+
+def _consumers(steps: list[GroundStep], goal: Needs):
+    """(consumer id, sequence position, needs) for every step, then the goal at position n + 1."""
+    yield from ((s.step.id, s.step.id, s.needs) for s in steps)
+    yield GOAL, len(steps) + 1, goal
+
+
+def _protect(steps, producer: int, at: int, threats, orderings: set[tuple[int, int]]) -> None:
+    """Order producer before the consumer at position `at`, and each threat outside the link."""
+    n = len(steps)
+    if producer != INITIAL and at <= n:
+        orderings.add((producer, at))
+    for t in threats:
+        if t in (producer, at):
+            continue
+        if t < producer:
+            orderings.add((t, producer))
+        elif t > at and at <= n:
+            orderings.add((at, t))
+        elif producer < t < at:  # impossible in a valid sequential plan
+            raise AssertionError(f"step {t} threatens a link from {producer} to {at}")
+
+
+def partial_order(problem, plan) -> tuple[tuple[Step, ...], tuple[CausalLink, ...], tuple[tuple[int, int], ...]]:
+    """Steps, causal links and (transitively reduced) orderings of the validated sequential `plan`."""
+    steps = ground_steps(plan)
+    goal = _goal_needs(problem)
+    if not (goal.simple and all(s.simple for s in steps)):
+        return _total_order(problem, plan, steps, goal)
+    links: list[CausalLink] = []
+    orderings: set[tuple[int, int]] = set()
+    for consumer, at, needs in _consumers(steps, goal):
+        for fact in _unique(f for f, _ in needs.positive):
+            producer = max((s.step.id for s in steps[: at - 1] if fact in s.adds), default=INITIAL)
+            links.append(CausalLink(producer, fact, consumer))
+            _protect(steps, producer, at, [s.step.id for s in steps if fact in s.deletes], orderings)
+        for fact in _unique(needs.negative):
+            producer = max((s.step.id for s in steps[: at - 1] if fact in s.deletes), default=INITIAL)
+            _protect(steps, producer, at, [s.step.id for s in steps if fact in s.adds], orderings)
+    return tuple(s.step for s in steps), _sorted(links), transitive_reduction(orderings)
+
+
+def _total_order(problem, plan, steps, goal):
+    """Sequential order kept; each positive conjunct is linked to the last step that made it true."""
+    from unified_planning.shortcuts import SequentialSimulator
+
+    with SequentialSimulator(problem) as simulator:
+        states = [simulator.get_initial_state()]
+        for instance in plan.actions:
+            states.append(simulator.apply(states[-1], instance))
+
+    def holds(node, index: int) -> bool:
+        return states[index].get_value(node).bool_constant_value()
+
+    links = []
+    for consumer, at, needs in _consumers(steps, goal):
+        for fact, node in {f: n for f, n in needs.positive}.items():
+            made_true = [k for k in range(1, at) if holds(node, k) and not holds(node, k - 1)]
+            links.append(CausalLink(made_true[-1] if made_true else INITIAL, fact, consumer))
+    chain = tuple((k, k + 1) for k in range(1, len(steps)))
+    return tuple(s.step for s in steps), _sorted(links), chain
+
+
+def _sorted(links: list[CausalLink]) -> tuple[CausalLink, ...]:
+    """Links grouped by consumer (steps in order, then the goal), each group by producer; stable otherwise."""
+
+    def key(link: CausalLink) -> tuple[int, int]:
+        return (10**9 if link.consumer == GOAL else int(link.consumer), link.producer)
+
+    return tuple(sorted(links, key=key))
+
+
+def transitive_reduction(orderings: set[tuple[int, int]]) -> tuple[tuple[int, int], ...]:
+    """The fewest pairs with the same transitive closure, sorted (orderings always go from lower to higher id)."""
+    after: dict[int, set[int]] = {}
+    for a, b in orderings:
+        after.setdefault(a, set()).add(b)
+
+    def reachable(start: int) -> set[int]:
+        seen, todo = set(), list(after.get(start, ()))
+        while todo:
+            node = todo.pop()
+            if node not in seen:
+                seen.add(node)
+                todo.extend(after.get(node, ()))
+        return seen
+
+    kept = set()
+    for a, b in orderings:
+        if not any(b in reachable(c) for c in after[a] if c != b):
+            kept.add((a, b))
+    return tuple(sorted(kept))

@@ -1,0 +1,192 @@
+"""Semantic checks of a domain/problem pair before unified-planning reads it.
+
+unified-planning reports some of these mistakes with an unclear message or none at all (an undefined type in
+a problem, a problem written for another domain), so we check them here, each naming the file, line and column:
+undefined predicates, types, objects and variables, wrong arity, and a problem naming another domain.
+Only the usual PDDL subset is checked; anything unfamiliar is left for the PDDL reader to judge.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from planner_bridge.errors import PDDLSemanticError, PDDLSyntaxError
+from planner_bridge.sexpr import Expr, SList, Symbol
+
+CONNECTIVES = {"and", "or", "not", "imply"}
+QUANTIFIERS = {"forall", "exists"}
+NUMERIC = {"=", "<", ">", "<=", ">=", "increase", "decrease", "assign", "scale-up", "scale-down"}
+SKIPPED = {"preference"}  # PDDL3 preferences: left to the reader
+BUILTIN_TYPES = {"object", "number"}
+
+
+@dataclass
+class DomainSignature:
+    """What a domain declares: its name, types, constants, predicates (with arity) and function names."""
+
+    file: str
+    name: str = ""
+    types: set[str] = field(default_factory=lambda: set(BUILTIN_TYPES))
+    constants: set[str] = field(default_factory=set)
+    predicates: dict[str, int] = field(default_factory=dict)
+    functions: set[str] = field(default_factory=set)
+
+
+def _sections(define: SList) -> list[SList]:
+    return [item for item in define.items[1:] if isinstance(item, SList)]
+
+
+def _typed_names(items: tuple[Expr, ...]) -> list[tuple[Symbol, Expr | None]]:
+    """Split `a b - t c` into [(a, t), (b, t), (c, None)]; a type may be a symbol or (either ...)."""
+    result: list[tuple[Symbol, Expr | None]] = []
+    pending: list[Symbol] = []
+    i = 0
+    while i < len(items):
+        item = items[i]
+        if isinstance(item, Symbol) and item.text == "-" and i + 1 < len(items):
+            result.extend((name, items[i + 1]) for name in pending)
+            pending, i = [], i + 2
+            continue
+        if isinstance(item, Symbol):
+            pending.append(item)
+        i += 1
+    result.extend((name, None) for name in pending)
+    return result
+
+
+def _check_type(type_expr: Expr | None, sig: DomainSignature, file: str) -> None:
+    if type_expr is None:
+        return
+    names = [type_expr] if isinstance(type_expr, Symbol) else [s for s in type_expr.items[1:] if isinstance(s, Symbol)]
+    for name in names:
+        if name.text not in sig.types:
+            raise PDDLSemanticError(f"undefined type '{name.text}'", file, name.line, name.col)
+
+
+def _render(expr: Expr) -> str:
+    if isinstance(expr, Symbol):
+        return expr.text
+    return "(" + " ".join(_render(item) for item in expr.items) + ")"
+
+
+def _check_atom(atom: SList, sig: DomainSignature, scope: set[str], objects: set[str], file: str) -> None:
+    name = atom.head
+    if name is None:
+        raise PDDLSyntaxError(f"syntax error: expected a predicate name in {_render(atom)}", file, atom.line, atom.col)
+    if name in sig.functions:
+        return
+    if name not in sig.predicates:
+        raise PDDLSemanticError(f"undefined predicate '{name}' in {_render(atom)}", file, atom.line, atom.col)
+    args = atom.items[1:]
+    if len(args) != sig.predicates[name]:
+        raise PDDLSemanticError(
+            f"predicate '{name}' takes {sig.predicates[name]} argument(s) but {_render(atom)} gives {len(args)}",
+            file, atom.line, atom.col,
+        )
+    for arg in args:
+        if isinstance(arg, SList):
+            continue  # a function term: left to the reader
+        if arg.text.startswith("?"):
+            if arg.text not in scope:
+                raise PDDLSemanticError(f"undefined variable '{arg.text}' in {_render(atom)}", file, arg.line, arg.col)
+        elif arg.text not in objects:
+            raise PDDLSemanticError(f"undefined object '{arg.text}' in {_render(atom)}", file, arg.line, arg.col)
+
+
+def _check_formula(expr: Expr, sig: DomainSignature, scope: set[str], objects: set[str], file: str) -> None:
+    """Walk a condition or effect; check every atom against the domain's predicates."""
+    if not isinstance(expr, SList) or not expr.items:
+        return  # `()` is the empty condition; a bare symbol is left to the reader
+    head, items = expr.head, expr.items
+    if head in CONNECTIVES or head == "when":
+        for item in items[1:]:
+            _check_formula(item, sig, scope, objects, file)
+    elif head in QUANTIFIERS and len(items) == 3 and isinstance(items[1], SList):
+        variables = _typed_names(items[1].items)
+        for _, type_expr in variables:
+            _check_type(type_expr, sig, file)
+        _check_formula(items[2], sig, scope | {v.text for v, _ in variables}, objects, file)
+    elif head in ("at", "over") and len(items) == 3 and isinstance(items[1], Symbol) and (
+        items[1].text in ("start", "end", "all")
+    ):
+        _check_formula(items[2], sig, scope, objects, file)  # durative: (at start F), (over all F)
+    elif head in NUMERIC or head in SKIPPED:
+        return
+    else:
+        _check_atom(expr, sig, scope, objects, file)
+
+
+def _keyword_values(items: tuple[Expr, ...]) -> dict[str, Expr]:
+    values: dict[str, Expr] = {}
+    for key, value in zip(items, items[1:]):
+        if isinstance(key, Symbol) and key.text.startswith(":"):
+            values[key.text] = value
+    return values
+
+
+def check_domain(define: SList, file: str) -> DomainSignature:
+    """Check a domain's declarations and action bodies; return what it declares for checking problems."""
+    sig = DomainSignature(file)
+    sections = _sections(define)
+    for section in sections:
+        if section.head == "domain" and len(section.items) == 2 and isinstance(section.items[1], Symbol):
+            sig.name = section.items[1].text
+        elif section.head == ":types":
+            for name, parent in _typed_names(section.items[1:]):
+                sig.types.add(name.text)
+                if isinstance(parent, Symbol):
+                    sig.types.add(parent.text)
+    for section in sections:
+        if section.head == ":constants":
+            for name, type_expr in _typed_names(section.items[1:]):
+                _check_type(type_expr, sig, file)
+                sig.constants.add(name.text)
+        elif section.head == ":predicates":
+            for predicate in section.items[1:]:
+                if isinstance(predicate, SList) and predicate.head:
+                    params = _typed_names(predicate.items[1:])
+                    for _, type_expr in params:
+                        _check_type(type_expr, sig, file)
+                    sig.predicates[predicate.head] = len(params)
+        elif section.head == ":functions":
+            sig.functions |= {f.head for f in section.items[1:] if isinstance(f, SList) and f.head}
+    for section in sections:
+        if section.head in (":action", ":durative-action"):
+            values = _keyword_values(section.items[2:])
+            params = values.get(":parameters")
+            typed = _typed_names(params.items) if isinstance(params, SList) else []
+            for _, type_expr in typed:
+                _check_type(type_expr, sig, file)
+            scope = {name.text for name, _ in typed}
+            for key in (":precondition", ":condition", ":effect"):
+                if key in values:
+                    _check_formula(values[key], sig, scope, sig.constants, file)
+        elif section.head == ":derived" and len(section.items) == 3 and isinstance(section.items[1], SList):
+            scope = {name.text for name, _ in _typed_names(section.items[1].items[1:])}
+            _check_formula(section.items[2], sig, scope, sig.constants, file)
+    return sig
+
+
+def check_problem(define: SList, sig: DomainSignature, file: str) -> None:
+    """Check that a problem belongs to the domain and uses only what the domain and its objects declare."""
+    sections = _sections(define)
+    objects = set(sig.constants)
+    for section in sections:
+        if section.head == ":domain" and len(section.items) == 2 and isinstance(section.items[1], Symbol):
+            named = section.items[1]
+            if sig.name and named.text != sig.name:
+                raise PDDLSemanticError(
+                    f"the problem is for domain '{named.text}', but {sig.file} defines domain '{sig.name}'",
+                    file, named.line, named.col,
+                )
+        elif section.head == ":objects":
+            for name, type_expr in _typed_names(section.items[1:]):
+                _check_type(type_expr, sig, file)
+                objects.add(name.text)
+    for section in sections:
+        if section.head == ":init":
+            for fact in section.items[1:]:
+                _check_formula(fact, sig, set(), objects, file)
+        elif section.head == ":goal":
+            for goal in section.items[1:]:
+                _check_formula(goal, sig, set(), objects, file)

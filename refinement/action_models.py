@@ -1,0 +1,218 @@
+"""Learned action models (Chapter 4) as frozen values with a JSON form, and their loaders.
+
+An ActionModel predicts how long an action takes from its parameters (x, y, phi, v, xg, yg, phig, vg):
+the parameters are mapped to a feature space (Table 4.1) and a model tree predicts the duration there.
+A CollisionModel predicts whether goToPose reaches a pose at the ball without bumping it first (Sec. 4.2.2).
+Files are JSON with a schema key, never pickle: loading a model must not run code.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from refinement.decision_tree import DecisionTree, LeafBox
+from refinement.errors import ModelFileError
+from refinement.features import FEATURE_SETS, compute_features
+from refinement.model_tree import ModelTree
+
+ACTION_MODEL_SCHEMA = "tailor.action_model/1"
+COLLISION_MODEL_SCHEMA = "tailor.collision_model/1"
+COLLISION_SUFFIX = ".collision.json"
+COLLISION_FILE = "goToPose" + COLLISION_SUFFIX
+
+
+@dataclass(frozen=True, eq=False)
+class ActionModel:
+    """Predicts an action's execution duration (s) from its parameters with a model tree over features."""
+
+    action: str
+    feature_set: str
+    feature_names: tuple[str, ...]
+    duration: ModelTree
+    n_i: int  # intermediate examples per episode it was trained with (Sec. 4.1.2)
+    report: dict = field(default_factory=dict)
+
+    def features(self, params: np.ndarray) -> np.ndarray:
+        """(n, 8) action parameters -> (n, f) features."""
+        return compute_features(self.feature_set, params)
+
+    def predict_duration(self, params: np.ndarray) -> np.ndarray:
+        """Predicted duration (s) for each row of (n, 8) action parameters."""
+        return np.asarray(self.duration.predict(self.features(params)), dtype=float)
+
+    def rules_text(self) -> str:
+        return self.duration.export_text(list(self.feature_names))
+
+    def to_json(self) -> dict:
+        return {
+            "schema": ACTION_MODEL_SCHEMA,
+            "action": self.action,
+            "feature_set": self.feature_set,
+            "feature_names": list(self.feature_names),
+            "n_i": self.n_i,
+            "rules": self.rules_text().splitlines(),
+            "duration": self.duration.to_json(),
+            "report": self.report,
+        }
+
+    @classmethod
+    def from_json(cls, data: dict, source: str) -> ActionModel:
+        """Build from parsed JSON; anything malformed raises ModelFileError naming `source`."""
+        _check_schema(data, ACTION_MODEL_SCHEMA, source)
+        action, feature_set, names = _common_fields(data, source)
+        n_i = data.get("n_i")
+        if not isinstance(n_i, int) or isinstance(n_i, bool) or n_i < 1:
+            raise ModelFileError(f"'n_i' must be a positive integer, got {n_i!r}", file=source)
+        if not isinstance(data.get("duration"), dict):
+            raise ModelFileError("'duration' must be a model tree object", file=source)
+        try:
+            tree = ModelTree.from_json(data["duration"], source)
+        except ModelFileError:
+            raise
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ModelFileError(f"invalid duration model tree: {exc}", file=source) from None
+        n_in = getattr(tree, "n_features_in_", None)
+        if n_in != len(names):
+            raise ModelFileError(f"duration model tree takes {n_in} features, feature set has {len(names)}", file=source)
+        return cls(action, feature_set, names, tree, n_i, _report(data, source))
+
+
+@dataclass(frozen=True, eq=False)
+class CollisionModel:
+    """Predicts whether an action reaches its goal pose at the ball without bumping the ball (Sec. 4.2.2).
+
+    The decision tree was trained with a cost matrix that makes it pessimistic: where in doubt it predicts
+    a collision, since a wrongly predicted success costs more (an asserted subgoal only costs some time).
+    """
+
+    action: str
+    feature_set: str
+    feature_names: tuple[str, ...]
+    tree: DecisionTree
+    report: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        inner = self.tree.children_left != -1
+        if np.any((self.tree.feature[inner] < 0) | (self.tree.feature[inner] >= len(self.feature_names))):
+            raise ValueError(f"a node tests a feature outside 0..{len(self.feature_names) - 1}")
+
+    def features(self, params: np.ndarray) -> np.ndarray:
+        return compute_features(self.feature_set, params)
+
+    def predict_success(self, params: np.ndarray) -> np.ndarray:
+        """True where the action is predicted to reach its goal without a collision, per row of (n, 8)."""
+        return self.tree.predict(self.features(params))
+
+    def regions(self) -> list[LeafBox]:
+        """The tree's leaves as boxes in feature space (lower < x <= upper), each predicting success or not."""
+        return self.tree.leaf_boxes(len(self.feature_names))
+
+    def rules_text(self) -> str:
+        return self.tree.export_text(self.feature_names)
+
+    def to_json(self) -> dict:
+        return {
+            "schema": COLLISION_MODEL_SCHEMA,
+            "action": self.action,
+            "feature_set": self.feature_set,
+            "feature_names": list(self.feature_names),
+            "rules": self.rules_text().splitlines(),
+            "tree": self.tree.to_json(),
+            "report": self.report,
+        }
+
+    @classmethod
+    def from_json(cls, data: dict, source: str) -> CollisionModel:
+        _check_schema(data, COLLISION_MODEL_SCHEMA, source)
+        action, feature_set, names = _common_fields(data, source)
+        try:
+            tree = DecisionTree.from_json(data["tree"])
+            return cls(action, feature_set, names, tree, _report(data, source))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ModelFileError(f"invalid decision tree: {exc}", file=source) from None
+
+
+def load_action_models(models_dir: Path, actions: tuple[str, ...] | None = None) -> dict[str, ActionModel]:
+    """Every duration model `<action>.json` in `models_dir`, keyed by action (`actions` must all be present)."""
+    models_dir = Path(models_dir)
+    if not models_dir.is_dir():
+        raise ModelFileError("model directory not found", file=str(models_dir))
+    if actions is not None:
+        paths = [models_dir / f"{action}.json" for action in actions]
+    else:
+        paths = sorted(p for p in models_dir.glob("*.json") if not p.name.endswith(COLLISION_SUFFIX))
+        if not paths:
+            raise ModelFileError("no action model files (<action>.json)", file=str(models_dir))
+    models = {}
+    for path in paths:
+        model = ActionModel.from_json(read_json(path), str(path))
+        if model.action != path.name.removesuffix(".json"):
+            raise ModelFileError(f"holds the model of {model.action!r}, not of its file name's action", file=str(path))
+        models[model.action] = model
+    return models
+
+
+def load_collision_model(path: Path) -> CollisionModel:
+    """The ball-collision classifier, normally `<models_dir>/goToPose.collision.json`."""
+    return CollisionModel.from_json(read_json(Path(path)), str(path))
+
+
+def read_json(path: Path) -> dict:
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ModelFileError("file not found", file=str(path)) from None
+    except OSError as exc:
+        raise ModelFileError(f"cannot read: {exc.strerror}", file=str(path)) from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ModelFileError(f"not JSON: {exc.msg}", file=str(path), line=exc.lineno, col=exc.colno) from None
+    if not isinstance(data, dict):
+        raise ModelFileError("expected a JSON object", file=str(path))
+    return data
+
+
+def write_json_atomic(path: Path, data: dict) -> None:
+    """Write JSON to a temp file beside `path`, then rename it over `path`: never a half-written file."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            json.dump(data, handle, indent=1)
+            handle.write("\n")
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _check_schema(data: dict, schema: str, source: str) -> None:
+    if data.get("schema") != schema:
+        raise ModelFileError(f"schema is {data.get('schema')!r}, expected {schema!r}", file=source)
+
+
+def _common_fields(data: dict, source: str) -> tuple[str, str, tuple[str, ...]]:
+    action, feature_set, names = data.get("action"), data.get("feature_set"), data.get("feature_names")
+    if not isinstance(action, str) or not action:
+        raise ModelFileError("'action' must be a non-empty string", file=source)
+    if feature_set not in FEATURE_SETS:
+        raise ModelFileError(f"unknown feature set {feature_set!r} (known: {', '.join(FEATURE_SETS)})", file=source)
+    expected = FEATURE_SETS[feature_set][0]
+    if not isinstance(names, list) or tuple(names) != expected:
+        raise ModelFileError(f"feature_names {names!r} do not match feature set {feature_set!r} {list(expected)}", file=source)
+    return action, feature_set, expected
+
+
+def _report(data: dict, source: str) -> dict:
+    report = data.get("report", {})
+    if not isinstance(report, dict):
+        raise ModelFileError("'report' must be an object", file=source)
+    return report

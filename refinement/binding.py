@@ -1,0 +1,254 @@
+"""The action library binding (Sec. 5.3): a declarative TOML file per domain, `domains/<name>/actions.toml`.
+
+It says which executable action (a `sims.ACTIONS` name) each PDDL action maps to and which PDDL argument
+supplies each of its parameter groups, what each predicate implies about the continuous values of its
+arguments (values read from the belief state, ranges, scene objects), and the ranges of each PDDL type that
+apply where no predicate says anything. Binding a new domain to existing actions needs no Python.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+from refinement.errors import BindingError, TailorError
+from sims import ACTIONS, ActionSpec
+
+SCHEMA = 1
+BINDING_FILE = "actions.toml"
+GROUPS = ("observed", "internal")  # parameter groups of an ActionSpec, in parameter order
+DEFAULT_TYPE = "default"  # [types.default]: ranges for objects of a type the binding does not name
+QUANTITIES: tuple[str, ...] = tuple(dict.fromkeys(q for spec in ACTIONS.values() for q in spec.quantities))
+NAMED_BOUNDS = {"pi": math.pi, "-pi": -math.pi}  # strings a range bound may be written as
+
+Range = tuple[float, float]
+
+_TOML_WHERE = re.compile(r"^(?P<msg>.*) \(at line (?P<line>\d+), column (?P<col>\d+)\)$")
+
+
+def read_toml(path: Path, error: type[TailorError], what: str) -> dict[str, Any]:
+    """Parse a TOML file, turning a missing file or a syntax error into `error` naming the file and line."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise error(f"{what} file not found", file=str(path)) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise error(f"cannot read {what} file: {exc}", file=str(path)) from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        where = _TOML_WHERE.match(str(exc))
+        if where:
+            raise error(f"invalid TOML: {where['msg']}", file=str(path), line=int(where["line"]),
+                        col=int(where["col"])) from None
+        raise error(f"invalid TOML: {exc}", file=str(path)) from None
+
+
+@dataclass(frozen=True)
+class ActionBinding:
+    """A PDDL action bound to an executable action; `args`: parameter group -> index of the PDDL argument."""
+
+    pddl: str
+    executable: str
+    args: Mapping[str, int]
+
+    @property
+    def spec(self) -> ActionSpec:
+        return ACTIONS[self.executable]
+
+
+@dataclass(frozen=True)
+class PredicateBinding:
+    """What a predicate implies about the continuous values of the objects it names.
+
+    `read`: quantities taken from the belief state when the fact holds in the initial state (causal link
+    from step 0); `ranges`: the interval each quantity lies in whenever the fact holds; `scene`: the scene
+    object the fact places when it holds initially; `args`: the argument positions it applies to (None: all).
+    """
+
+    name: str
+    read: tuple[str, ...]
+    ranges: Mapping[str, Range]
+    scene: str | None
+    args: tuple[int, ...] | None
+
+    def objects(self, fact: Sequence[str], file: str | None) -> tuple[str, ...]:
+        """The objects of `fact` (predicate name first) this binding speaks about."""
+        arguments = tuple(fact[1:])
+        if self.args is None:
+            return arguments
+        for index in self.args:
+            if index >= len(arguments):
+                raise BindingError(f"[predicates.{self.name}] args index {index} is out of range for "
+                                   f"({' '.join(fact)}) with {len(arguments)} argument(s)", file=file)
+        return tuple(arguments[i] for i in self.args)
+
+
+@dataclass(frozen=True)
+class Binding:
+    """The action library binding of one domain."""
+
+    file: str | None
+    domain: str | None
+    actions: Mapping[str, ActionBinding]
+    predicates: Mapping[str, PredicateBinding]
+    types: Mapping[str, Mapping[str, Range]]
+
+    def action(self, name: str, step: str = "") -> ActionBinding:
+        """The binding of PDDL action `name`; a BindingError naming it if the binding does not bind it."""
+        try:
+            return self.actions[name.lower()]
+        except KeyError:
+            where = f"plan step {step}: " if step else ""
+            raise BindingError(f"{where}PDDL action '{name}' is not bound (add an [actions.{name.lower()}] "
+                               "table)", file=self.file) from None
+
+    def predicate(self, name: str) -> PredicateBinding | None:
+        """The binding of a predicate, or None: a predicate the binding does not name constrains nothing."""
+        return self.predicates.get(name.lower())
+
+    def type_range(self, types: Sequence[str], quantity: str) -> tuple[Range, str] | None:
+        """The default range of `quantity` along `types` (most specific first), and the table it came from."""
+        for name in types:
+            table = self.types.get(name)
+            if table is not None and quantity in table:
+                return table[quantity], f"[types.{name}]"
+        return None
+
+
+def load_binding(path: Path | str) -> Binding:
+    """Read and validate an action library binding file."""
+    file = str(path)
+    data = read_toml(Path(path), BindingError, "action library binding")
+    return parse_binding(data, file)
+
+
+def load_domain_binding(domain_dir: Path | str) -> Binding:
+    """The binding of the domain in `domain_dir` (its `actions.toml`)."""
+    return load_binding(Path(domain_dir) / BINDING_FILE)
+
+
+def parse_binding(data: Mapping[str, Any], file: str | None = None) -> Binding:
+    """Validate the parsed TOML of a binding; every problem is a one-line BindingError naming `file`."""
+
+    def fail(message: str) -> BindingError:
+        return BindingError(message, file=file)
+
+    _check_keys(data, {"schema", "domain", "actions", "predicates", "types"}, "top level", fail)
+    if data.get("schema", SCHEMA) != SCHEMA:
+        raise fail(f"unsupported schema {data['schema']!r} (expected {SCHEMA})")
+    domain = data.get("domain")
+    if domain is not None and not isinstance(domain, str):
+        raise fail("'domain' must be a string")
+    actions = {name.lower(): _action(name, table, fail) for name, table in _tables(data, "actions", fail)}
+    predicates = {name.lower(): _predicate(name, table, fail)
+                  for name, table in _tables(data, "predicates", fail)}
+    types = {name: MappingProxyType(_ranges(f"[types.{name}]", table, set(), fail))
+             for name, table in _tables(data, "types", fail)}
+    return Binding(file, domain, MappingProxyType(actions), MappingProxyType(predicates),
+                   MappingProxyType(types))
+
+
+def _tables(data: Mapping[str, Any], key: str, fail) -> list[tuple[str, Mapping[str, Any]]]:
+    section = data.get(key, {})
+    if not isinstance(section, dict):
+        raise fail(f"'{key}' must be a table of tables ([{key}.NAME])")
+    for name, table in section.items():
+        if not isinstance(table, dict):
+            raise fail(f"[{key}.{name}] must be a table")
+    return list(section.items())
+
+
+def _check_keys(table: Mapping[str, Any], allowed: set[str], where: str, fail) -> None:
+    for key in table:
+        if key not in allowed:
+            raise fail(f"{where}: unknown key '{key}' (expected one of {', '.join(sorted(allowed))})")
+
+
+def _index(where: str, value: Any, fail) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise fail(f"{where} must be a PDDL argument index (an integer >= 0), not {value!r}")
+    return value
+
+
+def _action(name: str, table: Mapping[str, Any], fail) -> ActionBinding:
+    where = f"[actions.{name}]"
+    _check_keys(table, {"executable", *GROUPS}, where, fail)
+    executable = table.get("executable")
+    if executable not in ACTIONS:
+        raise fail(f"{where} executable = {executable!r} is not an executable action "
+                   f"(known: {', '.join(ACTIONS)})")
+    spec = ACTIONS[executable]
+    args = {}
+    for group in GROUPS:
+        has_parameters = bool(getattr(spec, group))
+        if group in table and not has_parameters:
+            raise fail(f"{where} {group}: {executable} has no {group} parameters")
+        if has_parameters:
+            if group not in table:
+                raise fail(f"{where} missing '{group}': the PDDL argument index that supplies "
+                           f"{executable}'s {group} parameters {', '.join(getattr(spec, group))}")
+            args[group] = _index(f"{where} {group}", table[group], fail)
+    return ActionBinding(name.lower(), executable, MappingProxyType(args))
+
+
+def _predicate(name: str, table: Mapping[str, Any], fail) -> PredicateBinding:
+    where = f"[predicates.{name}]"
+    extra = {"read", "scene", "args"}
+    read = table.get("read", [])
+    if not isinstance(read, list) or not all(isinstance(q, str) for q in read):
+        raise fail(f"{where} read must be a list of quantity names")
+    for quantity in read:
+        if quantity not in QUANTITIES:
+            raise fail(f"{where} read: unknown quantity '{quantity}' (known: {', '.join(QUANTITIES)})")
+    if len(set(read)) != len(read):
+        raise fail(f"{where} read names a quantity twice")
+    scene = table.get("scene")
+    if scene is not None and (not isinstance(scene, str) or not scene):
+        raise fail(f"{where} scene must be the name of a scene object, e.g. \"robot\"")
+    if scene is not None and not read:
+        raise fail(f"{where} scene = {scene!r} needs a read list (the quantities that place the {scene})")
+    args = table.get("args")
+    if args is not None:
+        if not isinstance(args, list) or not args:
+            raise fail(f"{where} args must be a non-empty list of argument indices")
+        args = tuple(_index(f"{where} args", a, fail) for a in args)
+    ranges = _ranges(where, table, extra, fail)
+    return PredicateBinding(name.lower(), tuple(read), MappingProxyType(ranges), scene, args)
+
+
+def _ranges(where: str, table: Mapping[str, Any], extra: set[str], fail) -> dict[str, Range]:
+    ranges = {}
+    for key, value in table.items():
+        if key in extra:
+            continue
+        if key not in QUANTITIES:
+            allowed = ", ".join([*sorted(extra), *QUANTITIES])
+            raise fail(f"{where}: unknown key '{key}' (expected one of {allowed})")
+        ranges[key] = _range(f"{where} {key}", value, fail)
+    return ranges
+
+
+def _range(where: str, value: Any, fail) -> Range:
+    if not isinstance(value, list) or len(value) != 2:
+        raise fail(f"{where} must be a range [low, high], not {value!r}")
+    low, high = (_bound(where, v, fail) for v in value)
+    if low > high:
+        raise fail(f"{where} = [{low:g}, {high:g}] is empty (low > high)")
+    return low, high
+
+
+def _bound(where: str, value: Any, fail) -> float:
+    if isinstance(value, str) and value.strip().lower() in NAMED_BOUNDS:
+        return NAMED_BOUNDS[value.strip().lower()]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise fail(f"{where}: {value!r} is not a number (or \"pi\" / \"-pi\")")
+    if not math.isfinite(value):
+        raise fail(f"{where}: {value!r} is not a finite number")
+    return float(value)

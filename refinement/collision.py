@@ -1,0 +1,141 @@
+"""The ball-collision classifier of Sec. 4.2.2: does goToPose reach a pose at the ball without bumping it?
+
+A scikit-learn decision tree on the goToPose features, made pessimistic by a cost matrix: predicting
+success for an episode that collides costs COST_FALSE_SUCCESS times as much as predicting a collision for
+one that succeeds. A tree learner takes a cost matrix by reweighting the examples by the cost of
+misclassifying them (Witten and Frank, 2005), here `class_weight={fail: cost, success: 1}`.
+The cost and the leaf size are chosen by stratified cross-validation on the training episodes; the tree is
+then evaluated on fresh episodes as a confusion matrix (Table 4.4).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from sklearn.model_selection import StratifiedKFold
+from sklearn.tree import DecisionTreeClassifier
+
+from refinement.action_models import CollisionModel
+from refinement.decision_tree import DecisionTree
+from refinement.errors import DataError
+from refinement.features import compute_features, feature_names, first_examples
+from sims.episode import Episode
+
+FAIL, SUCCESS = 0, 1
+COSTS = (1.0, 2.0, 3.0, 5.0, 8.0)  # cost of a false "success" relative to a false "fail"
+MIN_SAMPLES_LEAF = (2, 5, 10, 20)
+CV_FOLDS = 5
+TARGET_FALSE_SUCCESS = 0.01  # cross-validated share of failures predicted to succeed a candidate may have
+
+
+@dataclass(frozen=True)
+class CollisionTraining:
+    model: CollisionModel
+    report: dict
+
+
+def labels(episodes: list[Episode]) -> np.ndarray:
+    """1 where the episode reached its pose (success), 0 where it failed (bumped the ball, timed out)."""
+    return np.array([SUCCESS if e.succeeded else FAIL for e in episodes])
+
+
+def confusion(predicted: np.ndarray, observed: np.ndarray) -> dict:
+    """Counts and shares of Table 4.4: rows predicted, columns observed."""
+    predicted, observed = np.asarray(predicted, dtype=int), np.asarray(observed, dtype=int)
+    n = len(observed)
+    counts = {
+        f"predicted_{p}_observed_{o}": int(np.sum((predicted == pv) & (observed == ov)))
+        for p, pv in (("fail", FAIL), ("success", SUCCESS))
+        for o, ov in (("fail", FAIL), ("success", SUCCESS))
+    }
+    observed_fail = int(np.sum(observed == FAIL))
+    return {
+        "episodes": n,
+        "counts": counts,
+        "accuracy": float(np.mean(predicted == observed)) if n else float("nan"),
+        "false_success": counts["predicted_success_observed_fail"] / observed_fail if observed_fail else 0.0,
+        "predicted_fail": float(np.mean(predicted == FAIL)) if n else float("nan"),
+        "observed_fail": observed_fail / n if n else float("nan"),
+    }
+
+
+def make_classifier(cost: float, min_samples_leaf: int, seed: int) -> DecisionTreeClassifier:
+    return DecisionTreeClassifier(class_weight={FAIL: cost, SUCCESS: 1.0}, min_samples_leaf=min_samples_leaf,
+                                  random_state=seed)
+
+
+def choose_hyperparameters(X: np.ndarray, y: np.ndarray, seed: int) -> tuple[float, int, list[dict]]:
+    """(cost, min_samples_leaf) with the best cross-validated accuracy among the candidates whose
+    false-success share stays within TARGET_FALSE_SUCCESS (the most pessimistic one if none does)."""
+    folds = StratifiedKFold(n_splits=min(CV_FOLDS, int(np.bincount(y, minlength=2).min())), shuffle=True,
+                            random_state=seed)
+    table = []
+    for cost in COSTS:
+        for leaf in MIN_SAMPLES_LEAF:
+            predicted = np.empty_like(y)
+            for train, held_out in folds.split(X, y):
+                predicted[held_out] = make_classifier(cost, leaf, seed).fit(X[train], y[train]).predict(X[held_out])
+            scores = confusion(predicted, y)
+            table.append({"cost": cost, "min_samples_leaf": leaf, "accuracy": scores["accuracy"],
+                          "false_success": scores["false_success"]})
+    admissible = [row for row in table if row["false_success"] <= TARGET_FALSE_SUCCESS]
+    if admissible:
+        best = max(admissible, key=lambda row: (row["accuracy"], -row["false_success"], -row["cost"]))
+    else:
+        best = min(table, key=lambda row: (row["false_success"], -row["accuracy"]))
+    return best["cost"], best["min_samples_leaf"], table
+
+
+def tree_arrays(classifier: DecisionTreeClassifier) -> DecisionTree:
+    """The fitted tree as plain arrays; each node's class is the classifier's own (weighted argmax) choice."""
+    tree = classifier.tree_
+    predicted_class = classifier.classes_[np.argmax(tree.value[:, 0, :], axis=1)]
+    return DecisionTree(
+        children_left=tree.children_left.astype(np.int64),
+        children_right=tree.children_right.astype(np.int64),
+        feature=np.where(tree.children_left == -1, -1, tree.feature).astype(np.int64),
+        threshold=np.where(tree.children_left == -1, 0.0, tree.threshold).astype(float),
+        success=predicted_class == SUCCESS,
+        samples=tree.n_node_samples.astype(np.int64),
+    )
+
+
+def train_collision_model(
+    action: str,
+    episodes: list[Episode],
+    fresh: list[Episode],
+    seed: int,
+    feature_set: str = "pose",
+    step: Callable[[str], None] = lambda label: None,
+) -> CollisionTraining:
+    """Learn the pessimistic collision tree from `episodes`; evaluate it on the `fresh` ones."""
+    y = labels(episodes)
+    if len(episodes) < 2 * CV_FOLDS or np.bincount(y, minlength=2).min() < 2:
+        raise DataError(f"{action} collision data: {len(episodes)} episodes, "
+                        f"{int(np.sum(y == SUCCESS))} successes; need both outcomes several times")
+    X = compute_features(feature_set, first_examples(episodes)[0])
+    step("collision: choosing cost and leaf size")
+    cost, leaf, table = choose_hyperparameters(X, y, seed)
+    step("collision: fitting the tree")
+    classifier = make_classifier(cost, leaf, seed).fit(X, y)
+    tree = tree_arrays(classifier)
+    evaluation = confusion(tree.predict(compute_features(feature_set, first_examples(fresh)[0])), labels(fresh))
+    outcomes, counts = np.unique([e.outcome for e in episodes], return_counts=True)
+    report = {
+        "action": action,
+        "episodes": len(episodes),
+        "outcomes": {str(o): int(c) for o, c in zip(outcomes, counts)},
+        "cost_false_success": cost,
+        "min_samples_leaf": leaf,
+        "leaves": tree.n_leaves,
+        "fresh_episodes": len(fresh),
+        "accuracy": evaluation["accuracy"],
+        "false_success": evaluation["false_success"],
+        "confusion": evaluation,
+        "cross_validation": table,
+        "seed": seed,
+    }
+    model = CollisionModel(action, feature_set, feature_names(feature_set), tree, report)
+    return CollisionTraining(model, report)

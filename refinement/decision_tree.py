@@ -1,0 +1,134 @@
+"""A learned decision tree held as plain arrays (App. C.1): predicts without scikit-learn, saves as JSON.
+
+The arrays are those of a fitted `sklearn.tree.DecisionTreeClassifier.tree_` (node i tests
+`x[feature[i]] <= threshold[i]`, going to children_left[i] if true); leaves have children -1 and carry
+the predicted class. Each leaf is also a box lower < x <= upper, the form subgoal assertion needs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+LEAF = -1
+
+
+@dataclass(frozen=True, eq=False)
+class LeafBox:
+    """The region of one leaf: lower < x <= upper per feature (bounds may be infinite)."""
+
+    lower: np.ndarray
+    upper: np.ndarray
+    success: bool
+    samples: int
+
+    def contains(self, X: np.ndarray) -> np.ndarray:
+        X = np.atleast_2d(X)
+        return np.all((X > self.lower) & (X <= self.upper), axis=1)
+
+
+@dataclass(frozen=True, eq=False)
+class DecisionTree:
+    """A binary decision tree predicting success (True) or failure (False) per leaf."""
+
+    children_left: np.ndarray  # (nodes,) int, -1 at leaves
+    children_right: np.ndarray  # (nodes,) int, -1 at leaves
+    feature: np.ndarray  # (nodes,) int, tested feature (ignored at leaves)
+    threshold: np.ndarray  # (nodes,) float, go left if x <= threshold
+    success: np.ndarray  # (nodes,) bool, the class predicted at the node
+    samples: np.ndarray  # (nodes,) int, training episodes reaching the node
+
+    def __post_init__(self) -> None:
+        n = len(self.children_left)
+        for name in ("children_right", "feature", "threshold", "success", "samples"):
+            if np.shape(getattr(self, name)) != (n,):
+                raise ValueError(f"{name} must have shape ({n},), got {np.shape(getattr(self, name))}")
+        if n == 0:
+            raise ValueError("a tree needs at least one node")
+        inner = self.children_left != LEAF
+        if np.any((self.children_right == LEAF) != ~inner):
+            raise ValueError("a node has exactly one child")
+        children = np.concatenate([self.children_left[inner], self.children_right[inner]])
+        if np.any((children < 1) | (children >= n)) or len(np.unique(children)) != len(children):
+            raise ValueError("children must be distinct node indices in 1..nodes-1")
+
+    @property
+    def n_leaves(self) -> int:
+        return int(np.sum(self.children_left == LEAF))
+
+    def apply(self, X: np.ndarray) -> np.ndarray:
+        """The leaf index reached by each row of X (n, f)."""
+        # scikit-learn compares features as float32 against float64 thresholds; do the same for equal answers
+        X = np.atleast_2d(np.asarray(X, dtype=float)).astype(np.float32).astype(np.float64)
+        node = np.zeros(len(X), dtype=np.int64)
+        active = self.children_left[node] != LEAF
+        while np.any(active):
+            rows = np.flatnonzero(active)
+            at = node[rows]
+            go_left = X[rows, self.feature[at]] <= self.threshold[at]
+            node[rows] = np.where(go_left, self.children_left[at], self.children_right[at])
+            active[rows] = self.children_left[node[rows]] != LEAF
+        return node
+
+    def predict(self, X: np.ndarray) -> np.ndarray:
+        return self.success[self.apply(X)]
+
+    def leaf_boxes(self, n_features: int) -> list[LeafBox]:
+        """Every leaf as a box in feature space, in depth-first order (left before right)."""
+        boxes: list[LeafBox] = []
+        stack = [(0, np.full(n_features, -np.inf), np.full(n_features, np.inf))]
+        while stack:
+            node, lower, upper = stack.pop()
+            if self.children_left[node] == LEAF:
+                boxes.append(LeafBox(lower, upper, bool(self.success[node]), int(self.samples[node])))
+                continue
+            f, t = self.feature[node], self.threshold[node]
+            left_upper, right_lower = upper.copy(), lower.copy()
+            left_upper[f] = min(upper[f], t)
+            right_lower[f] = max(lower[f], t)
+            stack.append((self.children_right[node], right_lower, upper))
+            stack.append((self.children_left[node], lower, left_upper))
+        return boxes
+
+    def export_text(self, feature_names: tuple[str, ...], labels: tuple[str, str] = ("Fail", "Success")) -> str:
+        """Readable rules, one test per line, indented by depth (like WEKA's J48 output, Fig. 4.8)."""
+        lines: list[str] = []
+
+        def visit(node: int, depth: int) -> None:
+            if self.children_left[node] == LEAF:
+                return
+            name, t = feature_names[self.feature[node]], self.threshold[node]
+            for child, op in ((self.children_left[node], "<="), (self.children_right[node], ">")):
+                text = f"{'|   ' * depth}{name} {op} {t:.3f}"
+                if self.children_left[child] == LEAF:
+                    text += f": {labels[int(self.success[child])]} ({self.samples[child]})"
+                lines.append(text)
+                visit(child, depth + 1)
+
+        if self.children_left[0] == LEAF:
+            lines.append(f": {labels[int(self.success[0])]} ({self.samples[0]})")
+        visit(0, 0)
+        return "\n".join(lines)
+
+    def to_json(self) -> dict:
+        return {
+            "children_left": self.children_left.tolist(),
+            "children_right": self.children_right.tolist(),
+            "feature": self.feature.tolist(),
+            "threshold": self.threshold.tolist(),
+            "success": self.success.tolist(),
+            "samples": self.samples.tolist(),
+        }
+
+    @classmethod
+    def from_json(cls, data: dict) -> DecisionTree:
+        """Raises ValueError/KeyError/TypeError on malformed data (the loader names the file)."""
+        return cls(
+            children_left=np.asarray(data["children_left"], dtype=np.int64),
+            children_right=np.asarray(data["children_right"], dtype=np.int64),
+            feature=np.asarray(data["feature"], dtype=np.int64),
+            threshold=np.asarray(data["threshold"], dtype=float),
+            success=np.asarray(data["success"], dtype=bool),
+            samples=np.asarray(data["samples"], dtype=np.int64),
+        )

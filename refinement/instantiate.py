@@ -1,0 +1,161 @@
+"""Action instantiation (Algorithm 3): the abstract plan's steps become executable actions.
+
+Each step's executable action comes from the binding; each parameter group takes the PDDL object of its bound
+argument. An object's value per quantity is composed from every causal link whose fact mentions it: facts
+that hold in the initial state (producer 0) read values from the belief state, all bound facts contribute
+ranges (intersected), and the binding's type defaults apply where no predicate gives a range. A quantity with
+a value is BOUND, otherwise FREE in its range, with id "object.quantity", shared by every action using it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from types import MappingProxyType
+
+from planner_bridge.abstract_plan import INITIAL, AbstractPlan
+from refinement.action_sequence import RANGE_TOLERANCE, ActionSequence, ExecutableAction, Parameter
+from refinement.belief import BeliefState
+from refinement.binding import DEFAULT_TYPE, GROUPS, Binding, PredicateBinding
+from refinement.errors import BindingError, EmptyRangeError
+
+ObjectTypes = Mapping[str, "str | Sequence[str]"]  # object -> its type, or its type and ancestors
+
+
+@dataclass(frozen=True)
+class _Fact:
+    """A fact on a causal link, with the binding of its predicate."""
+
+    producer: int
+    fact: tuple[str, ...]
+    binding: PredicateBinding
+
+    @property
+    def text(self) -> str:
+        return f"({' '.join(self.fact)})"
+
+
+def instantiate(plan: AbstractPlan, binding: Binding, belief: BeliefState,
+                object_types: ObjectTypes | None = None,
+                initial_state: Iterable[Sequence[str]] = ()) -> ActionSequence:
+    """Algorithm 3: the ActionSequence of `plan`, parameters bound from `belief` or free in composed ranges.
+
+    `object_types` gives PDDL object types for the type defaults (default: the binding's only type);
+    `initial_state` adds initial facts not on any causal link to those that place scene objects.
+    """
+    facts = _facts_by_object(plan, binding)
+    composed: dict[tuple[str, str], tuple[float | None, float, float]] = {}
+    actions = []
+    for step in sorted(plan.steps, key=lambda s: s.id):
+        pddl = f"({' '.join((step.action, *step.args))})"
+        bound = binding.action(step.action, step=f"{step.id} {pddl}")
+        spec = bound.spec
+        params = []
+        for group in GROUPS:
+            names = getattr(spec, group)
+            if not names:
+                continue
+            index = bound.args[group]
+            if index >= len(step.args):
+                raise BindingError(f"[actions.{bound.pddl}] {group} = {index} is out of range for step "
+                                   f"{step.id} {pddl} with {len(step.args)} argument(s)", file=binding.file)
+            obj = step.args[index]
+            for name, quantity in zip(names, spec.quantities):
+                key = (obj.lower(), quantity)
+                if key not in composed:
+                    types = _type_chain(obj, binding, object_types)
+                    on_links = facts.get(obj.lower(), ())
+                    composed[key] = _compose(obj, quantity, on_links, types, binding, belief)
+                value, low, high = composed[key]
+                params.append(Parameter(f"{obj}.{quantity}", name, value, low, high))
+        actions.append(ExecutableAction(step.id, pddl, bound.executable, tuple(params)))
+    scene = _scene(plan, binding, belief, initial_state)
+    return ActionSequence(plan.domain, plan.problem, tuple(actions), scene)
+
+
+def _facts_by_object(plan: AbstractPlan, binding: Binding) -> dict[str, list[_Fact]]:
+    """Per object (lower case), the distinct bound facts on causal links that mention it."""
+    out: dict[str, list[_Fact]] = {}
+    for link in plan.links:
+        predicate = binding.predicate(link.fact[0])
+        if predicate is None:  # static or unbound predicates (next, visited) constrain nothing
+            continue
+        fact = _Fact(link.producer, tuple(link.fact), predicate)
+        for obj in predicate.objects(link.fact, binding.file):
+            entries = out.setdefault(obj.lower(), [])
+            if fact not in entries:
+                entries.append(fact)
+    return out
+
+
+def _type_chain(obj: str, binding: Binding, object_types: ObjectTypes | None) -> tuple[str, ...]:
+    """The type names whose defaults apply to `obj`, most specific first, ending with `default`."""
+    declared = None if object_types is None else object_types.get(obj)
+    if declared is None:
+        named = [name for name in binding.types if name != DEFAULT_TYPE]
+        chain: tuple[str, ...] = tuple(named) if len(named) == 1 else ()
+    else:
+        chain = (declared,) if isinstance(declared, str) else tuple(declared)
+    return (*chain, DEFAULT_TYPE)
+
+
+def _compose(obj: str, quantity: str, facts: Sequence[_Fact], types: Sequence[str], binding: Binding,
+             belief: BeliefState) -> tuple[float | None, float, float]:
+    """(value or None, low, high) of one quantity of one object, composed from the facts that mention it."""
+    value, read_by = None, None
+    low, high = float("-inf"), float("inf")
+    sources = []
+    for f in facts:
+        if quantity in f.binding.ranges:
+            lo, hi = f.binding.ranges[quantity]
+            low, high = max(low, lo), min(high, hi)
+            sources.append(f"{f.text} [{lo:g}, {hi:g}]")
+        if f.producer == INITIAL and quantity in f.binding.read and value is None:
+            # every read of an object's quantity comes from the same belief entry, so all reads agree
+            value, read_by = belief.value(obj, quantity, needed_by=f"{f.text} in the initial state"), f.text
+    if not sources:
+        default = binding.type_range(types, quantity)
+        if default is None:
+            tried = ", ".join(f"[types.{t}]" for t in types)
+            raise BindingError(f"no range for {obj}.{quantity}: no predicate on its causal links bounds "
+                               f"'{quantity}' and none of {tried} defines it", file=binding.file)
+        (low, high), where = default
+        sources.append(f"{where} [{low:g}, {high:g}]")
+    if low > high:
+        raise EmptyRangeError(f"{obj}.{quantity}: the ranges {', '.join(sources)} do not intersect",
+                              file=binding.file)
+    if value is not None:
+        if not (low - RANGE_TOLERANCE <= value <= high + RANGE_TOLERANCE):
+            raise EmptyRangeError(f"{obj}.{quantity} = {value:g} read for {read_by} lies outside its range "
+                                  f"[{low:g}, {high:g}] from {', '.join(sources)}", file=belief.file)
+        value = min(max(value, low), high)
+    elif low == high:  # a degenerate range determines the value
+        value = low
+    return value, low, high
+
+
+def _scene(plan: AbstractPlan, binding: Binding, belief: BeliefState,
+           initial_state: Iterable[Sequence[str]]) -> Mapping[str, tuple[float, ...]]:
+    """The scene objects placed by initial facts (robot pose, ball position), read from the belief state."""
+    initial = [tuple(link.fact) for link in plan.links if link.producer == INITIAL]
+    initial += [tuple(fact) for fact in initial_state]
+    scene: dict[str, tuple[float, ...]] = {}
+    placed_by: dict[str, str] = {}
+    for fact in initial:
+        predicate = binding.predicate(fact[0])
+        if predicate is None or predicate.scene is None:
+            continue
+        text = f"({' '.join(fact)})"
+        objects = predicate.objects(fact, binding.file)
+        if len(objects) != 1:
+            raise BindingError(f"[predicates.{predicate.name}] places scene object '{predicate.scene}' but "
+                               f"{text} names {len(objects)} objects (set args to one index)",
+                               file=binding.file)
+        values = tuple(belief.value(objects[0], q, needed_by=f"{text} in the initial state")
+                       for q in predicate.read)
+        if placed_by.get(predicate.scene, text) != text:
+            raise BindingError(f"scene object '{predicate.scene}' placed twice in the initial state: "
+                               f"{placed_by[predicate.scene]} and {text}", file=binding.file)
+        scene.setdefault(predicate.scene, values)
+        placed_by.setdefault(predicate.scene, text)
+    return MappingProxyType(scene)

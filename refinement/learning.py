@@ -1,0 +1,164 @@
+"""The training protocol of duration models (Sec. 4.3, Fig. 4.9).
+
+Episodes are shuffled (seeded) and split: half train, a quarter validation, a quarter test.
+1. n_i is chosen from candidates by the validation MAE of models trained on the half (Fig. 4.5).
+2. A model trained on train + validation (three quarters) with that n_i is tested on the last quarter: its
+   MAE is the reported accuracy, beside the MAE of a gradient-boosting ensemble trained on the same examples.
+3. The stored model is trained on all episodes.
+Test sets only ever hold the first example of each episode (Sec. 4.1.2): that is how the model is queried.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from sklearn.base import RegressorMixin
+from sklearn.ensemble import HistGradientBoostingRegressor
+
+from refinement.action_models import ActionModel
+from refinement.errors import DataError
+from refinement.features import compute_features, feature_names, first_examples, intermediate_examples
+from refinement.model_tree import ModelTree
+from sims.episode import Episode
+
+N_I_CANDIDATES = (1, 2, 3, 5, 10, 20, 30, 50)  # examples per episode tried (Fig. 4.5)
+EPISODE_FRACTIONS = (0.125, 0.25, 0.5, 1.0)  # of the three-quarter training set, for Fig. 4.6
+MIN_EPISODES = 8  # fewer successful episodes cannot be split into train / validation / test
+DEFAULT_FEATURE_SET = "pose"
+
+RegressorFactory = Callable[[int], RegressorMixin]  # seed -> unfitted regressor
+
+
+def make_model_tree(seed: int) -> RegressorMixin:
+    """The duration model: an M5-style model tree (App. C.2); the seed is unused (the tree is deterministic)."""
+    return ModelTree()
+
+
+def make_baseline(seed: int) -> RegressorMixin:
+    """The comparison of Table 4.3's MAE: scikit-learn's histogram gradient boosting, seeded."""
+    return HistGradientBoostingRegressor(random_state=seed)
+
+
+@dataclass(frozen=True)
+class Split:
+    """Episode indices of the three parts of Fig. 4.9; disjoint, together all episodes."""
+
+    train: np.ndarray
+    validation: np.ndarray
+    test: np.ndarray
+
+
+def split_episodes(n: int, seed: int) -> Split:
+    """Seeded shuffle of n episodes into half train, a quarter validation, a quarter test."""
+    order = np.random.default_rng(seed).permutation(n)
+    half, three_quarters = n // 2, (3 * n) // 4
+    return Split(order[:half], order[half:three_quarters], order[three_quarters:])
+
+
+def fit_on_episodes(episodes: list[Episode], feature_set: str, n_i: int, regressor: RegressorMixin) -> RegressorMixin:
+    """Fit `regressor` on the first n_i examples of each episode, in the features of `feature_set`."""
+    params, targets, _ = intermediate_examples(episodes, n_i)
+    return regressor.fit(compute_features(feature_set, params), targets)
+
+
+def held_out_mae(regressor: RegressorMixin, episodes: list[Episode], feature_set: str) -> float:
+    """Mean absolute error (s) on the first example of each episode."""
+    params, durations = first_examples(episodes)
+    predicted = regressor.predict(compute_features(feature_set, params))
+    return float(np.mean(np.abs(predicted - durations)))
+
+
+def count_examples(episodes: list[Episode], n_i: int) -> int:
+    return int(sum(min(n_i, len(e.t)) for e in episodes))
+
+
+@dataclass(frozen=True)
+class DurationTraining:
+    model: ActionModel
+    report: dict
+
+
+def train_duration_model(
+    action: str,
+    episodes: list[Episode],
+    seed: int,
+    feature_set: str = DEFAULT_FEATURE_SET,
+    n_i_candidates: tuple[int, ...] = N_I_CANDIDATES,
+    episode_fractions: tuple[float, ...] = EPISODE_FRACTIONS,
+    make_model: RegressorFactory = make_model_tree,
+    make_reference: RegressorFactory = make_baseline,
+    step: Callable[[str], None] = lambda label: None,
+) -> DurationTraining:
+    """Run the protocol of Fig. 4.9 on the successful episodes; `step` is called before each fit (progress)."""
+    used = [e for e in episodes if e.succeeded]
+    if len(used) < MIN_EPISODES:
+        raise DataError(f"{action}: {len(used)} successful episodes of {len(episodes)}; need at least {MIN_EPISODES}")
+    split = split_episodes(len(used), seed)
+    pick = lambda idx: [used[i] for i in idx]  # noqa: E731
+    train, validation, test = pick(split.train), pick(split.validation), pick(split.test)
+    learn = train + validation
+
+    n_i_curve = []
+    for n_i in n_i_candidates:
+        step(f"{action}: n_i={n_i}")
+        model = fit_on_episodes(train, feature_set, n_i, make_model(seed))
+        n_i_curve.append({"n_i": n_i, "examples": count_examples(train, n_i), "mae": held_out_mae(model, validation, feature_set)})
+    n_i = min(n_i_curve, key=lambda row: (row["mae"], row["n_i"]))["n_i"]
+
+    episodes_curve = []
+    for fraction in episode_fractions:
+        subset = learn[: max(MIN_EPISODES // 2, round(fraction * len(learn)))]
+        step(f"{action}: {len(subset)} episodes")
+        model = fit_on_episodes(subset, feature_set, n_i, make_model(seed))
+        reference = fit_on_episodes(subset, feature_set, n_i, make_reference(seed))
+        episodes_curve.append({
+            "episodes": len(subset),
+            "mae": held_out_mae(model, test, feature_set),
+            "mae_hgb": held_out_mae(reference, test, feature_set),
+            "leaves": _leaves(model),
+        })
+    evaluated = episodes_curve[-1] if len(episodes_curve) and episodes_curve[-1]["episodes"] == len(learn) else None
+    if evaluated is None:  # the curve did not end with the full three quarters: evaluate them here
+        step(f"{action}: {len(learn)} episodes")
+        model = fit_on_episodes(learn, feature_set, n_i, make_model(seed))
+        reference = fit_on_episodes(learn, feature_set, n_i, make_reference(seed))
+        evaluated = {"mae": held_out_mae(model, test, feature_set), "mae_hgb": held_out_mae(reference, test, feature_set),
+                     "leaves": _leaves(model)}
+
+    step(f"{action}: final model")
+    final = fit_on_episodes(used, feature_set, n_i, make_model(seed))
+    durations = np.array([e.duration for e in used])
+    report = {
+        "action": action,
+        "episodes": len(used),
+        "episodes_gathered": len(episodes),
+        "outcomes": _outcome_counts(episodes),
+        "mean_duration": float(durations.mean()),
+        "simulated_hours": float(sum(e.duration for e in episodes) / 3600.0),
+        "n_i": n_i,
+        "examples": count_examples(used, n_i),
+        "test_episodes": len(test),
+        "mae": evaluated["mae"],
+        "mae_hgb": evaluated["mae_hgb"],
+        "mae_relative": evaluated["mae"] / float(durations.mean()),
+        "mae_over_hgb": evaluated["mae"] / evaluated["mae_hgb"] if evaluated["mae_hgb"] > 0 else float("inf"),
+        "leaves_evaluated": evaluated["leaves"],
+        "leaves": _leaves(final),
+        "n_i_curve": n_i_curve,
+        "episodes_curve": episodes_curve,
+        "seed": seed,
+    }
+    model = ActionModel(action, feature_set, feature_names(feature_set), final, n_i, report)
+    return DurationTraining(model, report)
+
+
+def _leaves(model: RegressorMixin) -> int | None:
+    leaves = getattr(model, "n_leaves_", None)
+    return int(leaves) if leaves is not None else None
+
+
+def _outcome_counts(episodes: list[Episode]) -> dict[str, int]:
+    outcomes, counts = np.unique([e.outcome for e in episodes], return_counts=True)
+    return {str(o): int(c) for o, c in zip(outcomes, counts)}

@@ -1,0 +1,98 @@
+"""Figures of the training report: MAE over n_i (Fig. 4.5), MAE over episodes (Fig. 4.6), and the predicted
+duration over the angle of approach for one situation (Fig. 4.7). Drawn headless (Agg), saved atomically."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Mapping
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from refinement.action_models import ActionModel  # noqa: E402
+
+# the situation of Fig. 4.7: goal 1.5 m straight ahead, robot standing, arriving at rest
+SITUATION_DIST = 1.5  # m
+SITUATION_V = 0.0  # m/s
+SITUATION_VG = 0.0  # m/s
+ANGLE_SAMPLES = 361
+
+
+def plot_mae_vs_n_i(reports: Mapping[str, dict], path: Path) -> None:
+    """Validation MAE of models trained on half the episodes, against examples per episode (Fig. 4.5)."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    for action, report in reports.items():
+        curve = report["n_i_curve"]
+        ax.plot([r["n_i"] for r in curve], [r["mae"] for r in curve], marker="o", label=f"{action} (n_i={report['n_i']})")
+    ax.set(xscale="log", xlabel="examples per episode n_i", ylabel="MAE on validation episodes (s)",
+           title="Accuracy against intermediate examples (Fig. 4.5)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    _save(fig, path)
+
+
+def plot_mae_vs_episodes(reports: Mapping[str, dict], path: Path) -> None:
+    """Test MAE against the number of training episodes, model tree and gradient boosting (Fig. 4.6)."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    for index, (action, report) in enumerate(reports.items()):
+        curve = report["episodes_curve"]
+        color = f"C{index}"
+        episodes = [r["episodes"] for r in curve]
+        ax.plot(episodes, [r["mae"] for r in curve], marker="o", color=color, label=f"{action} model tree")
+        ax.plot(episodes, [r["mae_hgb"] for r in curve], marker="x", linestyle="--", color=color,
+                label=f"{action} gradient boosting")
+    ax.set(xscale="log", xlabel="training episodes", ylabel="MAE on test episodes (s)",
+           title="Accuracy against experience (Fig. 4.6)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize="small")
+    _save(fig, path)
+
+
+def situation_params(angle_at: np.ndarray) -> np.ndarray:
+    """Action parameters with dist 1.5 m, angle_to 0, v 0 and the given angles of approach (rad)."""
+    params = np.zeros((len(angle_at), 8))
+    params[:, 4] = SITUATION_DIST  # goal straight ahead of a robot at the origin facing +x
+    params[:, 3] = SITUATION_V
+    params[:, 6] = angle_at  # phig; the bearing to the goal is 0, so angle_at = phig
+    params[:, 7] = SITUATION_VG
+    return params
+
+
+def plot_angle_at(models: Mapping[str, ActionModel], path: Path) -> None:
+    """Predicted duration over angle_at for one situation, Cartesian and polar (Fig. 4.7)."""
+    angle_at = np.linspace(-np.pi, np.pi, ANGLE_SAMPLES)
+    params = situation_params(angle_at)
+    fig = plt.figure(figsize=(10.0, 4.2))
+    cartesian = fig.add_subplot(1, 2, 1)
+    polar = fig.add_subplot(1, 2, 2, projection="polar")
+    for action, model in models.items():
+        predicted = model.predict_duration(params)
+        cartesian.plot(np.degrees(angle_at), predicted, label=action)
+        polar.plot(angle_at, predicted, label=action)
+    cartesian.set(xlabel="angle_at (deg)", ylabel="predicted duration (s)", xticks=range(-180, 181, 90),
+                  title=f"dist {SITUATION_DIST} m, angle_to 0, v {SITUATION_V} m/s, vg {SITUATION_VG} m/s")
+    cartesian.grid(True, alpha=0.3)
+    cartesian.legend()
+    polar.set_title("predicted duration (s) over angle_at (Fig. 4.7)", fontsize="medium")
+    _save(fig, path)
+
+
+def _save(fig: plt.Figure, path: Path) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        fig.tight_layout()
+        fig.savefig(tmp, dpi=110)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    finally:
+        plt.close(fig)

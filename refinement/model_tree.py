@@ -1,0 +1,216 @@
+"""An M5 model tree (Quinlan 1992) as a scikit-learn regressor: the action models of Chapter 4 / App. C.2.
+
+Splits by standard-deviation reduction, a least-squares linear model in each node (over all features;
+constant features get 0, near-collinear directions are cut by a truncated SVD rather than M5's attribute
+restriction), bottom-up pruning with M5's (n + v) / (n - v) error estimate, and M5 smoothing folded into
+each leaf's coefficients. So every leaf is one bounded hyperplane (`rules()`), which is what the analytic
+minimization of App. C.3 needs; the rules print like WEKA's M5 output and save as JSON without pickle.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils.validation import check_is_fitted, validate_data
+
+from refinement.errors import ModelFileError
+from refinement.model_tree_grow import GrowParams, TreeArrays, grow_tree
+from refinement.model_tree_io import export_text, tree_from_json, tree_to_json
+from refinement.rules import Rule
+
+HYPERPARAMETERS = (
+    "min_samples_leaf",
+    "max_depth",
+    "sd_fraction",
+    "prune",
+    "pruning_factor",
+    "smoothing",
+    "smoothing_k",
+)
+
+
+@dataclass(frozen=True, eq=False)
+class _Router:
+    """The tree in the shape `predict` walks: all rows step down one level per iteration, leaves loop."""
+
+    feature: np.ndarray  # (n_nodes,) feature tested, 0 at leaves (whose threshold +inf sends x to itself)
+    threshold: np.ndarray
+    children: np.ndarray  # (2 * n_nodes,) left, right of each node
+    leaf: np.ndarray
+    depth: int
+
+
+class ModelTree(RegressorMixin, BaseEstimator):
+    """M5 model tree regressor.
+
+    Parameters
+    ----------
+    min_samples_leaf : samples at least in each child of a split (M5P's -M); a node with fewer than twice
+        as many is a leaf.
+    max_depth : depth limit of the grown tree, or None.
+    sd_fraction : a node whose target SD is at most this fraction of the root's is not split (M5: 0.05).
+    prune : prune bottom-up where a node's model has no larger estimated error than its subtree.
+    pruning_factor : multiplies v in the numerator of M5's error factor (n + f v) / (n - v); 1 is M5.
+    smoothing : fold M5 smoothing p' = (n p + k q) / (n + k) along each leaf's path into the leaf.
+    smoothing_k : the k of the smoothing formula (M5: 15).
+    """
+
+    def __init__(
+        self,
+        min_samples_leaf: int = 4,
+        max_depth: int | None = None,
+        sd_fraction: float = 0.05,
+        prune: bool = True,
+        pruning_factor: float = 1.0,
+        smoothing: bool = True,
+        smoothing_k: float = 15.0,
+    ):
+        self.min_samples_leaf = min_samples_leaf
+        self.max_depth = max_depth
+        self.sd_fraction = sd_fraction
+        self.prune = prune
+        self.pruning_factor = pruning_factor
+        self.smoothing = smoothing
+        self.smoothing_k = smoothing_k
+
+    def fit(self, X, y) -> "ModelTree":
+        """Grow, prune and smooth the tree on X (n_samples, n_features) and the target y."""
+        X, y = validate_data(self, X, y, dtype=np.float64, y_numeric=True)
+        y = np.asarray(y, dtype=np.float64)
+        self._set_tree(grow_tree(X, y, self._grow_params()))
+        return self
+
+    def predict(self, X) -> np.ndarray:
+        """Each row's value on the hyperplane of the leaf it falls in (vectorized over rows)."""
+        check_is_fitted(self)
+        if not self._is_ready_matrix(X):
+            X = validate_data(self, X, dtype=np.float64, reset=False)
+        leaf = self._leaf_of(X)
+        return np.einsum("ij,ij->i", X, self.tree_.coef[leaf]) + self.tree_.intercept[leaf]
+
+    def apply(self, X) -> np.ndarray:
+        """The index of the leaf (0 .. n_leaves_-1, the order of `rules()`) each row falls in."""
+        check_is_fitted(self)
+        return self._leaf_of(validate_data(self, X, dtype=np.float64, reset=False))
+
+    def rules(self) -> list[Rule]:
+        """One Rule per leaf, in leaf order: its box (lower exclusive, upper inclusive) and hyperplane."""
+        check_is_fitted(self)
+        tree, d = self.tree_, self.n_features_in_
+        rules: list[Rule] = []
+        stack = [(0, np.full(d, -np.inf), np.full(d, np.inf))]
+        while stack:
+            node, lower, upper = stack.pop()
+            if tree.leaf[node] >= 0:
+                leaf = tree.leaf[node]
+                rules.append(Rule(lower, upper, tree.coef[leaf].copy(), float(tree.intercept[leaf])))
+                continue
+            f, t = tree.feature[node], tree.threshold[node]
+            left_upper, right_lower = upper.copy(), lower.copy()
+            left_upper[f] = min(upper[f], t)
+            right_lower[f] = max(lower[f], t)
+            stack.append((tree.right[node], right_lower, upper))
+            stack.append((tree.left[node], lower, left_upper))
+        return rules
+
+    def export_text(self, feature_names=None) -> str:
+        """The tree and its linear models in WEKA's M5 layout (App. C.3.1)."""
+        check_is_fitted(self)
+        return export_text(self.tree_, self._feature_names(feature_names))
+
+    def to_json(self) -> dict:
+        """A JSON-serializable dict (schema tailor.model_tree/1); from_json gives identical predictions."""
+        check_is_fitted(self)
+        names = getattr(self, "feature_names_in_", None)
+        return tree_to_json(
+            self.tree_,
+            {name: getattr(self, name) for name in HYPERPARAMETERS},
+            self.n_features_in_,
+            None if names is None else [str(n) for n in names],
+        )
+
+    @classmethod
+    def from_json(cls, data: dict, source: str = "<model>") -> "ModelTree":
+        """Rebuild a fitted tree from `to_json` output; raises ModelFileError naming `source` if invalid."""
+        tree, hyper, n_features, names = tree_from_json(data, source, HYPERPARAMETERS)
+        model = cls(**hyper)
+        try:
+            model._grow_params()
+        except ValueError as exc:
+            raise ModelFileError(f"hyperparameters: {exc}", file=source) from None
+        model.n_features_in_ = n_features
+        if names is not None:
+            model.feature_names_in_ = np.asarray(names, dtype=object)
+        model._set_tree(tree)
+        return model
+
+    # -- internals -------------------------------------------------------------------------------------
+
+    def _grow_params(self) -> GrowParams:
+        """Check the hyperparameters (here, not in __init__, as scikit-learn requires) and bundle them."""
+        msl, depth = self.min_samples_leaf, self.max_depth
+        if isinstance(msl, bool) or not isinstance(msl, (int, np.integer)) or msl < 1:
+            raise ValueError(f"min_samples_leaf must be an integer >= 1, got {msl!r}")
+        if depth is not None and (isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or depth < 0):
+            raise ValueError(f"max_depth must be None or an integer >= 0, got {depth!r}")
+        for name in ("sd_fraction", "pruning_factor", "smoothing_k"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < np.inf:
+                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+        return GrowParams(
+            int(msl), None if depth is None else int(depth), float(self.sd_fraction), bool(self.prune),
+            float(self.pruning_factor), bool(self.smoothing), float(self.smoothing_k),
+        )
+
+    def _set_tree(self, tree: TreeArrays) -> None:
+        self.tree_ = tree
+        self.n_leaves_ = int(len(tree.intercept))
+        self._router = _make_router(tree)
+
+    def _is_ready_matrix(self, X) -> bool:
+        """True if validate_data would return X unchanged; skipping it (~60 us) keeps small calls fast."""
+        return (
+            type(X) is np.ndarray
+            and X.dtype == np.float64
+            and X.ndim == 2
+            and X.shape[0] > 0
+            and X.shape[1] == self.n_features_in_
+            and not hasattr(self, "feature_names_in_")
+            and bool(np.isfinite(X).all())
+        )
+
+    def _leaf_of(self, X: np.ndarray) -> np.ndarray:
+        r = self._router
+        n, d = X.shape
+        flat = X.ravel()  # a copy if X is not C-contiguous
+        row_start = np.arange(0, n * d, d)
+        node = np.zeros(n, dtype=np.intp)
+        for _ in range(r.depth):
+            go_right = flat.take(row_start + r.feature.take(node)) > r.threshold.take(node)
+            node = r.children.take(2 * node + go_right)
+        return r.leaf.take(node)
+
+    def _feature_names(self, feature_names) -> list[str]:
+        if feature_names is None:
+            names = getattr(self, "feature_names_in_", None)
+            return [f"x{i}" for i in range(self.n_features_in_)] if names is None else [str(n) for n in names]
+        names = [str(n) for n in feature_names]
+        if len(names) != self.n_features_in_:
+            raise ValueError(f"feature_names has {len(names)} names, the tree has {self.n_features_in_} features")
+        return names
+
+
+def _make_router(tree: TreeArrays) -> _Router:
+    depth = np.zeros(len(tree.feature), dtype=np.intp)
+    for node in range(len(tree.feature)):  # preorder: parents come before their children
+        if tree.leaf[node] < 0:
+            depth[tree.left[node]] = depth[tree.right[node]] = depth[node] + 1
+    return _Router(
+        feature=np.where(tree.feature < 0, 0, tree.feature).astype(np.intp),
+        threshold=tree.threshold.copy(),
+        children=np.stack([tree.left, tree.right], axis=1).ravel().astype(np.intp),
+        leaf=tree.leaf.copy(),
+        depth=int(depth.max()),
+    )

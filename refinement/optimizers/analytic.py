@@ -1,0 +1,141 @@
+"""Analytic minimization of sums of model trees over the free parameters (App. C.3).
+
+Each rule of a model tree is a bounded hyperplane over the features. Where every feature is affine in one
+free parameter between breakpoints (detected by `structure.detect`), a rule restricted to one piece of each
+free parameter is a box in the free-parameter space with a linear cost (C.3.1; bound features just drop
+the rules they violate, C.3.2). The rule sets of all terms are merged by intersecting their boxes and summing
+their linear models, dropping contradictory pairs (C.3.3), and the minimum of each merged rule is at the
+corner its gradient points away from. The best corners are checked with the true objective.
+"""
+
+from __future__ import annotations
+
+import time
+import weakref
+
+import numpy as np
+
+from refinement.optimizers.objective import Objective, OptimizationResult
+from refinement.optimizers.structure import LOCATE_TOL, NotApplicable, TermStructure, detect
+
+MAX_MERGED_PAIRS = 4_000_000  # box pairs examined when merging two rule sets (C.3.3 worst case r1 * r2)
+CANDIDATES = 32  # best predicted corners checked with the true objective (more if all are invalid)
+NUDGE = 100 * LOCATE_TOL  # fraction of max(1, range) by which an open corner is moved inside its box
+_rule_cache: "weakref.WeakKeyDictionary[object, tuple]" = weakref.WeakKeyDictionary()
+
+
+def rule_arrays(model) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The model's rules stacked as (lower, upper, coef) of shape (R, n_features) and intercept (R,)."""
+    try:
+        return _rule_cache[model]
+    except (KeyError, TypeError):
+        pass
+    rules = model.rules()
+    arrays = (
+        np.array([r.lower for r in rules], dtype=float),
+        np.array([r.upper for r in rules], dtype=float),
+        np.array([r.coef for r in rules], dtype=float),
+        np.array([r.intercept for r in rules], dtype=float),
+    )
+    try:
+        _rule_cache[model] = arrays
+    except TypeError:  # a model that cannot be weakly referenced is simply not cached
+        pass
+    return arrays
+
+
+def term_boxes(structure: TermStructure, model) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One term's rules as boxes in free-parameter space: lo, hi (n, d), gradient (n, d), constant (n,)."""
+    lower, upper, coef, intercept = rule_arrays(model)
+    bound = structure.var_of < 0
+    c = structure.const[bound]
+    keep = np.all((lower[:, bound] < c) & (c <= upper[:, bound]), axis=1)  # C.3.2: bound features
+    constant = intercept + coef[:, bound] @ c
+    per_var = []
+    for j, edges in enumerate(structure.edges):
+        dep = np.flatnonzero(structure.var_of == j)
+        s = structure.slope[j][dep][None]  # (1, nd, P)
+        o = structure.offset[j][dep][None]
+        lo_f, hi_f = lower[:, dep, None], upper[:, dep, None]  # (R, nd, 1)
+        rising, falling = s > 0, s < 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a = np.where(rising, (lo_f - o) / s, np.where(falling, (hi_f - o) / s, -np.inf))
+            b = np.where(rising, (hi_f - o) / s, np.where(falling, (lo_f - o) / s, np.inf))
+        flat_ok = (s != 0) | ((lo_f < o) & (o <= hi_f))  # a feature constant on the piece holds or not
+        a = np.where(flat_ok, a, np.inf)
+        lo = np.maximum(a.max(axis=1, initial=-np.inf), edges[:-1])  # (R, P)
+        hi = np.minimum(b.min(axis=1, initial=np.inf), edges[1:])
+        grad = coef[:, dep] @ structure.slope[j][dep]  # (R, P)
+        const = coef[:, dep] @ structure.offset[j][dep]
+        per_var.append((lo, hi, grad, const))
+    n_free = len(per_var)
+    shape = (len(intercept),) + tuple(v[0].shape[1] for v in per_var)
+    ok = keep.reshape((-1,) + (1,) * n_free)
+    for j, (lo, hi, _, _) in enumerate(per_var):
+        ok = ok & (lo <= hi).reshape(_axis_shape(len(intercept), n_free, j, lo.shape[1]))
+    index = np.nonzero(np.broadcast_to(ok, shape))
+    r = index[0]
+    box_lo = np.stack([per_var[j][0][r, index[j + 1]] for j in range(n_free)], axis=1)
+    box_hi = np.stack([per_var[j][1][r, index[j + 1]] for j in range(n_free)], axis=1)
+    grad = np.stack([per_var[j][2][r, index[j + 1]] for j in range(n_free)], axis=1)
+    const = constant[r] + sum(per_var[j][3][r, index[j + 1]] for j in range(n_free))
+    return box_lo, box_hi, grad, const
+
+
+def _axis_shape(n_rules: int, n_free: int, j: int, n_pieces: int) -> tuple[int, ...]:
+    shape = [n_rules] + [1] * n_free
+    shape[j + 1] = n_pieces
+    return tuple(shape)
+
+
+def merge(first, second):
+    """C.3.3: every pair of rules, boxes intersected and linear models summed; contradictory pairs dropped."""
+    lo1, hi1, g1, c1 = first
+    lo2, hi2, g2, c2 = second
+    if len(lo1) * len(lo2) > MAX_MERGED_PAIRS:
+        raise NotApplicable(f"merging {len(lo1)} x {len(lo2)} rules exceeds the budget of {MAX_MERGED_PAIRS}")
+    lo = np.maximum(lo1[:, None], lo2[None])
+    hi = np.minimum(hi1[:, None], hi2[None])
+    i, k = np.nonzero(np.all(lo <= hi, axis=2))
+    return lo[i, k], hi[i, k], g1[i] + g2[k], c1[i] + c2[k]
+
+
+def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
+    """The minimum over the corners of the merged rule set, or NotApplicable (the caller falls back)."""
+    del seed  # deterministic; the argument keeps the optimizers interchangeable
+    start = time.perf_counter()
+    low, high = objective.low, objective.high
+    names = tuple(p.id for p in objective.free)
+    merged = None
+    for term in objective.terms:
+        boxes = term_boxes(detect(term, low, high, names), term.model)
+        merged = boxes if merged is None else merge(merged, boxes)
+    lo, hi, grad, const = merged
+    if len(lo) == 0:
+        raise NotApplicable("no rule combination covers the free-parameter ranges")
+    corner = np.where(grad > 0, lo, hi)
+    predicted = const + np.einsum("nd,nd->n", grad, corner)
+    # an open bound inside the range is approached from inside its box; the range bounds are closed
+    inward = np.where(grad > 0, 1.0, -1.0) * NUDGE * np.maximum(1.0, high - low)
+    interior = (corner > low) & (corner < high)
+    nudged = np.where(interior, np.clip(corner + inward, lo, hi), corner)
+    nudged = np.where(interior & (hi - lo < 2 * np.abs(inward)), (lo + hi) / 2, nudged)
+    order = np.argsort(predicted, kind="stable")
+    evaluations = 0
+    for chunk in range(0, len(order), CANDIDATES):
+        pick = order[chunk : chunk + CANDIDATES]
+        points = np.concatenate([corner[pick], nudged[pick]])
+        cost = objective.cost(points)
+        evaluations += len(points)
+        cost = np.where(objective.valid(points), cost, np.inf)
+        best = int(np.argmin(cost))
+        if np.isfinite(cost[best]):
+            return OptimizationResult(
+                values=tuple(float(v) for v in points[best]),
+                cost=float(cost[best]),
+                method="analytic",
+                evaluations=evaluations,
+                seconds=time.perf_counter() - start,
+                note=f"{len(lo)} merged rules",
+            )
+    raise NotApplicable("every corner of the merged rule set is marked invalid")

@@ -1,0 +1,97 @@
+"""The refinement objective: the summed predicted duration of the actions within the horizon (Sec. 5.4).
+
+A free parameter is one continuous value left open by instantiation (e.g. the heading at a subgoal, shared by
+the action that reaches it and the one that leaves it). A term is one action's model called on the features
+that the free values induce; the objective sums the terms. Every optimizer returns an OptimizationResult.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class FreeParameter:
+    """A free action parameter with its id (shared by the actions it links) and its closed range."""
+
+    id: str
+    low: float
+    high: float
+
+
+@dataclass(frozen=True, eq=False)
+class Term:
+    """One action's predicted duration: its action model called on features derived from the free values."""
+
+    model: object  # predict(F) -> (n,) and rules() -> list[Rule]
+    features: Callable[[np.ndarray], np.ndarray]  # theta (batch, n_free) -> (batch, n_features)
+    valid: Callable[[np.ndarray], np.ndarray] | None = None  # theta -> (batch,) bool; False = predicted failure
+    label: str = ""
+
+
+@dataclass(frozen=True, eq=False)
+class Objective:
+    """Sum of the terms' predicted durations as a function of the free parameters."""
+
+    free: tuple[FreeParameter, ...]
+    terms: tuple[Term, ...]
+
+    @property
+    def low(self) -> np.ndarray:
+        return np.array([p.low for p in self.free], dtype=float)
+
+    @property
+    def high(self) -> np.ndarray:
+        return np.array([p.high for p in self.free], dtype=float)
+
+    def cost(self, theta: np.ndarray) -> np.ndarray:
+        """Summed predicted duration (s) of each row of theta (batch, n_free)."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        total = np.zeros(len(theta))
+        for term in self.terms:
+            total += np.asarray(term.model.predict(term.features(theta)), dtype=float)
+        return total
+
+    def valid(self, theta: np.ndarray) -> np.ndarray:
+        """True where no term's model marks the parameterization invalid (e.g. a predicted failure)."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        ok = np.ones(len(theta), dtype=bool)
+        for term in self.terms:
+            if term.valid is not None:
+                ok &= np.asarray(term.valid(theta), dtype=bool)
+        return ok
+
+
+@dataclass(frozen=True)
+class OptimizationResult:
+    """The chosen free values (in the order of Objective.free), their predicted cost and how they were found."""
+
+    values: tuple[float, ...]
+    cost: float
+    method: str  # the optimizer actually used (analytic may fall back to "ga")
+    evaluations: int  # parameterizations whose cost was evaluated
+    seconds: float
+    note: str = ""  # e.g. why analytic fell back to the genetic algorithm
+
+
+def brute_force(objective: Objective, points_per_dim: int) -> OptimizationResult:
+    """Best valid point of a regular grid over the free ranges (endpoints included); the reference optimum."""
+    import time
+
+    start = time.perf_counter()
+    axes = [np.linspace(p.low, p.high, points_per_dim) for p in objective.free]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(axes))
+    cost = objective.cost(grid)
+    cost = np.where(objective.valid(grid), cost, np.inf)
+    best = int(np.argmin(cost))
+    return OptimizationResult(
+        values=tuple(float(v) for v in grid[best]),
+        cost=float(cost[best]),
+        method="grid",
+        evaluations=len(grid),
+        seconds=time.perf_counter() - start,
+        note="" if np.isfinite(cost[best]) else "no valid grid point",
+    )

@@ -1,0 +1,196 @@
+"""Synthetic refinement problems: random model trees over feature maps like those of the soccer actions.
+
+Used by the optimizer tests and benchmarks, independent of learned models. A feature is bound (a constant),
+affine in one free parameter, an absolute wrapped angle (like angle_to), a wrapped angle (like angle_at of
+the first action), a sign flip (like angle_at of the second), or, to exercise the fallback, curved (a
+distance over a free coordinate) or mixed (two free parameters in one feature).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from refinement.optimizers.objective import FreeParameter, Objective, Term
+from refinement.rules import Rule
+
+KINDS = ("bound", "affine", "abs", "wrap", "sign")  # piecewise affine in one free parameter
+ANGLE_KINDS = ("abs", "wrap", "sign")  # only for free parameters that are angles
+RANGE_SAMPLES = 4000  # random points used to find each feature's range before drawing split thresholds
+
+
+def wrap(angle: np.ndarray) -> np.ndarray:
+    """Angle normalized to [-pi, pi)."""
+    return (angle + np.pi) % (2 * np.pi) - np.pi
+
+
+class RandomModelTree:
+    """A model tree with random axis-aligned splits and a random linear model in each leaf."""
+
+    def __init__(self, low: np.ndarray, high: np.ndarray, n_leaves: int, rng: np.random.Generator):
+        self.feature, self.threshold, self.left, self.right = [-1], [0.0], [-1], [-1]
+        self.coef, self.intercept = [None], [0.0]
+        boxes = {0: (np.asarray(low, float).copy(), np.asarray(high, float).copy())}
+        leaves = [0]
+        while len(leaves) < n_leaves:
+            node = leaves.pop(int(rng.integers(len(leaves))))
+            lo, hi = boxes[node]
+            f = int(rng.integers(len(lo)))
+            thr = float(rng.uniform(lo[f], hi[f]))
+            self.feature[node], self.threshold[node] = f, thr
+            for side in (0, 1):
+                child = len(self.feature)
+                self.feature.append(-1), self.threshold.append(0.0), self.left.append(-1), self.right.append(-1)
+                self.coef.append(None), self.intercept.append(0.0)
+                clo, chi = lo.copy(), hi.copy()
+                (chi if side == 0 else clo)[f] = thr
+                boxes[child] = (clo, chi)
+                (self.left if side == 0 else self.right)[node] = child
+                leaves.append(child)
+        for leaf in leaves:
+            self.coef[leaf] = rng.normal(0.0, 1.0, len(low))
+            self.intercept[leaf] = float(rng.uniform(1.0, 3.0))
+        self.n_features = len(low)
+        self._arrays = (
+            np.array(self.feature), np.array(self.threshold), np.array(self.left), np.array(self.right),
+            np.array([c if c is not None else np.zeros(self.n_features) for c in self.coef]),
+            np.array(self.intercept),
+        )
+
+    def _leaf(self, F: np.ndarray) -> np.ndarray:
+        feature, threshold, left, right = self._arrays[:4]
+        node = np.zeros(len(F), dtype=int)
+        while True:
+            inner = feature[node] >= 0
+            if not inner.any():
+                return node
+            n = node[inner]
+            go_left = F[np.flatnonzero(inner), feature[n]] <= threshold[n]
+            node[inner] = np.where(go_left, left[n], right[n])
+
+    def predict(self, F: np.ndarray) -> np.ndarray:
+        F = np.atleast_2d(F)
+        leaf = self._leaf(F)
+        coef, intercept = self._arrays[4:]
+        return np.einsum("nf,nf->n", F, coef[leaf]) + intercept[leaf]
+
+    def rules(self) -> list[Rule]:
+        out = []
+        stack = [(0, np.full(self.n_features, -np.inf), np.full(self.n_features, np.inf))]
+        while stack:
+            node, lo, hi = stack.pop()
+            f = self.feature[node]
+            if f < 0:
+                out.append(Rule(lo, hi, self.coef[node], self.intercept[node]))
+                continue
+            lhi, rlo = hi.copy(), lo.copy()
+            lhi[f] = min(hi[f], self.threshold[node])
+            rlo[f] = max(lo[f], self.threshold[node])
+            stack.append((self.right[node], rlo, hi))
+            stack.append((self.left[node], lo, lhi))
+        return out
+
+
+@dataclass(frozen=True)
+class FeatureMap:
+    """One feature as a function of the free parameters: kind, the parameter(s) it uses, its constants."""
+
+    kind: str
+    var: int
+    a: float
+    b: float
+    other: int = -1
+
+    def __call__(self, theta: np.ndarray) -> np.ndarray:
+        t = theta[:, self.var] if self.var >= 0 else np.zeros(len(theta))
+        if self.kind == "bound":
+            return np.full(len(theta), self.b)
+        if self.kind == "affine":
+            return self.a * t + self.b
+        if self.kind == "abs":
+            return np.abs(wrap(self.a - t))
+        if self.kind == "wrap":
+            return wrap(t - self.a)
+        if self.kind == "sign":
+            return np.where(wrap(self.a - t) >= 0, 1.0, -1.0) * self.b
+        if self.kind == "curved":
+            return np.hypot(t - self.a, self.b)
+        if self.kind == "mixed":
+            return t + self.a * theta[:, self.other]
+        raise ValueError(f"unknown feature kind {self.kind!r}")
+
+
+def feature_function(maps: list[FeatureMap]):
+    def features(theta: np.ndarray) -> np.ndarray:
+        theta = np.atleast_2d(theta)
+        return np.stack([m(theta) for m in maps], axis=1)
+
+    return features
+
+
+def random_map(kind: str, var: int, rng: np.random.Generator, n_free: int = 1) -> FeatureMap:
+    if kind == "mixed":
+        return FeatureMap(kind, var, float(rng.uniform(0.5, 2)), 0.0, other=(var + 1) % n_free)
+    return FeatureMap(kind, var, float(rng.uniform(-np.pi, np.pi)), float(rng.uniform(0.2, 2.0)))
+
+
+def random_objective(
+    rng: np.random.Generator,
+    n_free: int,
+    n_terms: int,
+    n_leaves: int = 30,
+    n_features: int = 4,
+    extra_kind: str | None = None,
+) -> Objective:
+    """Terms sharing n_free parameters (even ones angles in [-pi, pi], odd ones speeds in [0, 2])."""
+    free = tuple(
+        FreeParameter(f"p{j}.phi", -np.pi, np.pi) if j % 2 == 0 else FreeParameter(f"p{j}.v", 0.0, 2.0)
+        for j in range(n_free)
+    )
+    terms = []
+    for k in range(n_terms):
+        maps = []
+        for i in range(n_features):
+            var = int(rng.integers(n_free)) if i > 0 else (k % n_free)  # the first feature uses a free one
+            kinds = KINDS if free[var].id.endswith("phi") else ("bound", "affine")
+            kind = str(rng.choice(kinds[1:] if i == 0 else kinds))
+            maps.append(random_map(kind, -1 if kind == "bound" else var, rng))
+        if extra_kind is not None and k == 0:
+            maps.append(random_map(extra_kind, 0, rng, n_free))
+        terms.append(_term(maps, n_leaves, free, rng, label=f"term{k}"))
+    return Objective(free, tuple(terms))
+
+
+def _term(maps, n_leaves, free, rng, label) -> Term:
+    features = feature_function(maps)
+    low = np.array([p.low for p in free])
+    high = np.array([p.high for p in free])
+    sample = features(rng.uniform(low, high, size=(RANGE_SAMPLES, len(free))))
+    tree = RandomModelTree(sample.min(axis=0), sample.max(axis=0), n_leaves, rng)
+    return Term(model=tree, features=features, label=label)
+
+
+def soccer_like(rng: np.random.Generator, n_leaves: int = 100) -> Objective:
+    """approachBall -> dribbleBall with the subgoal's heading phi and speed v free (Fig. 5.8/5.9 shape)."""
+    free = (FreeParameter("ball.phi", -np.pi, np.pi), FreeParameter("ball.v", 0.0, 0.3))
+    a1, a2 = rng.uniform(-np.pi, np.pi, size=2)
+    approach = [  # dist, angle_to (bound: the start pose is known), angle_at (phi free), v, vg
+        FeatureMap("bound", -1, 0.0, float(rng.uniform(0.5, 4))),
+        FeatureMap("bound", -1, 0.0, float(rng.uniform(0, np.pi))),
+        FeatureMap("wrap", 0, float(a1), 0.0),
+        FeatureMap("bound", -1, 0.0, 0.0),
+        FeatureMap("affine", 1, 1.0, 0.0),
+    ]
+    dribble = [  # dist, angle_to (phi free), angle_at (sign flips with phi), v (free), vg
+        FeatureMap("bound", -1, 0.0, float(rng.uniform(0.5, 4))),
+        FeatureMap("abs", 0, float(a2), 0.0),
+        FeatureMap("sign", 0, float(a2), float(rng.uniform(0.1, np.pi))),
+        FeatureMap("affine", 1, 1.0, 0.0),
+        FeatureMap("bound", -1, 0.0, 0.0),
+    ]
+    terms = (
+        _term(approach, n_leaves, free, rng, "approachBall"),
+        _term(dribble, n_leaves, free, rng, "dribbleBall"),
+    )
+    return Objective(free, terms)

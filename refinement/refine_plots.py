@@ -1,0 +1,84 @@
+"""Pictures of subgoal refinement: greedy vs refined trajectories (Fig. 5.1) and predicted time over the
+free angle of approach as polar plots (Fig. 5.8)."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+FIELD_X = (-4.0, 4.0)  # m, the soccer field of sims.soccer
+FIELD_Y = (-3.0, 3.0)
+
+
+def _save(fig, path: Path) -> None:
+    """Write the figure atomically: a reader never sees half a PNG."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(suffix=path.suffix or ".png", dir=path.parent)
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=110, bbox_inches="tight")
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def _draw_trajectory(ax, trajectory: np.ndarray, title: str, goals: list[tuple[float, float, float]]) -> None:
+    t, x, y, phi = trajectory[:, 0], trajectory[:, 1], trajectory[:, 2], trajectory[:, 3]
+    ax.plot(x, y, "-", color="tab:blue", lw=1.5, label="robot (ball point)")
+    step = max(1, len(t) // 25)
+    ax.quiver(x[::step], y[::step], np.cos(phi[::step]), np.sin(phi[::step]), color="tab:blue",
+              scale=25, width=0.004, alpha=0.6)
+    if trajectory.shape[1] >= 7 and np.isfinite(trajectory[:, 5]).any():
+        ax.plot(trajectory[:, 5], trajectory[:, 6], "--", color="tab:orange", lw=1.2, label="ball")
+        ax.plot(trajectory[0, 5], trajectory[0, 6], "o", color="tab:orange", ms=7)
+    for gx, gy, gphi in goals:
+        ax.plot(gx, gy, "x", color="k", ms=8)
+        if np.isfinite(gphi):
+            ax.arrow(gx, gy, 0.35 * np.cos(gphi), 0.35 * np.sin(gphi), head_width=0.08, color="k")
+    ax.set_xlim(*FIELD_X)
+    ax.set_ylim(*FIELD_Y)
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.3)
+    ax.set_title(title, fontsize=10)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+
+
+def plot_trajectories(path: Path, panels: list[tuple[str, np.ndarray, list[tuple[float, float, float]]]]) -> None:
+    """Side-by-side trajectories, one panel per (title, trajectory (n, 7), subgoals [(x, y, phi)])."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(panels), figsize=(6.0 * len(panels), 4.8))
+    for ax, (title, trajectory, goals) in zip(np.atleast_1d(axes), panels):
+        _draw_trajectory(ax, trajectory, title, goals)
+    np.atleast_1d(axes)[0].legend(loc="lower left", fontsize=8)
+    _save(fig, path)
+    plt.close(fig)
+
+
+def plot_polar_costs(path: Path, angles: np.ndarray, curves: list[tuple[str, np.ndarray]],
+                     marks: list[tuple[str, float]]) -> None:
+    """Predicted duration over the free angle of approach, one polar plot per curve (Fig. 5.8)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(curves), subplot_kw={"projection": "polar"}, figsize=(4.2 * len(curves), 4.2))
+    for ax, (title, values) in zip(np.atleast_1d(axes), curves):
+        ax.plot(angles, values, color="tab:blue")
+        for label, angle in marks:
+            k = int(np.argmin(np.abs(np.angle(np.exp(1j * (angles - angle))))))
+            ax.plot([angle], [values[k]], "o", ms=6, label=f"{label}: {np.degrees(angle):.0f}°, {values[k]:.2f} s")
+        ax.set_title(title, fontsize=10)
+        ax.legend(loc="lower center", bbox_to_anchor=(0.5, -0.32), fontsize=8)
+    _save(fig, path)
+    plt.close(fig)

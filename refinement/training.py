@@ -1,0 +1,160 @@
+"""Learning a domain's action models end to end (Chapter 4): gather experience, train, write models and report.
+
+The recipe of a domain says which actions get a duration model and which scenario feeds the collision
+classifier. Everything is computed first and written only at the end, each file to a temporary name that is
+renamed over the target once all are complete: an interrupted run leaves the old files untouched.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from tqdm import tqdm
+
+from planner_bridge.bundled import DOMAINS_DIR
+from refinement.action_models import COLLISION_SUFFIX
+from refinement.collision import train_collision_model
+from refinement.errors import DataError, TailorError
+from refinement.learning import EPISODE_FRACTIONS, N_I_CANDIDATES, train_duration_model
+from refinement.training_report import format_report
+from sims.episode import Episode
+
+FRESH_SEED_OFFSET = 7_919_000  # the fresh test episodes of the classifier use seed + this: no shared episode
+
+
+@dataclass(frozen=True)
+class TrainingRecipe:
+    """What `tailor train DOMAIN` learns."""
+
+    domain: str
+    duration_actions: tuple[str, ...]  # each also the name of its experience scenario
+    collision_scenario: str  # experience for the collision classifier (Sec. 4.2.2)
+    collision_action: str  # the action the classifier guards
+    default_episodes: int  # per scenario; chosen so the floors hold and a run takes < 15 min on 2 cores
+    fresh_episodes: int = 1000  # fresh episodes the classifier is evaluated on (Table 4.4)
+
+
+TRAINING_DOMAINS: dict[str, TrainingRecipe] = {
+    "soccer": TrainingRecipe(
+        domain="soccer",
+        duration_actions=("goToPose", "approachBall", "dribbleBall"),
+        collision_scenario="goToPoseAtBall",
+        collision_action="goToPose",
+        default_episodes=1000,
+    ),
+}
+
+
+def recipe_for(domain: str) -> TrainingRecipe:
+    try:
+        return TRAINING_DOMAINS[domain]
+    except KeyError:
+        raise TailorError(f"no training recipe for domain {domain!r} (known: {', '.join(TRAINING_DOMAINS)})") from None
+
+
+def default_out(domain: str) -> Path:
+    return DOMAINS_DIR / domain
+
+
+Gather = Callable[..., list[Episode]]
+
+
+def train_domain(
+    recipe: TrainingRecipe,
+    episodes: int,
+    seed: int,
+    out: Path,
+    jobs: int = 1,
+    fresh_episodes: int | None = None,
+    progress: bool = True,
+    gather: Gather | None = None,
+    n_i_candidates: tuple[int, ...] = N_I_CANDIDATES,
+    episode_fractions: tuple[float, ...] = EPISODE_FRACTIONS,
+) -> dict:
+    """Gather, train and write `out/models/*.json` and `out/training/` (report and plots); return the report."""
+    if gather is None:
+        from sims.experience import gather
+    if episodes < 1:
+        raise DataError(f"--episodes must be positive, got {episodes}")
+    fresh_episodes = recipe.fresh_episodes if fresh_episodes is None else fresh_episodes
+    started = time.perf_counter()
+
+    experience = {}
+    for scenario in (*recipe.duration_actions, recipe.collision_scenario):
+        experience[scenario] = gather(scenario, episodes, seed=seed, jobs=jobs, progress=progress)
+    fresh = gather(recipe.collision_scenario, fresh_episodes, seed=seed + FRESH_SEED_OFFSET, jobs=jobs,
+                   progress=progress)
+    shared = {e.seed for e in experience[recipe.collision_scenario]} & {e.seed for e in fresh}
+    if shared:
+        raise DataError(f"fresh and training episodes share seeds {sorted(shared)[:3]}: choose another seed")
+    gathered = time.perf_counter()
+
+    fits = len(recipe.duration_actions) * (len(n_i_candidates) + len(episode_fractions) + 2) + 2
+    with tqdm(total=fits, desc="training", unit="fit", disable=not progress) as bar:
+        def step(label: str) -> None:
+            bar.set_postfix_str(label, refresh=False)
+            bar.update(1)
+
+        models = {}
+        for action in recipe.duration_actions:
+            models[action] = train_duration_model(action, experience[action], seed, step=step,
+                                                  n_i_candidates=n_i_candidates,
+                                                  episode_fractions=episode_fractions).model
+        collision = train_collision_model(recipe.collision_action, experience[recipe.collision_scenario], fresh,
+                                          seed, step=step).model
+        bar.n = bar.total
+        bar.refresh()
+
+    report = {
+        "schema": "tailor.training_report/1",
+        "domain": recipe.domain,
+        "seed": seed,
+        "episodes_per_scenario": episodes,
+        "models": {action: model.report for action, model in models.items()},
+        "collision": collision.report,
+        "gather_seconds": gathered - started,
+        "train_seconds": time.perf_counter() - gathered,
+    }
+    write_outputs(out, models, collision, report)
+    return report
+
+
+def write_outputs(out: Path, models: dict, collision, report: dict) -> None:
+    """Stage every file beside its target, then rename them all into place."""
+    from refinement import learning_plots
+
+    models_dir, training_dir = Path(out) / "models", Path(out) / "training"
+    files: dict[Path, Callable[[Path], None]] = {}
+    for action, model in models.items():
+        files[models_dir / f"{action}.json"] = _json_writer(model.to_json())
+    files[models_dir / f"{collision.action}{COLLISION_SUFFIX}"] = _json_writer(collision.to_json())
+    files[training_dir / "report.json"] = _json_writer(report)
+    files[training_dir / "report.txt"] = lambda p: p.write_text(format_report(report, models, collision), "utf-8")
+    reports = {action: model.report for action, model in models.items()}
+    files[training_dir / "mae_vs_n_i.png"] = lambda p: learning_plots.plot_mae_vs_n_i(reports, p)
+    files[training_dir / "mae_vs_episodes.png"] = lambda p: learning_plots.plot_mae_vs_episodes(reports, p)
+    files[training_dir / "angle_at_polar.png"] = lambda p: learning_plots.plot_angle_at(models, p)
+
+    staged: list[tuple[Path, Path]] = []
+    try:
+        for target, write in files.items():
+            target.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(prefix=f".{target.stem}.", suffix=target.suffix, dir=target.parent)
+            os.close(fd)
+            staged.append((Path(tmp), target))
+            write(Path(tmp))
+        for tmp, target in staged:
+            os.replace(tmp, target)
+    finally:
+        for tmp, _ in staged:
+            tmp.unlink(missing_ok=True)
+
+
+def _json_writer(data: dict) -> Callable[[Path], None]:
+    return lambda path: path.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")

@@ -1,0 +1,74 @@
+"""The readable training report: a Table 4.3-like row per duration model, the classifier's confusion matrix
+(Table 4.4), and the learned rules."""
+
+from __future__ import annotations
+
+
+def _hours_minutes(hours: float) -> str:
+    minutes = round(hours * 60.0)
+    return f"{minutes // 60}:{minutes % 60:02d}"
+
+
+def _percent(share: float) -> str:
+    return f"{100.0 * share:.1f}%"
+
+
+def duration_table(reports: dict[str, dict]) -> list[str]:
+    header = (f"{'action':<14}{'episodes':>9}{'mean t (s)':>11}{'sim. h:mm':>10}{'n_i':>5}{'MAE (s)':>9}"
+              f"{'MAE/t':>7}{'HGB MAE (s)':>12}{'MAE/HGB':>8}{'leaves':>7}")
+    lines = [header, "-" * len(header)]
+    for action, r in reports.items():
+        lines.append(
+            f"{action:<14}{r['episodes']:>9d}{r['mean_duration']:>11.2f}{_hours_minutes(r['simulated_hours']):>10}"
+            f"{r['n_i']:>5d}{r['mae']:>9.3f}{_percent(r['mae_relative']):>7}{r['mae_hgb']:>12.3f}"
+            f"{r['mae_over_hgb']:>8.2f}{r['leaves']:>7}"
+        )
+    return lines
+
+
+def confusion_table(evaluation: dict) -> list[str]:
+    c, n = evaluation["counts"], max(evaluation["episodes"], 1)
+    share = lambda key: _percent(c[key] / n)  # noqa: E731
+    fail_row = c["predicted_fail_observed_fail"] + c["predicted_fail_observed_success"]
+    success_row = c["predicted_success_observed_fail"] + c["predicted_success_observed_success"]
+    fail_col = c["predicted_fail_observed_fail"] + c["predicted_success_observed_fail"]
+    success_col = c["predicted_fail_observed_success"] + c["predicted_success_observed_success"]
+    return [
+        f"{'':<20}{'observed Fail':>14}{'observed Success':>18}{'total':>8}",
+        f"{'predicted Fail':<20}{share('predicted_fail_observed_fail'):>14}"
+        f"{share('predicted_fail_observed_success'):>18}{_percent(fail_row / n):>8}",
+        f"{'predicted Success':<20}{share('predicted_success_observed_fail'):>14}"
+        f"{share('predicted_success_observed_success'):>18}{_percent(success_row / n):>8}",
+        f"{'total':<20}{_percent(fail_col / n):>14}{_percent(success_col / n):>18}"
+        f"   correct {_percent(evaluation['accuracy'])}",
+    ]
+
+
+def format_report(report: dict, models: dict, collision) -> str:
+    """The whole report as text; `models` and `collision` give the rules."""
+    c = report["collision"]
+    lines = [
+        f"Action models of domain {report['domain']} (seed {report['seed']}, "
+        f"{report['episodes_per_scenario']} episodes per scenario; "
+        f"gathering {report['gather_seconds']:.0f} s, training {report['train_seconds']:.0f} s)",
+        "",
+        "Duration models (Table 4.3): successful episodes, their mean duration, simulated time of all gathered",
+        "episodes, chosen n_i, MAE on the held-out quarter (first example of each episode), and the MAE of",
+        "HistGradientBoostingRegressor trained on the same examples; leaves of the stored model (all episodes).",
+        "",
+        *duration_table(report["models"]),
+        "",
+        f"Collision classifier ({c['action']} to a pose at the ball, Sec. 4.2.2): decision tree trained on "
+        f"{c['episodes']} episodes, cost of a false success {c['cost_false_success']:g}, "
+        f"min_samples_leaf {c['min_samples_leaf']}, {c['leaves']} leaves.",
+        f"Confusion matrix on {c['fresh_episodes']} fresh episodes (Table 4.4):",
+        "",
+        *confusion_table(c["confusion"]),
+        "",
+        f"false success: {_percent(c['false_success'])} of the failing episodes were predicted to succeed",
+        "",
+    ]
+    for action, model in models.items():
+        lines += [f"Rules of {action} (n_i = {model.n_i}):", model.rules_text(), ""]
+    lines += [f"Rules of the collision classifier of {collision.action}:", collision.rules_text(), ""]
+    return "\n".join(lines)

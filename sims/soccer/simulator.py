@@ -1,0 +1,272 @@
+"""SoccerSim: one robot and a ball on the field, a pymunk space stepped at a fixed rate (headless).
+
+Timing: physics at PHYSICS_HZ, the action (controller) at CONTROL_HZ holding its command in between, the
+state logged at LOG_HZ (Sec. 4.1: 10 Hz). The robot is a kinematic body: each physics step its [v, phidot]
+moves toward the (noisy) command by at most A_MAX / ALPHA_MAX per second, within V_MAX / W_MAX (unicycle
+model of the wheel axle); pymunk resolves its contacts with the ball.
+
+An action ends (Episode.outcome) on
+- "success": ball point within POS_TOL of the goal, heading within HEADING_TOL, speed within SPEED_TOL of
+  vg; for approachBall the untouched ball also lies within POS_TOL of the ball point, for dribbleBall the
+  ball sits in the guide (within BALL_HELD_DISTANCE of the ball point);
+- "collision": a ball is in the scene, the action does not dribble, and the ball moved (by more than
+  BUMP_DISTANCE) before the goal pose was reached;
+- "ball_lost": dribbling, the ball is further than BALL_LOST_DISTANCE from the ball point;
+- "timeout": TIMEOUT simulated seconds passed.
+Termination is judged on the true state; the action sees (and the Episode logs) the believed state.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pymunk
+
+from sims import ACTIONS
+from sims.episode import ActionCall, ActionResult, Episode, SequenceResult
+from sims.errors import SimError
+from sims.soccer import world as W
+from sims.soccer.actions import ACTION_FUNCTIONS
+
+PHYSICS_HZ = 100  # Hz, fixed physics step
+CONTROL_HZ = 20  # Hz, controller rate (must divide PHYSICS_HZ)
+LOG_HZ = 10  # Hz, logging rate (must divide CONTROL_HZ)
+DT = 1.0 / PHYSICS_HZ  # s
+STEPS_PER_CONTROL = PHYSICS_HZ // CONTROL_HZ
+CONTROLS_PER_LOG = CONTROL_HZ // LOG_HZ
+
+POS_TOL = 0.1  # m, ball point to goal position
+HEADING_TOL = 0.2  # rad, heading to goal heading
+SPEED_TOL = 0.15  # m/s, speed to vg
+BALL_HELD_DISTANCE = 0.06  # m, a ball this close to the ball point is in the guide
+BALL_LOST_DISTANCE = 0.15  # m, a dribbled ball further than this from the ball point is lost
+BUMP_DISTANCE = 0.02  # m, a ball moved this far was bumped
+TIMEOUT = 30.0  # s, simulated time an action may take
+
+_WALL_RADIUS = 0.02  # m, thickness of the wall segments
+_GUIDE_RADIUS = 0.005  # m, thickness of the guide arms
+
+
+@dataclass(frozen=True)
+class Noise:
+    """Seeded noise: on the motor commands (as the motors execute them) and on the believed state.
+
+    motor: relative standard deviation of the executed v and phidot, drawn anew each control period;
+    position (m), heading (rad), speed (m/s): standard deviations of the believed robot pose and ball.
+    """
+
+    motor: float = 0.03
+    position: float = 0.01
+    heading: float = math.radians(1.0)
+    speed: float = 0.01
+
+    @classmethod
+    def off(cls) -> Noise:
+        return cls(0.0, 0.0, 0.0, 0.0)
+
+
+def _ball_velocity(body: pymunk.Body, gravity: tuple[float, float], damping: float, dt: float) -> None:
+    """Rolling friction: the ball's speed drops by ROLL_DECELERATION * dt each step, down to rest."""
+    vx, vy = body.velocity
+    speed = math.hypot(vx, vy)
+    drop = W.ROLL_DECELERATION * dt
+    if speed <= drop:
+        body.velocity = (0.0, 0.0)
+    else:
+        k = (speed - drop) / speed
+        body.velocity = (vx * k, vy * k)
+
+
+class SoccerSim:
+    """The soccer field with one robot and (optionally) a ball; `run` executes one action as an Episode."""
+
+    def __init__(self, seed: int, noise: Noise = Noise()):
+        self.noise = noise
+        self.rng = np.random.default_rng(seed)
+        self.seed = int(seed)
+        self.space = pymunk.Space()
+        self._add_walls()
+        self.robot = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        hl, hw = W.ROBOT_HALF_LENGTH, W.ROBOT_HALF_WIDTH
+        shapes = [pymunk.Poly(self.robot, [(-hl, -hw), (hl, -hw), (hl, hw), (-hl, hw)])]
+        shapes += [pymunk.Segment(self.robot, a, b, _GUIDE_RADIUS) for a, b in W.guide_arms()]
+        for shape in shapes:
+            shape.friction, shape.elasticity = 0.0, 0.0
+        self.space.add(self.robot, *shapes)
+        self.ball = pymunk.Body(W.BALL_MASS, math.inf)
+        self.ball.velocity_func = _ball_velocity
+        ball_shape = pymunk.Circle(self.ball, W.BALL_RADIUS)
+        ball_shape.friction, ball_shape.elasticity = 0.0, W.WALL_ELASTICITY
+        self._ball_shape = ball_shape
+        self.has_ball = False
+        self.time = 0.0
+        self.v = self.w = 0.0  # true translational / rotational velocity
+        self.phi = 0.0  # true heading (mirrors the body's angle)
+        self.v_cmd = self.w_cmd = 0.0
+
+    def _add_walls(self) -> None:
+        hx, hy = W.FIELD_HALF_LENGTH + W.WALL_RUNOFF, W.FIELD_HALF_WIDTH + W.WALL_RUNOFF
+        corners = [(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)]
+        for a, b in zip(corners, corners[1:] + corners[:1]):
+            wall = pymunk.Segment(self.space.static_body, a, b, _WALL_RADIUS)
+            wall.elasticity, wall.friction = W.WALL_ELASTICITY, 0.0
+            self.space.add(wall)
+
+    # --- state ------------------------------------------------------------------------------------------
+    def reset(self, robot: tuple[float, float, float, float], ball: tuple[float, float] | None = None) -> None:
+        """Place the robot (ball point x, y, heading phi, speed v) and the ball (at rest) or no ball."""
+        x, y, phi, v = (float(q) for q in robot)
+        if not all(math.isfinite(q) for q in (x, y, phi, v)) or abs(v) > W.V_MAX + 1e-9:
+            raise SimError(f"invalid robot state {robot}: finite values and |v| <= {W.V_MAX} m/s required")
+        self.phi, self.v, self.w = phi, v, 0.0
+        self.v_cmd, self.w_cmd = v, 0.0
+        self.robot.angle = phi
+        self.robot.position = (x - W.BALL_POINT_OFFSET * math.cos(phi), y - W.BALL_POINT_OFFSET * math.sin(phi))
+        self.robot.velocity = (v * math.cos(phi), v * math.sin(phi))
+        self.robot.angular_velocity = 0.0
+        if ball is not None and not self.has_ball:
+            self.space.add(self.ball, self._ball_shape)
+        elif ball is None and self.has_ball:
+            self.space.remove(self.ball, self._ball_shape)
+        self.has_ball = ball is not None
+        if ball is not None:
+            self.ball.position = (float(ball[0]), float(ball[1]))
+            self.ball.velocity = (0.0, 0.0)
+        self.space.reindex_shapes_for_body(self.robot)
+        self.time = 0.0
+
+    def true_state(self) -> tuple[float, float, float, float, float, float]:
+        """(x, y, phi, v, ball_x, ball_y) of the ball point; ball NaN without a ball."""
+        px, py = self.robot.position
+        c, s = math.cos(self.phi), math.sin(self.phi)
+        bx, by = self.ball.position if self.has_ball else (math.nan, math.nan)
+        return px + W.BALL_POINT_OFFSET * c, py + W.BALL_POINT_OFFSET * s, W.wrap(self.phi), self.v, bx, by
+
+    def believed_state(self) -> tuple[float, float, float, float, float, float]:
+        """The true state with the seeded sensing noise of `self.noise`."""
+        x, y, phi, v, bx, by = self.true_state()
+        n, e = self.noise, self.rng.standard_normal(6)
+        return (x + n.position * e[0], y + n.position * e[1], W.wrap(phi + n.heading * e[2]), v + n.speed * e[3],
+                bx + n.position * e[4], by + n.position * e[5])
+
+    # --- dynamics ---------------------------------------------------------------------------------------
+    def command(self, v_cmd: float, w_cmd: float) -> None:
+        """Send a motor command [v, phidot]; the motors execute it with noise, within the velocity limits."""
+        e = self.rng.standard_normal(2) if self.noise.motor > 0.0 else (0.0, 0.0)
+        v_cmd *= 1.0 + self.noise.motor * e[0]
+        w_cmd *= 1.0 + self.noise.motor * e[1]
+        self.v_cmd = max(-W.V_MAX, min(W.V_MAX, v_cmd))
+        self.w_cmd = max(-W.W_MAX, min(W.W_MAX, w_cmd))
+
+    def step(self) -> None:
+        """One physics step: accelerate toward the command within the limits, move, resolve contacts."""
+        dv, dw = self.v_cmd - self.v, self.w_cmd - self.w
+        a, alpha = W.A_MAX * DT, W.ALPHA_MAX * DT
+        self.v += a if dv > a else -a if dv < -a else dv
+        self.w += alpha if dw > alpha else -alpha if dw < -alpha else dw
+        robot = self.robot
+        robot.velocity = (self.v * math.cos(self.phi), self.v * math.sin(self.phi))
+        robot.angular_velocity = self.w
+        self.space.step(DT)
+        self.phi += self.w * DT
+        self.time += DT
+
+    # --- actions ----------------------------------------------------------------------------------------
+    def run(self, call: ActionCall) -> Episode:
+        """Execute one action from the current state until it ends; the Episode logs the believed state."""
+        return self._execute(call, trajectory=None)
+
+    def run_sequence(self, calls: list[ActionCall]) -> SequenceResult:
+        """Dispatch actions one after the other without stopping between them; stop at the first failure."""
+        trajectory: list[tuple[float, ...]] = []
+        results = []
+        self._next_sample = self.time
+        for call in calls:
+            start = self.time
+            episode = self._execute(call, trajectory)
+            results.append(ActionResult(call.action, episode.outcome, episode.duration, start))
+            if not episode.succeeded:
+                break
+        return SequenceResult(tuple(results), np.array(trajectory, dtype=float).reshape(-1, 7))
+
+    def _execute(self, call: ActionCall, trajectory: list | None) -> Episode:
+        if call.action not in ACTION_FUNCTIONS or ACTIONS.get(call.action) is None:
+            raise SimError(f"unknown soccer action {call.action!r}; known: {', '.join(ACTION_FUNCTIONS)}")
+        if len(call.goal) != 4 or not all(math.isfinite(float(g)) for g in call.goal):
+            raise SimError(f"{call.action}: goal must be 4 finite numbers (xg, yg, phig, vg), got {call.goal}")
+        act = ACTION_FUNCTIONS[call.action]
+        xg, yg, phig, vg = (float(g) for g in call.goal)
+        dribbling = call.action == "dribbleBall"
+        if dribbling and not self.has_ball:
+            raise SimError("dribbleBall needs a ball in the scene")
+        ball_start = tuple(self.ball.position) if self.has_ball else None
+        ticks = 0
+        log_t, log_robot, log_ball = [], [], []
+        params = None
+        max_ticks = int(round(TIMEOUT * CONTROL_HZ))
+        outcome = "timeout"
+        while True:
+            if trajectory is not None and self.time >= self._next_sample - 1e-9:
+                trajectory.append((self.time, *self.true_state()))
+                self._next_sample += 1.0 / LOG_HZ
+            belief = self.believed_state()
+            if params is None:
+                params = np.array([*belief[:4], xg, yg, phig, vg], dtype=float)
+            if ticks % CONTROLS_PER_LOG == 0:
+                log_t.append(ticks / CONTROL_HZ)
+                log_robot.append(belief[:4])
+                log_ball.append(belief[4:])
+            ended = self._judge(call.action, dribbling, ball_start, xg, yg, phig, vg)
+            if ended is not None:
+                outcome = ended
+                break
+            if ticks >= max_ticks:
+                break
+            self.command(*act(belief[0], belief[1], belief[2], belief[3], xg, yg, phig, vg))
+            for _ in range(STEPS_PER_CONTROL):
+                self.step()
+            self._keep_inside()
+            ticks += 1
+        episode = Episode(call.action, params, np.array(log_t), np.array(log_robot, dtype=float).reshape(-1, 4),
+                          np.array(log_ball, dtype=float).reshape(-1, 2), outcome, ticks / CONTROL_HZ, self.seed)
+        return episode
+
+    def _judge(self, action: str, dribbling: bool, ball_start, xg: float, yg: float, phig: float,
+               vg: float) -> str | None:
+        """The outcome if the action has ended in the current true state, else None."""
+        x, y, phi, v, bx, by = self.true_state()
+        ball_gap = math.hypot(bx - x, by - y) if self.has_ball else math.nan
+        if dribbling and ball_gap > BALL_LOST_DISTANCE:
+            return "ball_lost"
+        at_goal = (math.hypot(x - xg, y - yg) <= POS_TOL and abs(W.wrap(phi - phig)) <= HEADING_TOL
+                   and abs(v - vg) <= SPEED_TOL)
+        bumped = (ball_start is not None and not dribbling
+                  and math.hypot(bx - ball_start[0], by - ball_start[1]) > BUMP_DISTANCE)
+        if bumped:
+            return "collision"
+        if at_goal:
+            if dribbling and ball_gap > BALL_HELD_DISTANCE:
+                return None
+            if action == "approachBall" and ball_gap > POS_TOL:
+                return None
+            return "success"
+        return None
+
+    def _keep_inside(self) -> None:
+        """Clamp the robot inside the walls (a kinematic body is not stopped by them)."""
+        px, py = self.robot.position
+        hx = W.FIELD_HALF_LENGTH + W.WALL_RUNOFF - W.ROBOT_HALF_LENGTH
+        hy = W.FIELD_HALF_WIDTH + W.WALL_RUNOFF - W.ROBOT_HALF_WIDTH
+        if abs(px) > hx or abs(py) > hy:
+            self.robot.position = (max(-hx, min(hx, px)), max(-hy, min(hy, py)))
+            self.space.reindex_shapes_for_body(self.robot)
+
+
+def simulate_sequence(robot: tuple[float, float, float, float], ball: tuple[float, float] | None,
+                      calls: list[ActionCall], seed: int, noise: Noise | None = None) -> SequenceResult:
+    """Execute a sequence of actions in a fresh simulator: reset to (robot, ball), then run_sequence."""
+    sim = SoccerSim(seed, Noise() if noise is None else noise)
+    sim.reset(robot, ball)
+    return sim.run_sequence(list(calls))

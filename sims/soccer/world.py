@@ -1,0 +1,76 @@
+"""The soccer world: field, Pioneer-like robot with a passive ball guide, ball; all constants in SI units.
+
+Coordinates: metres, radians, seconds; x along the field's length, phi counter-clockwise from +x.
+
+Field (RoboCup mid-size, Sec. 1.2.1): the playing area is x in [-FIELD_HALF_LENGTH, FIELD_HALF_LENGTH],
+y in [-FIELD_HALF_WIDTH, FIELD_HALF_WIDTH] (8 x 6 m); walls stand WALL_RUNOFF beyond the lines, as the carpet
+of a real field extends past them. Walls reflect the ball; the robot is a kinematic body that walls do not
+stop (experience ranges keep it on the field with a margin; a position clamp keeps it inside the walls).
+
+Robot (Pioneer I with its passive guide rail, App. B.1): differential drive, motor commands [v, phidot]
+(Sec. 2.1) limited to |v| <= V_MAX, |phidot| <= W_MAX and changed no faster than A_MAX, ALPHA_MAX. Its
+reference point, the pose (x, y) in every soccer action, parameter and log, is the *ball point*: the centre
+of the V-shaped guide on its front, where a dribbled ball sits, BALL_POINT_OFFSET ahead of the wheel axle
+(the centre of rotation). A V lets a ball pushed sideways slide forward along an arm and out: a turn too
+sharp for the rolling friction that presses the ball into the V loses it, and so does braking harder than
+the ball decelerates by itself (ROLL_DECELERATION).
+
+Ball: a RoboCup ball (BALL_RADIUS) that slides without spin (infinite moment) and loses speed at the
+constant rolling-friction deceleration mu_r * g, so it stops after v0^2 / (2 mu_r g).
+"""
+
+from __future__ import annotations
+
+import math
+
+# --- field (m) -------------------------------------------------------------------------------------------
+FIELD_HALF_LENGTH = 4.0  # m, playing area x in [-4, 4]
+FIELD_HALF_WIDTH = 3.0  # m, playing area y in [-3, 3]
+WALL_RUNOFF = 1.0  # m, walls stand this far outside the lines
+WALL_ELASTICITY = 0.5  # ball bounce off the walls
+
+# --- robot (Pioneer-like differential drive) ------------------------------------------------------------
+V_MAX = 1.0  # m/s, translational velocity limit (forward and backward)
+W_MAX = 3.0  # rad/s, rotational velocity limit
+A_MAX = 1.0  # m/s^2, translational acceleration limit (speeding up and braking)
+ALPHA_MAX = 6.0  # rad/s^2, rotational acceleration limit
+ROBOT_HALF_LENGTH = 0.2  # m, body: 0.4 x 0.4 m square centred on the wheel axle
+ROBOT_HALF_WIDTH = 0.2  # m
+
+# --- ball ------------------------------------------------------------------------------------------------
+BALL_RADIUS = 0.11  # m, FIFA size-5 ball used in the mid-size league
+BALL_MASS = 0.45  # kg
+GRAVITY = 9.81  # m/s^2
+MU_ROLL = 0.05  # rolling-friction coefficient of a ball on carpet (dimensionless)
+ROLL_DECELERATION = MU_ROLL * GRAVITY  # m/s^2, constant deceleration of a free rolling ball (0.49)
+
+# --- ball guide (a V of two arms on the robot's front) --------------------------------------------------
+GUIDE_HALF_ANGLE = math.radians(15.0)  # rad, angle between the driving direction and each arm
+GUIDE_CLEARANCE = 0.005  # m, gap between a seated ball and the front plate / arms
+GUIDE_ARM_LENGTH = 0.2  # m, length of each arm from the front plate's corner outward
+BALL_POINT_OFFSET = ROBOT_HALF_LENGTH + BALL_RADIUS + GUIDE_CLEARANCE  # m, axle -> ball point (0.315)
+
+
+def guide_arms() -> list[tuple[tuple[float, float], tuple[float, float]]]:
+    """The two arm segments in the robot frame (axle at the origin, +x forward), tangent to a seated ball.
+
+    An arm leaves the front plate where it is tangent (with clearance) to a ball centred on the ball point
+    and opens outward at GUIDE_HALF_ANGLE from the driving direction.
+    """
+    arms = []
+    r = BALL_RADIUS + GUIDE_CLEARANCE
+    for side in (1.0, -1.0):
+        # the arm line is at distance r from the ball point, its direction (cos a, side * sin a)
+        a = GUIDE_HALF_ANGLE
+        nx, ny = -math.sin(a), side * math.cos(a)  # outward normal of the arm line, pointing sideways
+        # points p on the line satisfy (p - ball_point) . n = r; start where the line meets the front plate
+        px0 = ROBOT_HALF_LENGTH
+        py0 = (r - (px0 - BALL_POINT_OFFSET) * nx) / ny
+        dx, dy = math.cos(a), side * math.sin(a)
+        arms.append(((px0, py0), (px0 + GUIDE_ARM_LENGTH * dx, py0 + GUIDE_ARM_LENGTH * dy)))
+    return arms
+
+
+def wrap(angle: float) -> float:
+    """The angle normalized to [-pi, pi)."""
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi

@@ -1,0 +1,55 @@
+"""Synthetic soccer episodes for the learning tests: a robot that turns towards the goal and drives to it.
+
+Durations follow a known formula (turn at TURN_RATE, then drive at SPEED, then turn to the goal heading), so
+the learning pipeline can be tested without the simulator; `gather` has the signature of
+`sims.experience.gather`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from refinement.features import norm
+from sims.episode import Episode
+
+SPEED = 0.8  # m/s
+TURN_RATE = 2.0  # rad/s
+LOG_PERIOD = 0.1  # s
+NOISE = 0.05  # s, Gaussian noise on the duration
+
+
+def synthetic_duration(params: np.ndarray) -> np.ndarray:
+    """Turn to face the goal, drive there, turn to the goal heading."""
+    params = np.atleast_2d(params)
+    dx, dy = params[:, 4] - params[:, 0], params[:, 5] - params[:, 1]
+    bearing = np.arctan2(dy, dx)
+    turn_in = np.abs(norm(bearing - params[:, 2]))
+    turn_out = np.abs(norm(params[:, 6] - bearing))
+    return (turn_in + turn_out) / TURN_RATE + np.hypot(dx, dy) / SPEED
+
+
+def synthetic_episode(action: str, seed: int, collide_beyond: float | None = None) -> Episode:
+    """One episode; with `collide_beyond`, it ends in a collision when |angle_at| exceeds that angle (rad)."""
+    rng = np.random.default_rng(seed)
+    params = np.concatenate([rng.uniform(-3, 3, 2), rng.uniform(-np.pi, np.pi, 1), rng.uniform(0, 0.5, 1),
+                             rng.uniform(-3, 3, 2), rng.uniform(-np.pi, np.pi, 1), rng.uniform(0, 0.5, 1)])
+    duration = float(synthetic_duration(params)[0] + rng.normal(0.0, NOISE))
+    duration = max(duration, 2 * LOG_PERIOD)
+    t = np.arange(0.0, duration, LOG_PERIOD)
+    share = (t / duration)[:, None]
+    robot = np.empty((len(t), 4))
+    robot[:, :2] = params[:2] + share * (params[4:6] - params[:2])
+    robot[:, 2] = params[2] + share[:, 0] * norm(params[6] - params[2])
+    robot[:, 3] = params[3] + share[:, 0] * (params[7] - params[3])
+    outcome = "success"
+    if collide_beyond is not None:
+        bearing = np.arctan2(params[5] - params[1], params[4] - params[0])
+        if abs(norm(params[6] - bearing)) > collide_beyond:
+            outcome = "collision"
+    return Episode(action, params, t, robot, np.full((len(t), 2), np.nan), outcome, duration, seed)
+
+
+def gather(scenario: str, episodes: int, seed: int, jobs: int = 1, progress: bool = True) -> list[Episode]:
+    """Stand-in for sims.experience.gather: one seed per episode, derived from `seed`."""
+    collide = 2.0 if scenario == "goToPoseAtBall" else None
+    return [synthetic_episode(scenario, seed * 100_003 + i, collide) for i in range(episodes)]

@@ -1,0 +1,135 @@
+"""Feature spaces (Table 4.1) and intermediate examples (Sec. 4.1.2)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from refinement.errors import DataError
+from refinement.features import (
+    FEATURE_SETS,
+    compute_features,
+    feature_names,
+    first_examples,
+    intermediate_examples,
+    norm,
+)
+from sims.episode import Episode
+
+PI = math.pi
+
+
+def random_params(n: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return np.column_stack([
+        rng.uniform(-4, 4, n), rng.uniform(-3, 3, n), rng.uniform(-PI, PI, n), rng.uniform(0, 1, n),
+        rng.uniform(-4, 4, n), rng.uniform(-3, 3, n), rng.uniform(-PI, PI, n), rng.uniform(0, 1, n),
+    ])
+
+
+def transform(params: np.ndarray, angle: float, shift: tuple[float, float], mirror: bool) -> np.ndarray:
+    """Rotate the whole scene by `angle` about the origin, translate it by `shift`, optionally mirror in y."""
+    out = params.copy()
+    c, s = math.cos(angle), math.sin(angle)
+    for xi, yi, hi in ((0, 1, 2), (4, 5, 6)):
+        x, y = params[:, xi], params[:, yi]
+        out[:, xi] = c * x - s * y + shift[0]
+        out[:, yi] = s * x + c * y + shift[1]
+        out[:, hi] = params[:, hi] + angle
+        if mirror:
+            out[:, yi], out[:, hi] = -out[:, yi], -out[:, hi]
+    return out
+
+
+def test_norm_wraps_into_minus_pi_to_pi():
+    angles = np.array([0.0, 0.5, PI - 1e-9, PI + 0.25, -PI - 0.25, 7 * PI + 0.1, -5.0])
+    wrapped = norm(angles)
+    assert np.all((wrapped >= -PI) & (wrapped < PI))
+    np.testing.assert_allclose(wrapped, [0.0, 0.5, PI - 1e-9, -PI + 0.25, PI - 0.25, -PI + 0.1, 2 * PI - 5.0], atol=1e-12)
+
+
+def test_pose_features_by_hand():
+    names = feature_names("pose")
+    assert names == ("v", "vg", "dist", "angle_to", "angle_at")
+    params = np.array([
+        # robot at the origin facing +x, goal at (1, 1) facing +y: goal 45 deg to the left, arrive 45 deg left
+        [0.0, 0.0, 0.0, 0.3, 1.0, 1.0, PI / 2, 0.1],
+        # robot facing +y: the goal is 45 deg to its right, so angle_at is mirrored: -norm(0 - pi/4)
+        [0.0, 0.0, PI / 2, 0.0, 1.0, 1.0, 0.0, 0.2],
+        # across the wrap: bearing pi, heading -3 -> angle_to_signed = 3 - pi < 0; phig = -3
+        [1.0, 2.0, -3.0, 0.5, -1.0, 2.0, -3.0, 0.0],
+    ])
+    expected = np.array([
+        [0.3, 0.1, math.sqrt(2), PI / 4, PI / 4],
+        [0.0, 0.2, math.sqrt(2), PI / 4, PI / 4],
+        [0.5, 0.0, 2.0, PI - 3.0, -(PI - 3.0)],
+    ])
+    np.testing.assert_allclose(compute_features("pose", params), expected, atol=1e-12)
+    delta = compute_features("pose_delta", params)[:, -1]
+    np.testing.assert_allclose(delta, [PI / 2, PI / 2, 0.0], atol=1e-12)
+
+
+@pytest.mark.parametrize("feature_set", sorted(FEATURE_SETS))
+@pytest.mark.parametrize("mirror", [False, True])
+def test_features_invariant_to_translation_rotation_and_mirroring(feature_set, mirror):
+    params = random_params(500, seed=1)
+    before = compute_features(feature_set, params)
+    for angle, shift in ((0.7, (1.5, -2.0)), (-2.9, (-3.0, 0.4)), (PI, (0.0, 0.0))):
+        after = compute_features(feature_set, transform(params, angle, shift, mirror))
+        np.testing.assert_allclose(after, before, atol=1e-9)
+
+
+def test_features_see_a_change_of_the_goal_relative_to_the_robot():
+    params = random_params(200, seed=2)
+    moved = params.copy()
+    moved[:, 6] += 0.3  # turn only the goal heading: angle_at must change, the rest must not
+    a, b = compute_features("pose", params), compute_features("pose", moved)
+    np.testing.assert_array_equal(a[:, :4], b[:, :4])
+    assert np.all(np.abs(b[:, 4] - a[:, 4]) > 0.29)
+
+
+@pytest.mark.parametrize("feature_set", sorted(FEATURE_SETS))
+@pytest.mark.parametrize("column", [2, 3, 6, 7])  # phi, v, phig, vg
+def test_features_piecewise_affine_in_headings_and_speeds(feature_set, column):
+    """With positions fixed, each feature is affine in phi, v, phig, vg between a few kinks (App. C.3.4)."""
+    base = random_params(20, seed=3)
+    grid = np.linspace(-PI, PI, 2001) if column in (2, 6) else np.linspace(0.0, 1.0, 2001)
+    for row in base:
+        params = np.repeat(row[None, :], len(grid), axis=0)
+        params[:, column] = grid
+        values = compute_features(feature_set, params)
+        bends = np.abs(np.diff(values, n=2, axis=0)) > 1e-9  # second differences vanish on affine pieces
+        assert np.all(bends.sum(axis=0) <= 8), bends.sum(axis=0)
+
+
+def test_compute_features_rejects_bad_input():
+    with pytest.raises(ValueError, match=r"shape \(n, 8\)"):
+        compute_features("pose", np.zeros((3, 7)))
+    with pytest.raises(DataError, match="unknown feature set 'speed'"):
+        compute_features("speed", np.zeros((1, 8)))
+    assert compute_features("pose", np.zeros(8)).shape == (1, 5)
+
+
+def make_episode(rows: int, duration: float, seed: int = 0) -> Episode:
+    t = np.arange(rows) * 0.1
+    robot = np.column_stack([np.arange(rows) + 100.0 * seed, np.zeros(rows), np.zeros(rows), np.full(rows, 0.5)])
+    params = np.array([100.0 * seed, 0.0, 0.0, 0.5, 9.0, 1.0, 0.5, 0.2])
+    return Episode("goToPose", params, t, robot, np.full((rows, 2), np.nan), "success", duration, seed)
+
+
+def test_intermediate_examples_take_the_first_n_i_rows_of_each_episode():
+    episodes = [make_episode(5, 0.45, seed=0), make_episode(2, 0.15, seed=1)]
+    params, targets, owner = intermediate_examples(episodes, 3)
+    np.testing.assert_array_equal(owner, [0, 0, 0, 1, 1])  # the short episode gives all it has
+    np.testing.assert_allclose(targets, [0.45, 0.35, 0.25, 0.15, 0.05])
+    np.testing.assert_array_equal(params[:, 0], [0.0, 1.0, 2.0, 100.0, 101.0])  # logged x at t_k
+    np.testing.assert_array_equal(params[:, 3], 0.5)
+    np.testing.assert_array_equal(params[:, 4:], np.tile([9.0, 1.0, 0.5, 0.2], (5, 1)))  # the goal stays
+
+    first, durations = first_examples(episodes)
+    np.testing.assert_array_equal(first, params[[0, 3]])
+    np.testing.assert_array_equal(durations, [0.45, 0.15])
+    with pytest.raises(ValueError, match="n_i must be at least 1"):
+        intermediate_examples(episodes, 0)

@@ -1,0 +1,138 @@
+"""The training protocol of Fig. 4.9 and the pessimistic collision classifier (Sec. 4.2.2)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.linear_model import LinearRegression
+
+from refinement.collision import FAIL, SUCCESS, confusion, labels, train_collision_model
+from refinement.errors import DataError
+from refinement.features import compute_features, first_examples, intermediate_examples
+from refinement.learning import held_out_mae, split_episodes, train_duration_model
+from refinement.model_tree import ModelTree
+from synthetic_episodes import gather
+
+
+@pytest.mark.parametrize("n", [8, 9, 10, 11, 101])
+def test_split_is_a_seeded_partition_into_half_quarter_quarter(n):
+    split = split_episodes(n, seed=3)
+    parts = [split.train, split.validation, split.test]
+    assert [len(p) for p in parts] == [n // 2, 3 * n // 4 - n // 2, n - 3 * n // 4]
+    np.testing.assert_array_equal(np.sort(np.concatenate(parts)), np.arange(n))  # no episode in two sets
+    again = split_episodes(n, seed=3)
+    assert all(np.array_equal(a, b) for a, b in zip(parts, [again.train, again.validation, again.test]))
+    other = split_episodes(n, seed=4)
+    assert not np.array_equal(split.train, other.train)
+
+
+class Recorder(RegressorMixin, BaseEstimator):
+    """A linear regressor that remembers which rows it was fitted on (to check no test data leaks in)."""
+
+    fitted: list[np.ndarray] = []
+
+    def fit(self, X, y):
+        Recorder.fitted.append(np.asarray(X).copy())
+        self.model_ = LinearRegression().fit(X, y)
+        return self
+
+    def predict(self, X):
+        return self.model_.predict(X)
+
+
+def rows_of(episodes, n_i):
+    return compute_features("pose", intermediate_examples(episodes, n_i)[0])
+
+
+def test_duration_protocol_uses_each_part_for_its_purpose():
+    episodes = gather("goToPose", 48, seed=5)
+    episodes[7] = dataclasses.replace(episodes[7], outcome="timeout")  # failures train no duration model
+    episodes[20] = dataclasses.replace(episodes[20], outcome="collision")
+    used = [e for e in episodes if e.succeeded]
+    split = split_episodes(len(used), seed=9)
+    train = [used[i] for i in split.train]
+    validation = [used[i] for i in split.validation]
+    test = [used[i] for i in split.test]
+
+    Recorder.fitted = []
+    result = train_duration_model("goToPose", episodes, seed=9, n_i_candidates=(1, 4, 9), episode_fractions=(0.5, 1.0),
+                                  make_model=lambda seed: Recorder(), make_reference=lambda seed: LinearRegression())
+    report, fits = result.report, list(Recorder.fitted)
+    assert len(fits) == 6  # 3 n_i candidates, 2 points of Fig. 4.6, the stored model
+    assert (report["episodes"], report["episodes_gathered"], report["test_episodes"]) == (46, 48, 12)
+    assert report["outcomes"] == {"collision": 1, "success": 46, "timeout": 1}
+
+    # 1. n_i: models on the half, scored on the validation quarter; the best is chosen
+    for fitted, n_i in zip(fits[:3], (1, 4, 9)):
+        np.testing.assert_array_equal(fitted, rows_of(train, n_i))
+    scores = [row["mae"] for row in report["n_i_curve"]]
+    for row, n_i in zip(report["n_i_curve"], (1, 4, 9)):
+        model = Recorder().fit(rows_of(train, n_i), intermediate_examples(train, n_i)[1])
+        assert row["mae"] == pytest.approx(held_out_mae(model, validation, "pose"), rel=1e-12)
+        assert row["examples"] == len(rows_of(train, n_i))
+    n_i = (1, 4, 9)[int(np.argmin(scores))]
+    assert report["n_i"] == n_i
+
+    # 2. the evaluated model: three quarters with that n_i, scored on the test quarter; Fig. 4.6 ends with it
+    learn = train + validation
+    np.testing.assert_array_equal(fits[3], rows_of(learn[:17], n_i))  # half of 34 episodes
+    np.testing.assert_array_equal(fits[4], rows_of(learn, n_i))
+    test_rows = rows_of(test, 1)
+    for fitted in fits[:5]:  # no test episode ever trains a model that is scored
+        assert not any((fitted == row).all(axis=1).any() for row in test_rows)
+    params, targets, _ = intermediate_examples(learn, n_i)
+    X_test, durations = compute_features("pose", first_examples(test)[0]), first_examples(test)[1]
+    expected = np.mean(np.abs(LinearRegression().fit(compute_features("pose", params), targets).predict(X_test)
+                              - durations))
+    assert report["mae"] == pytest.approx(expected, rel=1e-12)
+    assert report["mae_hgb"] == pytest.approx(expected, rel=1e-12)  # the reference is the same linear model here
+    assert [row["episodes"] for row in report["episodes_curve"]] == [17, 34]
+
+    # 3. the stored model: all successful episodes
+    np.testing.assert_array_equal(fits[5], rows_of(used, n_i))
+    assert result.model.n_i == n_i and result.model.report is report
+    assert report["mean_duration"] == pytest.approx(np.mean([e.duration for e in used]))
+    assert report["simulated_hours"] == pytest.approx(sum(e.duration for e in episodes) / 3600)
+
+
+def test_model_tree_learns_the_synthetic_durations():
+    episodes = gather("goToPose", 400, seed=6)
+    report = train_duration_model("goToPose", episodes, seed=0, n_i_candidates=(1, 5), episode_fractions=(1.0,),
+                                  make_model=lambda seed: ModelTree(min_samples_leaf=10)).report
+    # the synthetic noise is 0.05 s and durations average ~5.5 s
+    assert report["mae"] < 0.1 * report["mean_duration"]
+    assert report["leaves"] >= 2
+
+
+def test_too_few_successes_is_a_data_error():
+    episodes = [dataclasses.replace(e, outcome="ball_lost") for e in gather("dribbleBall", 20, seed=1)]
+    with pytest.raises(DataError, match="dribbleBall: 0 successful episodes of 20; need at least 8"):
+        train_duration_model("dribbleBall", episodes, seed=0)
+
+
+def test_confusion_matrix_by_hand():
+    predicted = np.array([FAIL, FAIL, FAIL, SUCCESS, SUCCESS, FAIL, SUCCESS, SUCCESS])
+    observed = np.array([FAIL, FAIL, SUCCESS, FAIL, SUCCESS, FAIL, SUCCESS, SUCCESS])
+    result = confusion(predicted, observed)
+    assert result["counts"] == {"predicted_fail_observed_fail": 3, "predicted_fail_observed_success": 1,
+                                "predicted_success_observed_fail": 1, "predicted_success_observed_success": 3}
+    assert (result["accuracy"], result["false_success"]) == (0.75, 0.25)
+    assert (result["predicted_fail"], result["observed_fail"]) == (0.5, 0.5)
+
+
+def test_collision_classifier_is_pessimistic_and_evaluated_on_fresh_episodes():
+    train, fresh = gather("goToPoseAtBall", 400, seed=2), gather("goToPoseAtBall", 300, seed=3)
+    result = train_collision_model("goToPose", train, fresh, seed=0)
+    report = result.report
+    X_fresh = compute_features("pose", first_examples(fresh)[0])
+    expected = confusion(result.model.tree.predict(X_fresh).astype(int), labels(fresh))
+    assert report["confusion"] == expected and report["fresh_episodes"] == 300
+    # synthetic rule: collision iff |angle_at| > 2.0, which a tree finds almost exactly
+    assert report["accuracy"] > 0.97 and report["false_success"] <= 0.02
+    chosen = [row for row in report["cross_validation"]
+              if (row["cost"], row["min_samples_leaf"]) == (report["cost_false_success"], report["min_samples_leaf"])]
+    assert chosen[0]["false_success"] <= 0.01
+    assert "angle_at" in result.model.rules_text()

@@ -1,0 +1,104 @@
+"""`tailor train`: files written, report printed, errors as one line, nothing half-written on Ctrl-C."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import synthetic_episodes
+from refinement.action_models import load_action_models, load_collision_model
+from refinement.cli import main
+from refinement.features import compute_features
+from test_features import random_params
+
+EXPECTED_FILES = {
+    "models/goToPose.json", "models/approachBall.json", "models/dribbleBall.json", "models/goToPose.collision.json",
+    "training/report.json", "training/report.txt", "training/mae_vs_n_i.png", "training/mae_vs_episodes.png",
+    "training/angle_at_polar.png",
+}
+
+
+def files_under(root) -> set[str]:
+    return {str(p.relative_to(root)) for p in root.rglob("*") if p.is_file()}
+
+
+def check_outputs(out, report: dict, episodes: int) -> None:
+    assert files_under(out) == EXPECTED_FILES
+    assert json.loads((out / "training" / "report.json").read_text()) == report
+    models = load_action_models(out / "models")
+    assert sorted(models) == ["approachBall", "dribbleBall", "goToPose"]
+    params = random_params(20, seed=1)
+    for action, model in models.items():
+        row = report["models"][action]
+        assert set(row) >= {"episodes", "mean_duration", "mae", "mae_hgb", "leaves"}
+        assert 8 <= row["episodes"] <= episodes and row["leaves"] == model.duration.n_leaves_
+        assert model.report == row and model.n_i == row["n_i"]
+        assert np.all(np.isfinite(model.predict_duration(params)))
+    collision = load_collision_model(out / "models" / "goToPose.collision.json")
+    c = report["collision"]
+    assert 0.0 <= c["accuracy"] <= 1.0 and 0.0 <= c["false_success"] <= 1.0 and c["fresh_episodes"] == 40
+    assert collision.predict_success(params).dtype == bool
+    text = (out / "training" / "report.txt").read_text()
+    for action in models:
+        assert f"Rules of {action}" in text
+    assert "predicted Success" in text and "observed Fail" in text
+    for png in ("mae_vs_n_i", "mae_vs_episodes", "angle_at_polar"):
+        assert (out / "training" / f"{png}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_train_soccer_end_to_end_in_the_simulator(tmp_path, capsys):
+    """The real pipeline on 40 episodes per scenario (n_i candidates cut down to keep it quick)."""
+    code = main(["train", "soccer", "--episodes", "40", "--fresh-episodes", "40", "--n-i", "1,5", "--seed", "1",
+                 "--out", str(tmp_path), "--json"])
+    assert code == 0
+    report = json.loads(capsys.readouterr().out)
+    check_outputs(tmp_path, report, 40)
+    assert [row["n_i"] for row in report["models"]["goToPose"]["n_i_curve"]] == [1, 5]
+
+
+def test_train_is_reproducible_and_prints_the_table(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr("sims.experience.gather", synthetic_episodes.gather)
+    args = ["train", "soccer", "--episodes", "40", "--fresh-episodes", "40", "--n-i", "1,3", "--out"]
+    assert main([*args, str(tmp_path / "a")]) == 0
+    printed = capsys.readouterr().out
+    assert printed.startswith("Action models of domain soccer (seed 0, 40 episodes per scenario;")
+    assert f"wrote {tmp_path / 'a' / 'models'}" in printed
+    assert main([*args, str(tmp_path / "b")]) == 0
+    for name in ("goToPose.json", "approachBall.json", "dribbleBall.json", "goToPose.collision.json"):
+        assert (tmp_path / "a" / "models" / name).read_text() == (tmp_path / "b" / "models" / name).read_text()
+    model = load_action_models(tmp_path / "a" / "models")["goToPose"]
+    assert model.duration.predict(compute_features("pose", random_params(5, 2))).shape == (5,)
+
+
+def test_unknown_domain_is_one_line(capsys, tmp_path):
+    assert main(["train", "hockey", "--out", str(tmp_path)]) == 9
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["tailor train: error: no training recipe for domain 'hockey' (known: soccer)"]
+    assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--episodes", "5"], "--episodes must be at least 8 (a quarter of them is the test set), got 5"),
+    (["--jobs", "0"], "--jobs must be positive, got 0"),
+])
+def test_bad_numbers_are_one_line(argv, message, capsys, tmp_path):
+    assert main(["train", "soccer", *argv, "--out", str(tmp_path)]) == 14
+    assert capsys.readouterr().err.strip() == f"tailor train: error: {message}"
+
+
+def test_interrupt_while_writing_leaves_nothing_half_written(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr("sims.experience.gather", synthetic_episodes.gather)
+    (tmp_path / "models").mkdir()
+    (tmp_path / "models" / "goToPose.json").write_text("old")
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("refinement.learning_plots.plot_angle_at", interrupted)  # the last file staged
+    code = main(["train", "soccer", "--episodes", "24", "--fresh-episodes", "20", "--n-i", "1", "--out", str(tmp_path)])
+    assert code == 130
+    assert capsys.readouterr().err.strip().endswith("tailor train: interrupted")
+    assert files_under(tmp_path) == {"models/goToPose.json"}  # staged files removed, the old model untouched
+    assert (tmp_path / "models" / "goToPose.json").read_text() == "old"
