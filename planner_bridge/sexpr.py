@@ -39,6 +39,7 @@ def read_sexpr(text: str, file: str) -> SList:
     stack: list[tuple[int, int, list[Expr]]] = []
     top: list[Expr] = []
     line, col, i, n = 1, 1, 0, len(text)
+    nested_section: tuple[int, int] | None = None  # first `(:keyword` found inside another section
     while i < n:
         ch = text[i]
         if ch == ";":  # a comment runs to the end of the line
@@ -62,10 +63,14 @@ def read_sexpr(text: str, file: str) -> SList:
             j = i
             while j < n and not text[j].isspace() and text[j] not in "();":
                 j += 1
+            if nested_section is None and len(stack) >= 3 and not stack[-1][2] and ch == ":":
+                nested_section = stack[-1][:2]
             (stack[-1][2] if stack else top).append(Symbol(text[i:j].lower(), line, col))
             col, i = col + (j - i), j
             continue
         col, i = col + 1, i + 1
+    if stack and nested_section is not None:
+        raise PDDLSyntaxError("syntax error: a ')' is missing before this section", file, *nested_section)
     if stack:
         start_line, start_col, _ = stack[-1]
         raise PDDLSyntaxError("syntax error: this '(' is never closed (a ')' is missing)", file, start_line, start_col)

@@ -109,7 +109,7 @@ def solve(problem, planner: str, file: str, on_search: Callable[[], None] | None
     if status == "UNSOLVABLE_PROVEN":
         raise NoPlanError(f"no plan exists (planner '{planner}' proved the goal unreachable)", file)
     if status == "UNSOLVABLE_INCOMPLETELY":
-        raise NoPlanError(f"no plan found (planner '{planner}' gave up; its search is incomplete)", file)
+        raise NoPlanError(f"no plan exists (planner '{planner}' ended its search without one)", file)
     if status == "UNSUPPORTED_PROBLEM":
         raise PlannerUnavailableError(f"planner '{planner}' does not support this problem", file)
     if actions is None:

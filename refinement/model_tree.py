@@ -28,7 +28,11 @@ HYPERPARAMETERS = (
     "pruning_factor",
     "smoothing",
     "smoothing_k",
+    "split_target",
+    "node_features",
 )
+SPLIT_TARGETS = ("residual", "target")
+NODE_FEATURES = ("tested", "all")
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,6 +59,11 @@ class ModelTree(RegressorMixin, BaseEstimator):
     pruning_factor : multiplies v in the numerator of M5's error factor (n + f v) / (n - v); 1 is M5.
     smoothing : fold M5 smoothing p' = (n p + k q) / (n + k) along each leaf's path into the leaf.
     smoothing_k : the k of the smoothing formula (M5: 15).
+    split_target : what SDR is computed on when choosing a split: "target" is Quinlan's SDR of y;
+        "residual" (default) the SDR of the residuals of a plane fitted to the node over all features,
+        which spends splits on kinks and steps instead of trends a leaf's plane fits anyway.
+    node_features : the features a node's linear model starts from before M5's greedy elimination:
+        "tested" (M5) those tested in its subtree (so unsplit leaves start constant), "all" every feature.
     """
 
     def __init__(
@@ -66,6 +75,8 @@ class ModelTree(RegressorMixin, BaseEstimator):
         pruning_factor: float = 1.0,
         smoothing: bool = True,
         smoothing_k: float = 15.0,
+        split_target: str = "residual",
+        node_features: str = "tested",
     ):
         self.min_samples_leaf = min_samples_leaf
         self.max_depth = max_depth
@@ -74,6 +85,8 @@ class ModelTree(RegressorMixin, BaseEstimator):
         self.pruning_factor = pruning_factor
         self.smoothing = smoothing
         self.smoothing_k = smoothing_k
+        self.split_target = split_target
+        self.node_features = node_features
 
     def fit(self, X, y) -> "ModelTree":
         """Grow, prune and smooth the tree on X (n_samples, n_features) and the target y."""
@@ -159,9 +172,14 @@ class ModelTree(RegressorMixin, BaseEstimator):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < np.inf:
                 raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+        if self.split_target not in SPLIT_TARGETS:
+            raise ValueError(f"split_target must be one of {SPLIT_TARGETS}, got {self.split_target!r}")
+        if self.node_features not in NODE_FEATURES:
+            raise ValueError(f"node_features must be one of {NODE_FEATURES}, got {self.node_features!r}")
         return GrowParams(
             int(msl), None if depth is None else int(depth), float(self.sd_fraction), bool(self.prune),
-            float(self.pruning_factor), bool(self.smoothing), float(self.smoothing_k),
+            float(self.pruning_factor), bool(self.smoothing), float(self.smoothing_k), self.split_target,
+            self.node_features,
         )
 
     def _set_tree(self, tree: TreeArrays) -> None:

@@ -13,6 +13,8 @@ import numpy as np
 
 from refinement.model_tree_linear import fit_node_model, m5_factor
 
+# Ridge on the unit-diagonal Gram matrix of the residual fit that guides splitting (keeps it solvable).
+SPLIT_RIDGE = 1e-10
 # A split's SDR must exceed this share of the node's SD: below it the "reduction" is rounding noise.
 MIN_RELATIVE_SDR = 1e-12
 # Mean absolute residuals below this share of the root SD count as this share (a perfect fit): it makes
@@ -29,6 +31,8 @@ class GrowParams:
     pruning_factor: float
     smoothing: bool
     smoothing_k: float
+    split_target: str  # "residual": SDR of the node's linear-model residuals; "target": Quinlan's SDR of y
+    node_features: str  # "tested": M5's features tested in the subtree; "all": every feature
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,7 +56,10 @@ class TreeArrays:
 def grow_tree(X: np.ndarray, y: np.ndarray, p: GrowParams) -> TreeArrays:
     """Fit the whole M5 tree: grow by SDR, fit node models, prune, smooth, flatten."""
     nodes = _grow(X, y, p)
-    tested = _features_tested_below(nodes, X.shape[1])
+    if p.node_features == "all":
+        tested = np.ones((len(nodes), X.shape[1]), dtype=bool)
+    else:
+        tested = _features_tested_below(nodes, X.shape[1])
     floor = RESIDUAL_FLOOR * float(np.std(y))
     for node, used in zip(nodes, tested):
         idx = node["idx"]
@@ -79,7 +86,8 @@ def _grow(X: np.ndarray, y: np.ndarray, p: GrowParams) -> list[dict]:
             nodes[parent]["left" if side == 0 else "right"] = nid
         split = None
         if _may_split(S, y, depth, root_sd, p):
-            split = _best_split(Xt, y, S, p.min_samples_leaf)
+            target = _linear_residuals(X, y, S[0]) if p.split_target == "residual" else y[S[0]]
+            split = _best_split(Xt, target, S, p.min_samples_leaf)
         if split is None:
             continue
         feature, k, threshold = split
@@ -102,10 +110,27 @@ def _may_split(S: np.ndarray, y: np.ndarray, depth: int, root_sd: float, p: Grow
     return float(np.std(y[S[0]])) > p.sd_fraction * root_sd
 
 
-def _best_split(Xt: np.ndarray, y: np.ndarray, S: np.ndarray, min_leaf: int) -> tuple[int, int, float] | None:
-    """The (feature, left size, threshold) maximizing SDR, from cumulative sums over the sorted values."""
+def _linear_residuals(X: np.ndarray, y: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """Residuals of a least-squares plane over all features on the node's samples, in the order of idx.
+
+    Splitting on these instead of on y puts the splits where the node's linear model fails (kinks,
+    steps) rather than along trends a leaf's hyperplane fits anyway; normal equations suffice here.
+    """
+    Xc = X[idx] - X[idx].mean(axis=0)
+    yc = y[idx] - y[idx].mean()
+    norm = np.sqrt(np.einsum("ij,ij->j", Xc, Xc))
+    norm[norm == 0] = 1.0
+    Z = Xc / norm
+    beta = np.linalg.solve(Z.T @ Z + SPLIT_RIDGE * np.eye(Z.shape[1]), Z.T @ yc)
+    return yc - Z @ beta
+
+
+def _best_split(Xt: np.ndarray, target: np.ndarray, S: np.ndarray, min_leaf: int) -> tuple[int, int, float] | None:
+    """The (feature, left size, threshold) maximizing SDR of `target` (given in the order of S[0])."""
     m = S.shape[1]
-    Ys = y[S]
+    rank = np.empty(len(Xt[0]), dtype=np.intp)  # position of each sample in S[0]
+    rank[S[0]] = np.arange(m)
+    Ys = target[rank[S]]
     Ys = Ys - Ys[0].mean()  # centring keeps the sums of squares accurate
     Xs = np.take_along_axis(Xt, S, axis=1)
     k = np.arange(min_leaf, m - min_leaf + 1)  # candidate sizes of the left part

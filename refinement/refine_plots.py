@@ -82,3 +82,49 @@ def plot_polar_costs(path: Path, angles: np.ndarray, curves: list[tuple[str, np.
         ax.legend(loc="lower center", bbox_to_anchor=(0.5, -0.32), fontsize=8)
     _save(fig, path)
     plt.close(fig)
+
+
+def _subgoals(sequence) -> list[tuple[float, float, float]]:
+    goals = []
+    for action in sequence.actions:
+        values = action.values()
+        goals.append((float(values[4]), float(values[5]), float(values[6])))
+    return goals
+
+
+def draw_refinement(path, prepared, outcomes) -> None:
+    """Fig. 5.1 for this problem (greedy and refined trajectories) and, where the first subgoal has a free
+    heading, Fig. 5.8 (predicted time of the first actions over that angle) as FILE_polar.png."""
+    path = Path(path)
+    panels = []
+    for key, label in (("greedy", "greedy (h=1)"), ("refined", f"refined (h={outcomes['refined'].refined.horizon})")):
+        o = outcomes[key]
+        title = f"{label}: predicted {o.refined.predicted_total:.2f} s, simulated {o.simulated.duration:.2f} s"
+        if not o.simulated.succeeded:
+            title += " (failed)"
+        panels.append((title, o.simulated.trajectory, _subgoals(o.refined.sequence)))
+    plot_trajectories(path, panels)
+
+    refined = outcomes["refined"].refined
+    first = prepared.sequence.actions[0]
+    angle = next((p for p in first.free_parameters() if p.name.startswith("phi")), None)
+    if angle is None:
+        return
+    window = prepared.sequence.actions[:max(2, refined.horizon)]
+    chosen = {p.id: p.value for a in refined.sequence.actions for p in a.params}
+    greedy = {p.id: p.value for a in outcomes["greedy"].refined.sequence.actions for p in a.params}
+    angles = np.linspace(angle.low, angle.high, 361)
+    curves = []
+    total = np.zeros_like(angles)
+    for action in window:
+        rows = []
+        for value in angles:
+            assignment = dict(chosen)
+            assignment[angle.id] = float(value)
+            rows.append(action.values(assignment))
+        predicted = prepared.models[action.action].predict_duration(np.array(rows))
+        total += predicted
+        curves.append((f"{action.step} {action.action}", predicted))
+    curves.append(("sum over the horizon", total))
+    plot_polar_costs(path.with_name(path.stem + "_polar" + (path.suffix or ".png")), angles, curves,
+                     [("greedy", greedy[angle.id]), ("refined", chosen[angle.id])])

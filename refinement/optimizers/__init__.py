@@ -58,7 +58,9 @@ def optimize(objective: Objective, method: str = "analytic", seed: int = 0) -> O
         raise TailorError(f"unknown optimizer {method!r}; choose one of {', '.join(OPTIMIZERS)}")
     for p in objective.free:
         if not (np.isfinite(p.low) and np.isfinite(p.high) and p.low <= p.high):
-            raise EmptyRangeError(f"free parameter {p.id} has an empty or unbounded range [{p.low}, {p.high}]")
+            raise EmptyRangeError(
+                f"free parameter {p.id} has an empty or unbounded range [{p.low}, {p.high}]"
+            )
     if not objective.free:  # everything bound: nothing to choose
         start = time.perf_counter()
         cost = float(objective.cost(np.zeros((1, 0)))[0])

@@ -28,7 +28,8 @@ class Term:
 
     model: object  # predict(F) -> (n,) and rules() -> list[Rule]
     features: Callable[[np.ndarray], np.ndarray]  # theta (batch, n_free) -> (batch, n_features)
-    valid: Callable[[np.ndarray], np.ndarray] | None = None  # theta -> (batch,) bool; False = predicted failure
+    # theta -> (batch,) bool; False where the model marks the parameterization invalid (predicted failure)
+    valid: Callable[[np.ndarray], np.ndarray] | None = None
     label: str = ""
 
 
@@ -67,7 +68,7 @@ class Objective:
 
 @dataclass(frozen=True)
 class OptimizationResult:
-    """The chosen free values (in the order of Objective.free), their predicted cost and how they were found."""
+    """The chosen free values (in the order of Objective.free), their predicted cost, how they were found."""
 
     values: tuple[float, ...]
     cost: float

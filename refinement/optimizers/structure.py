@@ -44,7 +44,9 @@ class TermStructure:
 def _features(term, theta: np.ndarray) -> np.ndarray:
     values = np.asarray(term.features(theta), dtype=float)
     if values.ndim != 2 or len(values) != len(theta):
-        raise NotApplicable(f"features of term {term.label!r} gave shape {values.shape} for {len(theta)} rows")
+        raise NotApplicable(
+            f"features of term {term.label!r} gave shape {values.shape} for {len(theta)} rows"
+        )
     return values
 
 
@@ -93,7 +95,9 @@ def detect(term, low: np.ndarray, high: np.ndarray, names: tuple[str, ...]) -> T
         e = e[np.concatenate([[True], np.diff(e) > 10 * LOCATE_TOL * widths[j]])]
         e[-1] = high[j]
         if len(e) - 2 > MAX_BREAKPOINTS:
-            raise NotApplicable(f"term {term.label!r} has {len(e) - 2} breakpoints in {names[j]} (budget {MAX_BREAKPOINTS})")
+            raise NotApplicable(
+                f"term {term.label!r} has {len(e) - 2} breakpoints in {names[j]} (budget {MAX_BREAKPOINTS})"
+            )
         edges.append(e)
     slopes, offsets = _fit_pieces(term, var_of, edges, base, names)
     return TermStructure(var_of, const, tuple(edges), slopes, offsets)
@@ -122,7 +126,8 @@ def _breakpoints(term, var_of, low, high, base, swept, names) -> list[np.ndarray
         if curved.any():
             r = np.flatnonzero(curved)[0]
             raise NotApplicable(
-                f"feature {feature[r]} of term {term.label!r} is not piecewise affine in {names[var[r]]} (curved)"
+                f"feature {feature[r]} of term {term.label!r} is not piecewise affine in "
+                f"{names[var[r]]} (curved)"
             )
         points = [(var[kink_rows], kinks)]
         if level > 0:  # a region with no gap left at this resolution hides a kink below the noise
@@ -139,7 +144,8 @@ def _breakpoints(term, var_of, low, high, base, swept, names) -> list[np.ndarray
         if len(region) > MAX_BREAKPOINTS * len(feature):
             raise NotApplicable(f"term {term.label!r} has too many breakpoints")
         if level == MAX_LEVELS:
-            raise NotApplicable(f"a breakpoint of term {term.label!r} in {names[var[region[0]]]} could not be located")
+            name = names[var[region[0]]]
+            raise NotApplicable(f"a breakpoint of term {term.label!r} in {name} could not be located")
         feature, var = feature[region], var[region]
         grid = np.linspace(a, b, REFINE_POINTS, axis=1)
         theta = np.repeat(base[None, :], grid.size, axis=0)
@@ -152,9 +158,11 @@ def _scan(grid: np.ndarray, vals: np.ndarray):
     h = np.diff(grid, axis=1)
     d = np.diff(vals, axis=1) / h
     noise = 64 * _EPS * (1.0 + np.abs(vals).max(axis=1, keepdims=True)) / h
-    same = np.abs(np.diff(d, axis=1)) <= SLOPE_RTOL * (1 + np.abs(d[:, 1:]) + np.abs(d[:, :-1])) + noise[:, 1:] + noise[:, :-1]
+    allowed = SLOPE_RTOL * (1 + np.abs(d[:, 1:]) + np.abs(d[:, :-1])) + noise[:, 1:] + noise[:, :-1]
+    same = np.abs(np.diff(d, axis=1)) <= allowed
     pad = np.zeros((len(grid), 1), dtype=bool)
-    clean = np.concatenate([pad, same], axis=1) | np.concatenate([same, pad], axis=1)  # interval in a run >= 2
+    # an interval is clean when it shares its slope with a neighbour (a run of at least two)
+    clean = np.concatenate([pad, same], axis=1) | np.concatenate([same, pad], axis=1)
     # slope changes exactly at a sample point between two clean intervals
     rows, k = np.nonzero(clean[:, :-1] & clean[:, 1:] & ~same)
     kinks = grid[rows, k + 1]

@@ -41,8 +41,9 @@ class RandomModelTree:
             self.feature[node], self.threshold[node] = f, thr
             for side in (0, 1):
                 child = len(self.feature)
-                self.feature.append(-1), self.threshold.append(0.0), self.left.append(-1), self.right.append(-1)
-                self.coef.append(None), self.intercept.append(0.0)
+                for column, empty in ((self.feature, -1), (self.threshold, 0.0), (self.left, -1),
+                                      (self.right, -1), (self.coef, None), (self.intercept, 0.0)):
+                    column.append(empty)
                 clo, chi = lo.copy(), hi.copy()
                 (chi if side == 0 else clo)[f] = thr
                 boxes[child] = (clo, chi)

@@ -47,7 +47,7 @@ ROLL_DECELERATION = MU_ROLL * GRAVITY  # m/s^2, constant deceleration of a free 
 # --- ball guide (a V of two arms on the robot's front) --------------------------------------------------
 GUIDE_HALF_ANGLE = math.radians(15.0)  # rad, angle between the driving direction and each arm
 GUIDE_CLEARANCE = 0.005  # m, gap between a seated ball and the front plate / arms
-GUIDE_ARM_LENGTH = 0.2  # m, length of each arm from the front plate's corner outward
+GUIDE_ARM_LENGTH = 0.12  # m, length of each arm from the front plate's corner outward
 BALL_POINT_OFFSET = ROBOT_HALF_LENGTH + BALL_RADIUS + GUIDE_CLEARANCE  # m, axle -> ball point (0.315)
 
 

@@ -1,0 +1,168 @@
+"""`tailor refine DOMAIN PROBLEM`: plan, instantiate, refine the free parameters (Sec. 5.4), optionally simulate.
+
+Greedy execution (h = 1) is always computed beside the requested horizon, so the gain can be read off.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+HELP = "refine the free parameters of a plan for the fastest predicted execution, optionally simulate it"
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1: {text!r}")
+    return value
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from refinement.commands.plan import _positive_seconds
+    from refinement.optimizers import OPTIMIZERS
+
+    parser.add_argument("domain", metavar="DOMAIN", help="domain.pddl file, or the name of a bundled domain (soccer)")
+    parser.add_argument("problem", metavar="PROBLEM", help="problem .pddl file, or the name of one of its problems")
+    parser.add_argument("--optimizer", choices=sorted(OPTIMIZERS), default="analytic",
+                        help="analytic model-tree minimization (falls back to ga where it does not apply), "
+                             "genetic algorithm, or random sampling (default: analytic)")
+    parser.add_argument("--horizon", type=_positive_int, default=2, metavar="H",
+                        help="actions optimized together (default 2; 1 is greedy)")
+    parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed of optimizer and simulator (default 0)")
+    parser.add_argument("--belief", metavar="FILE", help="belief state file (default: PROBLEM's stem + .toml)")
+    parser.add_argument("--planner", default="pyperplan", metavar="NAME", help="unified-planning engine")
+    parser.add_argument("--timeout", type=_positive_seconds, default=None, metavar="S", help="planner time limit")
+    parser.add_argument("--simulate", action="store_true", help="execute greedy and refined sequences in the simulator")
+    parser.add_argument("--plot", metavar="FILE.png",
+                        help="draw greedy and refined trajectories side by side (simulates them); where the first "
+                             "subgoal has a free heading, also FILE_polar.png: predicted time over that angle")
+    parser.add_argument("--json", action="store_true", help="print the result as JSON")
+
+
+def _fmt_param(p) -> str:
+    if p.free:
+        return f"{p.name}=[{p.low:.3g}, {p.high:.3g}]"
+    return f"{p.name}={p.value:.3f}"
+
+
+def _execution_json(outcome) -> dict:
+    refined, simulated = outcome.refined, outcome.simulated
+    actions = []
+    for k, (action, predicted) in enumerate(zip(refined.sequence.actions, refined.predicted)):
+        entry = {"step": action.step, "pddl": action.pddl, "action": action.action,
+                 "params": {p.name: p.value for p in action.params}, "predicted": round(predicted, 4)}
+        if simulated is not None:
+            if k < len(simulated.results):
+                entry["simulated"] = round(simulated.results[k].duration, 4)
+                entry["outcome"] = simulated.results[k].outcome
+            else:
+                entry["simulated"] = None
+                entry["outcome"] = "not_started"
+        actions.append(entry)
+    data = {"horizon": refined.horizon, "actions": actions, "predicted_total": round(refined.predicted_total, 4),
+            "optimization": [{"method": w.method, "cost": round(w.cost, 4), "evaluations": w.evaluations,
+                              "seconds": w.seconds, "note": w.note} for w in refined.windows]}
+    if simulated is not None:
+        data["simulated_total"] = round(simulated.duration, 4)
+        data["succeeded"] = simulated.succeeded
+    return data
+
+
+def result_json(prepared, method: str, seed: int, outcomes: dict) -> dict:
+    refined = outcomes["refined"].refined
+    chosen = {p.id: p.value for a in refined.sequence.actions for p in a.params}
+    greedy = outcomes["greedy"].refined
+    greedy_values = {p.id: p.value for a in greedy.sequence.actions for p in a.params}
+    data = {
+        "domain": prepared.plan.domain, "problem": prepared.plan.problem, "planner": prepared.plan.planner,
+        "optimizer": method, "horizon": refined.horizon, "seed": seed,
+        "plan": prepared.plan.to_json(),
+        "free_parameters": [{"id": p.id, "low": p.low, "high": p.high, "value": round(chosen[p.id], 6),
+                             "greedy": round(greedy_values[p.id], 6)}
+                            for p in prepared.sequence.free_parameters()],
+    }
+    data.update(_execution_json(outcomes["refined"]))
+    data["greedy"] = _execution_json(outcomes["greedy"])
+    return data
+
+
+def _print_text(prepared, method: str, outcomes: dict) -> None:
+    from planner_bridge import render_text
+
+    out = sys.stdout.write
+    plan = prepared.plan
+    out(f"Plan ({plan.planner}) for {plan.domain}/{plan.problem}:\n{render_text(plan)}\n")
+    out("Instantiated action sequence (free parameters as [low, high]):\n")
+    for a in prepared.sequence.actions:
+        out(f"  {a.step} {a.action:<13} {a.pddl}\n      {' '.join(_fmt_param(p) for p in a.params)}\n")
+    free = prepared.sequence.free_parameters()
+    names = [("greedy", "greedy (h=1)"), ("refined", f"refined (h={outcomes['refined'].refined.horizon}, {method})")]
+    names = [(k, label) for k, label in names if k in outcomes]
+    if free:
+        out("\nFree parameters chosen:\n")
+        out(f"  {'parameter':<16}" + "".join(f"{label:>28}" for _, label in names) + "\n")
+        for p in free:
+            cells = []
+            for key, _ in names:
+                value = next(q.value for a in outcomes[key].refined.sequence.actions for q in a.params if q.id == p.id)
+                cells.append(f"{value:.3f} ({math.degrees(value):.0f}°)" if p.name.startswith("phi") else f"{value:.3f}")
+            out(f"  {p.id:<16}" + "".join(f"{c:>28}" for c in cells) + "\n")
+    simulate = all(outcomes[k].simulated is not None for k, _ in names)
+    out("\nDurations (s), predicted" + (" / simulated" if simulate else "") + ":\n")
+    out(f"  {'action':<24}" + "".join(f"{label:>28}" for _, label in names) + "\n")
+    for k, action in enumerate(prepared.sequence.actions):
+        cells = []
+        for key, _ in names:
+            o = outcomes[key]
+            cell = f"{o.refined.predicted[k]:.2f}"
+            if simulate:
+                res = o.simulated.results
+                cell += f" / {res[k].duration:.2f}" if k < len(res) else " / -"
+                if k < len(res) and res[k].outcome != "success":
+                    cell += f" ({res[k].outcome})"
+            cells.append(cell)
+        out(f"  {str(action.step) + ' ' + action.action:<24}" + "".join(f"{c:>28}" for c in cells) + "\n")
+    totals = []
+    for key, _ in names:
+        o = outcomes[key]
+        cell = f"{o.refined.predicted_total:.2f}"
+        if simulate:
+            cell += f" / {o.simulated.duration:.2f}"
+        totals.append(cell)
+    out(f"  {'total':<24}" + "".join(f"{c:>28}" for c in totals) + "\n")
+    if len(names) == 2:
+        g, r = outcomes["greedy"], outcomes["refined"]
+        line = f"\nImprovement of refined over greedy: predicted {100 * (1 - r.refined.predicted_total / g.refined.predicted_total):.1f}%"
+        if simulate and g.simulated.succeeded and r.simulated.succeeded:
+            line += f", simulated {100 * (1 - r.simulated.duration / g.simulated.duration):.1f}%"
+        out(line + "\n")
+    for w in outcomes["refined"].refined.windows:
+        note = f" ({w.note})" if w.note else ""
+        out(f"Optimizer: {w.method}, {1000 * w.seconds:.1f} ms, {w.evaluations} evaluations{note}\n")
+
+
+def run(args: argparse.Namespace) -> int:
+    from refinement.pipeline import GREEDY_HORIZON, prepare, refine_and_dispatch, resolve_task
+
+    task = resolve_task(args.domain, args.problem, args.belief)
+    prepared = prepare(task, args.planner, args.timeout)
+    simulate = args.simulate or bool(args.plot)
+    outcomes = {"greedy": refine_and_dispatch(prepared, GREEDY_HORIZON, args.optimizer, args.seed, simulate),
+                "refined": refine_and_dispatch(prepared, args.horizon, args.optimizer, args.seed, simulate)}
+    if args.plot:
+        from refinement.refine_plots import draw_refinement
+
+        draw_refinement(args.plot, prepared, outcomes)
+    if args.json:
+        sys.stdout.write(json.dumps(result_json(prepared, args.optimizer, args.seed, outcomes), indent=1) + "\n")
+    else:
+        _print_text(prepared, args.optimizer, outcomes)
+        if args.plot:
+            sys.stdout.write(f"Wrote {args.plot}\n")
+    return 0

@@ -1,0 +1,130 @@
+"""The pipeline read top to bottom (Algorithm 4 without assertion): plan -> instantiate -> refine -> dispatch.
+
+One named function per stage; `run` strings them together for a domain/problem pair on disk.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from planner_bridge import DEFAULT_PLANNER, AbstractPlan, plan_files, resolve_problem
+from planner_bridge.reading import read_problem
+from sims.episode import SequenceResult
+
+from refinement.action_models import ActionModel, load_action_models
+from refinement.action_sequence import ActionSequence
+from refinement.belief import BeliefState, belief_path_for, load_belief
+from refinement.binding import BINDING_FILE, Binding, load_domain_binding
+from refinement.dispatch import dispatch
+from refinement.errors import BindingError, ModelFileError
+from refinement.instantiate import instantiate
+from refinement.refine import RefinedSequence, refine
+
+MODELS_DIR = "models"
+GREEDY_HORIZON = 1
+
+
+@dataclass(frozen=True)
+class Task:
+    """A domain/problem pair on disk with what refinement needs beside it."""
+
+    domain: Path
+    problem: Path
+    belief: Path
+
+    @property
+    def domain_dir(self) -> Path:
+        return self.domain.parent
+
+
+@dataclass(frozen=True)
+class ProblemFacts:
+    """What instantiation needs from the PDDL problem beyond the plan: objects, their type chains, init."""
+
+    objects: tuple[str, ...]
+    types: dict[str, tuple[str, ...]]
+    initial: tuple[tuple[str, ...], ...]
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """Everything before refinement: the plan, its instantiated sequence and the models to refine it with."""
+
+    task: Task
+    plan: AbstractPlan
+    sequence: ActionSequence
+    models: dict[str, ActionModel]
+    binding: Binding
+    facts: ProblemFacts
+
+
+def resolve_task(domain_arg: str, problem_arg: str, belief: str | None = None) -> Task:
+    domain, problem = resolve_problem(domain_arg, problem_arg)
+    return Task(domain, problem, Path(belief) if belief else belief_path_for(problem))
+
+
+def load_binding(task: Task) -> Binding:
+    if not (task.domain_dir / BINDING_FILE).exists():
+        raise BindingError(f"no action library binding {BINDING_FILE} beside the domain; refinement needs one",
+                           file=str(task.domain_dir / BINDING_FILE))
+    return load_domain_binding(task.domain_dir)
+
+
+def load_models(task: Task, sequence: ActionSequence) -> dict[str, ActionModel]:
+    needed = tuple(sorted({a.action for a in sequence.actions}))
+    models_dir = task.domain_dir / MODELS_DIR
+    if not models_dir.is_dir():
+        raise ModelFileError("no learned action models here (train them with `tailor train`)", file=str(models_dir))
+    return load_action_models(models_dir, needed)
+
+
+def plan_task(task: Task, planner: str = DEFAULT_PLANNER, timeout: float | None = None) -> AbstractPlan:
+    return plan_files(task.domain, task.problem, planner=planner, timeout=timeout)
+
+
+def problem_facts(task: Task) -> ProblemFacts:
+    problem, _ = read_problem(task.domain, task.problem)
+    types = {}
+    for o in problem.all_objects:
+        chain, t = [], o.type
+        while t is not None:
+            chain.append(getattr(t, "name", str(t)))
+            t = getattr(t, "father", None)
+        types[o.name] = tuple(chain)
+    initial = tuple(
+        (fact.fluent().name, *(str(a) for a in fact.args))
+        for fact, value in problem.explicit_initial_values.items()
+        if value.is_true()
+    )
+    return ProblemFacts(tuple(o.name for o in problem.all_objects), types, initial)
+
+
+def instantiate_task(task: Task, plan: AbstractPlan, binding: Binding, facts: ProblemFacts,
+                     belief: BeliefState | None = None) -> ActionSequence:
+    """Algorithm 3 with the problem's objects and their types (and ancestors) read from the PDDL."""
+    if belief is None:
+        belief = load_belief(task.belief, facts.objects)
+    return instantiate(plan, binding, belief, object_types=facts.types, initial_state=facts.initial)
+
+
+def prepare(task: Task, planner: str = DEFAULT_PLANNER, timeout: float | None = None) -> Prepared:
+    plan = plan_task(task, planner, timeout)
+    facts = problem_facts(task)
+    binding = load_binding(task)
+    sequence = instantiate_task(task, plan, binding, facts)
+    return Prepared(task, plan, sequence, load_models(task, sequence), binding, facts)
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """A refined sequence and, when dispatched, what the simulator measured."""
+
+    refined: RefinedSequence
+    simulated: SequenceResult | None
+
+
+def refine_and_dispatch(prepared: Prepared, horizon: int, method: str, seed: int, simulate: bool) -> Outcome:
+    refined = refine(prepared.sequence, prepared.models, horizon=horizon, method=method, seed=seed)
+    simulated = dispatch(refined.sequence, seed=seed) if simulate else None
+    return Outcome(refined, simulated)

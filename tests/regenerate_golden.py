@@ -1,0 +1,77 @@
+"""Regenerate the golden plans under tests/golden/plan/ and show what changed.
+
+    python tests/regenerate_golden.py           # rewrite the golden files, print a unified diff of changes
+    python tests/regenerate_golden.py --check   # only print the diff; exit status 1 when anything differs
+
+For every bundled pair domains/<domain>/problems/<problem>.pddl the golden file <domain>/<problem>.json holds
+exactly what `tailor plan <domain> <problem> --json` prints; <domain>/<problem>.txt holds the text rendering.
+Files are written atomically (temporary file, then os.replace).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import difflib
+import io
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+GOLDEN_DIR = ROOT / "tests" / "golden" / "plan"
+RENDERINGS = {".json": ["--json"], ".txt": []}  # golden file suffix -> extra `tailor plan` arguments
+
+
+def bundled_pairs() -> list[tuple[str, str]]:
+    """(domain, problem) names of every problem file under domains/."""
+    return sorted((p.parent.parent.name, p.stem) for p in (ROOT / "domains").glob("*/problems/*.pddl"))
+
+
+def golden_path(domain: str, problem: str, suffix: str) -> Path:
+    return GOLDEN_DIR / domain / f"{problem}{suffix}"
+
+
+def tailor_plan_output(domain: str, problem: str, extra: list[str]) -> str:
+    """What `tailor plan DOMAIN PROBLEM [extra]` prints on stdout (run in this process)."""
+    from refinement.cli import main
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        status = main(["plan", domain, problem, *extra])
+    if status != 0:
+        raise SystemExit(f"tailor plan {domain} {problem} {' '.join(extra)} failed with status {status}")
+    return out.getvalue()
+
+
+def write_atomically(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp", encoding="utf-8") as tmp:
+        tmp.write(text)
+    os.replace(tmp.name, path)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="do not write; exit 1 when a golden file differs")
+    args = parser.parse_args(argv)
+    changed = 0
+    for domain, problem in bundled_pairs():
+        for suffix, extra in RENDERINGS.items():
+            path = golden_path(domain, problem, suffix)
+            old = path.read_text(encoding="utf-8") if path.exists() else ""
+            new = tailor_plan_output(domain, problem, extra)
+            if new == old:
+                continue
+            changed += 1
+            name = str(path.relative_to(ROOT))
+            sys.stdout.writelines(difflib.unified_diff(old.splitlines(True), new.splitlines(True), name, name))
+            if not args.check:
+                write_atomically(path, new)
+    print(f"{changed} golden file(s) {'differ' if args.check else 'changed'}", file=sys.stderr)
+    return 1 if (args.check and changed) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,129 @@
+"""Soccer simulator: physics against hand computation, action outcomes, noise, determinism, logging."""
+
+import math
+
+import numpy as np
+import pytest
+
+from sims.episode import ActionCall
+from sims.errors import SimError
+from sims.experience import SCENARIOS, episode_seeds, run_episode
+from sims.soccer import Noise, SoccerSim, simulate_sequence
+from sims.soccer import world as W
+from sims.soccer.simulator import CONTROL_HZ, DT, LOG_HZ, STEPS_PER_CONTROL
+
+
+def test_rolling_ball_stops_after_v0_squared_over_two_mu_g():
+    sim = SoccerSim(0, Noise.off())
+    sim.reset((-3.0, -2.0, 0.0, 0.0), (0.0, 0.0))
+    v0 = 1.2
+    sim.ball.velocity = (v0, 0.0)
+    for _ in range(2000):
+        sim.space.step(DT)
+    expected = v0 ** 2 / (2 * 0.05 * 9.81)  # 1.468 m
+    assert sim.ball.velocity.length == 0.0
+    assert sim.ball.position.x == pytest.approx(expected, rel=0.02)
+
+
+def test_robot_never_exceeds_its_limits_under_random_commands():
+    rng = np.random.default_rng(3)
+    sim = SoccerSim(1, Noise(motor=0.5))  # large motor noise pushes commands beyond the limits
+    sim.reset((0.0, 0.0, 0.0, 0.0))
+    for _ in range(300):
+        sim.command(rng.uniform(-3, 3), rng.uniform(-10, 10))
+        for _ in range(STEPS_PER_CONTROL):
+            v0, w0 = sim.v, sim.w
+            sim.step()
+            assert abs(sim.v) <= W.V_MAX + 1e-12 and abs(sim.w) <= W.W_MAX + 1e-12
+            assert abs(sim.v - v0) <= W.A_MAX * DT + 1e-12
+            assert abs(sim.w - w0) <= W.ALPHA_MAX * DT + 1e-12
+
+
+def test_go_to_pose_reaches_random_reachable_poses():
+    outcomes = [run_episode("goToPose", s).outcome for s in episode_seeds(11, 20)]
+    assert outcomes == ["success"] * 20
+
+
+def test_episode_ends_within_tolerance_and_logs_at_10_hz():
+    sim = SoccerSim(4)
+    sim.reset((0.0, 0.0, 0.0, 0.0))
+    ep = sim.run(ActionCall("goToPose", (2.0, 1.0, math.pi / 2, 0.3)))
+    assert ep.outcome == "success"
+    np.testing.assert_allclose(ep.t, np.arange(len(ep.t)) / LOG_HZ)
+    assert ep.duration == pytest.approx(round(ep.duration * CONTROL_HZ) / CONTROL_HZ)
+    assert ep.t[-1] <= ep.duration < ep.t[-1] + 1.0 / LOG_HZ
+    x, y, phi, v, *_ = sim.true_state()
+    assert math.hypot(x - 2.0, y - 1.0) <= 0.1 and abs(W.wrap(phi - math.pi / 2)) <= 0.2 and abs(v - 0.3) <= 0.15
+
+
+def test_same_seed_same_episode_other_seed_slightly_different_duration():
+    call = ActionCall("goToPose", (2.5, 1.0, 1.0, 0.2))
+    durations = []
+    for seed in range(12):
+        sim = SoccerSim(seed)
+        sim.reset((-1.0, -1.0, 0.0, 0.0))
+        durations.append(sim.run(call).duration)
+    again = SoccerSim(0)
+    again.reset((-1.0, -1.0, 0.0, 0.0))
+    ep0 = again.run(call)
+    assert ep0.duration == durations[0]
+    d = np.array(durations)
+    assert d.std() > 0.0 and d.std() < 0.05 * d.mean()
+
+
+def test_dribbling_straight_keeps_the_ball():
+    sim = SoccerSim(5)
+    sim.reset((0.0, 0.0, 0.0, 0.0), (0.0, 0.0))
+    ep = sim.run(ActionCall("dribbleBall", (2.0, 0.0, 0.0, 0.1)))
+    assert ep.outcome == "success"
+
+
+def _dribble_then(sim, v_cmd, w_cmd, seconds):
+    for _ in range(int(2.0 * CONTROL_HZ)):  # accelerate straight to 0.8 m/s with the ball
+        sim.command(0.8, 0.0)
+        for _ in range(STEPS_PER_CONTROL):
+            sim.step()
+    for _ in range(int(seconds * CONTROL_HZ)):
+        sim.command(v_cmd, w_cmd)
+        for _ in range(STEPS_PER_CONTROL):
+            sim.step()
+    x, y, _, _, bx, by = sim.true_state()
+    return math.hypot(bx - x, by - y)
+
+
+def test_ball_kept_at_speed_lost_on_hard_brake_and_sharp_turn():
+    sim = SoccerSim(6, Noise.off())
+    sim.reset((-3.0, 0.0, 0.0, 0.0), (-3.0, 0.0))
+    assert _dribble_then(sim, 0.8, 0.0, 0.5) < 0.02  # held while pushed
+    # braking at A_MAX = 1 m/s^2 > mu_r g = 0.49: the ball runs on (v^2/2)(1/0.49 - 1/1) = 0.33 m ahead
+    sim.reset((-3.0, 0.0, 0.0, 0.0), (-3.0, 0.0))
+    assert _dribble_then(sim, 0.0, 0.0, 1.5) > 0.25
+    sim.reset((-3.0, 0.0, 0.0, 0.0), (-3.0, 0.0))
+    assert _dribble_then(sim, 0.8, W.W_MAX, 0.7) > 0.15
+
+
+def test_approach_ball_rarely_collides_unlike_plain_go_to_pose():
+    seeds = episode_seeds(21, 20)
+    approach = [run_episode("approachBall", s).outcome for s in seeds]
+    plain = [run_episode("goToPoseAtBall", s).outcome for s in seeds]
+    assert approach.count("collision") < plain.count("collision")
+    assert approach.count("success") >= 14
+
+
+def test_run_sequence_continues_without_stopping_and_logs_true_state():
+    calls = [ActionCall("approachBall", (1.0, 0.0, 0.0, 0.2)), ActionCall("dribbleBall", (2.5, 0.0, 0.0, 0.1))]
+    res = simulate_sequence((-1.0, 0.0, 0.0, 0.0), (1.0, 0.0), calls, seed=2)
+    assert [r.outcome for r in res.results] == ["success", "success"]
+    assert res.results[1].start == pytest.approx(res.results[0].duration)
+    np.testing.assert_allclose(np.diff(res.trajectory[:, 0]), 1.0 / LOG_HZ, atol=1e-9)
+    assert res.trajectory.shape[1] == 7 and res.trajectory[0, 1] == pytest.approx(-1.0)
+
+
+def test_bad_input_raises_sim_error():
+    sim = SoccerSim(0)
+    sim.reset((0.0, 0.0, 0.0, 0.0))
+    with pytest.raises(SimError, match="unknown soccer action 'kick'"):
+        sim.run(ActionCall("kick", (0.0, 0.0, 0.0, 0.0)))
+    with pytest.raises(SimError, match="dribbleBall needs a ball"):
+        sim.run(ActionCall("dribbleBall", (1.0, 0.0, 0.0, 0.0)))
+    assert set(SCENARIOS) == {"goToPose", "approachBall", "dribbleBall", "goToPoseAtBall"}
