@@ -29,7 +29,8 @@ def _looks_like_path(arg: str) -> bool:
 
 def resolve_problem(domain_arg: str | Path, problem_arg: str | Path) -> tuple[Path, Path]:
     """(domain file, problem file) for `soccer score`, for two file paths, or for a domain file and the name of
-    a problem in the `problems/` folder beside it. An existing file always wins over a bundled name."""
+    a problem in the `problems/` folder beside it. An existing file wins over a bundled name; InputFileError
+    names the argument that matches neither."""
     domain_arg, problem_arg = str(domain_arg), str(problem_arg)
     domain = Path(domain_arg)
     if not domain.is_file() and not _looks_like_path(domain_arg):
@@ -47,4 +48,7 @@ def resolve_problem(domain_arg: str | Path, problem_arg: str | Path) -> tuple[Pa
                 f"no such file, nor a problem of {domain} (known: {', '.join(known) or 'none'})", problem_arg
             )
         problem = candidate
+    for path in (domain, problem):
+        if not path.is_file():
+            raise InputFileError("no such file" if not path.exists() else "not a file", str(path))
     return domain, problem

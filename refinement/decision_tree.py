@@ -74,6 +74,38 @@ class DecisionTree:
     def predict(self, X: np.ndarray) -> np.ndarray:
         return self.success[self.apply(X)]
 
+    def simplified(self) -> DecisionTree:
+        """The same predictions with every subtree whose leaves all agree replaced by one leaf (fewer rules)."""
+        verdict: dict[int, bool | None] = {}  # node -> the one class its subtree predicts, None if mixed
+
+        def visit(node: int) -> bool | None:
+            if self.children_left[node] == LEAF:
+                verdict[node] = bool(self.success[node])
+            else:
+                left, right = visit(self.children_left[node]), visit(self.children_right[node])
+                verdict[node] = left if left is not None and left == right else None
+            return verdict[node]
+
+        visit(0)
+        keep: list[int] = []
+        new_index: dict[int, int] = {}
+        stack = [0]
+        while stack:  # preorder walk that stops at uniform subtrees
+            node = stack.pop()
+            new_index[node] = len(keep)
+            keep.append(node)
+            if verdict[node] is None:
+                stack += [int(self.children_right[node]), int(self.children_left[node])]
+        leaf = [verdict[node] is not None for node in keep]
+        return DecisionTree(
+            children_left=np.array([LEAF if lf else new_index[int(self.children_left[k])] for k, lf in zip(keep, leaf)]),
+            children_right=np.array([LEAF if lf else new_index[int(self.children_right[k])] for k, lf in zip(keep, leaf)]),
+            feature=np.array([LEAF if lf else int(self.feature[k]) for k, lf in zip(keep, leaf)]),
+            threshold=np.array([0.0 if lf else float(self.threshold[k]) for k, lf in zip(keep, leaf)]),
+            success=np.array([bool(self.success[k]) if verdict[k] is None else verdict[k] for k in keep]),
+            samples=np.array([int(self.samples[k]) for k in keep]),
+        )
+
     def leaf_boxes(self, n_features: int) -> list[LeafBox]:
         """Every leaf as a box in feature space, in depth-first order (left before right)."""
         boxes: list[LeafBox] = []
@@ -132,3 +164,4 @@ class DecisionTree:
             success=np.asarray(data["success"], dtype=bool),
             samples=np.asarray(data["samples"], dtype=np.int64),
         )
+

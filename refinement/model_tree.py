@@ -35,15 +35,31 @@ SPLIT_TARGETS = ("residual", "target")
 NODE_FEATURES = ("tested", "all")
 
 
+# Batches up to this many rows find their leaf by one matrix product instead of a loop over tree levels.
+SMALL_BATCH_ROWS = 256
+# The path matrix of that product is built only for trees with at most this many (internal x leaf) entries.
+PATH_MATRIX_MAX_ENTRIES = 1_000_000
+
+
 @dataclass(frozen=True, eq=False)
 class _Router:
-    """The tree in the shape `predict` walks: all rows step down one level per iteration, leaves loop."""
+    """The tree in the shapes `predict` uses to find each row's leaf without a per-row Python loop.
+
+    Large batches step all rows down one level per iteration (leaves loop onto themselves). Small batches
+    (a GA's calls) evaluate every split test at once: with B[r, a] = 1 where row r goes right at internal
+    node a, the row's leaf is the one whose path agrees on every test, i.e. where B @ path_matrix, which
+    adds +1 for each right turn and -1 for each left turn on the leaf's path, reaches its right turns.
+    """
 
     feature: np.ndarray  # (n_nodes,) feature tested, 0 at leaves (whose threshold +inf sends x to itself)
     threshold: np.ndarray
     children: np.ndarray  # (2 * n_nodes,) left, right of each node
     leaf: np.ndarray
     depth: int
+    internal_feature: np.ndarray  # (n_internal,)
+    internal_threshold: np.ndarray
+    path_matrix: np.ndarray | None  # (n_internal, n_leaves) float32 of -1, 0, +1
+    right_turns: np.ndarray  # (n_leaves,) float32
 
 
 class ModelTree(RegressorMixin, BaseEstimator):
@@ -100,6 +116,7 @@ class ModelTree(RegressorMixin, BaseEstimator):
         check_is_fitted(self)
         if not self._is_ready_matrix(X):
             X = validate_data(self, X, dtype=np.float64, reset=False)
+        X = np.ascontiguousarray(X)  # einsum's summation order depends on the memory layout
         leaf = self._leaf_of(X)
         return np.einsum("ij,ij->i", X, self.tree_.coef[leaf]) + self.tree_.intercept[leaf]
 
@@ -202,7 +219,10 @@ class ModelTree(RegressorMixin, BaseEstimator):
     def _leaf_of(self, X: np.ndarray) -> np.ndarray:
         r = self._router
         n, d = X.shape
-        flat = X.ravel()  # a copy if X is not C-contiguous
+        if r.path_matrix is not None and n <= SMALL_BATCH_ROWS:
+            right = (X.take(r.internal_feature, axis=1) > r.internal_threshold).astype(np.float32)
+            return np.argmax(right @ r.path_matrix - r.right_turns, axis=1)  # exact: small integers
+        flat = X.ravel()
         row_start = np.arange(0, n * d, d)
         node = np.zeros(n, dtype=np.intp)
         for _ in range(r.depth):
@@ -221,14 +241,33 @@ class ModelTree(RegressorMixin, BaseEstimator):
 
 
 def _make_router(tree: TreeArrays) -> _Router:
-    depth = np.zeros(len(tree.feature), dtype=np.intp)
-    for node in range(len(tree.feature)):  # preorder: parents come before their children
+    n_nodes, n_leaves = len(tree.feature), len(tree.intercept)
+    internal = np.flatnonzero(tree.leaf < 0)
+    column = np.full(n_nodes, -1, dtype=np.intp)
+    column[internal] = np.arange(len(internal))
+    depth = np.zeros(n_nodes, dtype=np.intp)
+    small = len(internal) * n_leaves <= PATH_MATRIX_MAX_ENTRIES
+    path = np.zeros((n_nodes, len(internal)), dtype=np.float32) if small else None  # per node: its path
+    for node in range(n_nodes):  # preorder: parents come before their children
         if tree.leaf[node] < 0:
-            depth[tree.left[node]] = depth[tree.right[node]] = depth[node] + 1
+            for child, turn in ((tree.left[node], -1.0), (tree.right[node], 1.0)):
+                depth[child] = depth[node] + 1
+                if path is not None:
+                    path[child] = path[node]
+                    path[child, column[node]] = turn
+    path_matrix, right_turns = None, np.zeros(n_leaves, dtype=np.float32)
+    if path is not None:
+        leaf_nodes = np.flatnonzero(tree.leaf >= 0)[np.argsort(tree.leaf[tree.leaf >= 0])]
+        path_matrix = np.ascontiguousarray(path[leaf_nodes].T)
+        right_turns = (path_matrix > 0).sum(axis=0).astype(np.float32)
     return _Router(
         feature=np.where(tree.feature < 0, 0, tree.feature).astype(np.intp),
         threshold=tree.threshold.copy(),
         children=np.stack([tree.left, tree.right], axis=1).ravel().astype(np.intp),
         leaf=tree.leaf.copy(),
         depth=int(depth.max()),
+        internal_feature=tree.feature[internal].astype(np.intp),
+        internal_threshold=tree.threshold[internal].copy(),
+        path_matrix=path_matrix,
+        right_turns=right_turns,
     )

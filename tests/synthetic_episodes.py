@@ -7,6 +7,8 @@ the learning pipeline can be tested without the simulator; `gather` has the sign
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from refinement.features import norm
@@ -16,6 +18,14 @@ SPEED = 0.8  # m/s
 TURN_RATE = 2.0  # rad/s
 LOG_PERIOD = 0.1  # s
 NOISE = 0.05  # s, Gaussian noise on the duration
+
+
+def random_params(n: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return np.column_stack([
+        rng.uniform(-4, 4, n), rng.uniform(-3, 3, n), rng.uniform(-math.pi, math.pi, n), rng.uniform(0, 1, n),
+        rng.uniform(-4, 4, n), rng.uniform(-3, 3, n), rng.uniform(-math.pi, math.pi, n), rng.uniform(0, 1, n),
+    ])
 
 
 def synthetic_duration(params: np.ndarray) -> np.ndarray:

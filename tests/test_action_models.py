@@ -21,8 +21,7 @@ from refinement.collision import tree_arrays
 from refinement.errors import ModelFileError
 from refinement.features import compute_features, feature_names
 from refinement.model_tree import ModelTree
-from synthetic_episodes import synthetic_duration
-from test_features import random_params
+from synthetic_episodes import random_params, synthetic_duration
 
 
 @pytest.fixture(scope="module")
@@ -70,6 +69,28 @@ def test_collision_tree_arrays_predict_like_scikit_learn(collision_model):
     np.testing.assert_array_equal(collision_model.predict_success(fresh),
                                   classifier.predict(compute_features("pose", fresh)))
     np.testing.assert_array_equal(collision_model.tree.apply(X), classifier.apply(X))
+
+
+def test_simplified_tree_merges_leaves_that_agree():
+    from refinement.decision_tree import DecisionTree
+
+    # 0: dist <= 2 ? 1 : 4;  1: v <= 0.5 ? 2 (Fail) : 3 (Fail);  4: angle_at <= 0 ? 5 (Success) : 6
+    # 6: v <= 0.2 ? 7 (Success) : 8 (Success)
+    tree = DecisionTree(children_left=np.array([1, 2, -1, -1, 5, -1, 7, -1, -1]),
+                        children_right=np.array([4, 3, -1, -1, 6, -1, 8, -1, -1]),
+                        feature=np.array([2, 0, -1, -1, 4, -1, 0, -1, -1]),
+                        threshold=np.array([2.0, 0.5, 0, 0, 0.0, 0, 0.2, 0, 0]),
+                        success=np.array([0, 0, 0, 0, 1, 1, 1, 1, 1], dtype=bool),
+                        samples=np.array([90, 40, 30, 10, 50, 20, 30, 25, 5]))
+    simple = tree.simplified()
+    np.testing.assert_array_equal(simple.children_left, [1, -1, -1])
+    np.testing.assert_array_equal(simple.children_right, [2, -1, -1])
+    np.testing.assert_array_equal(simple.feature, [2, -1, -1])
+    np.testing.assert_array_equal(simple.success, [False, False, True])
+    np.testing.assert_array_equal(simple.samples, [90, 40, 50])
+    X = compute_features("pose", random_params(2000, seed=17))
+    np.testing.assert_array_equal(simple.predict(X), tree.predict(X))
+    assert simple.export_text(feature_names("pose")) == "dist <= 2.000: Fail (40)\ndist > 2.000: Success (50)"
 
 
 def test_collision_regions_partition_feature_space(collision_model):

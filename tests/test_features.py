@@ -17,16 +17,9 @@ from refinement.features import (
     norm,
 )
 from sims.episode import Episode
+from synthetic_episodes import random_params
 
 PI = math.pi
-
-
-def random_params(n: int, seed: int) -> np.ndarray:
-    rng = np.random.default_rng(seed)
-    return np.column_stack([
-        rng.uniform(-4, 4, n), rng.uniform(-3, 3, n), rng.uniform(-PI, PI, n), rng.uniform(0, 1, n),
-        rng.uniform(-4, 4, n), rng.uniform(-3, 3, n), rng.uniform(-PI, PI, n), rng.uniform(0, 1, n),
-    ])
 
 
 def transform(params: np.ndarray, angle: float, shift: tuple[float, float], mirror: bool) -> np.ndarray:

@@ -11,7 +11,7 @@ import synthetic_episodes
 from refinement.action_models import load_action_models, load_collision_model
 from refinement.cli import main
 from refinement.features import compute_features
-from test_features import random_params
+from synthetic_episodes import random_params
 
 EXPECTED_FILES = {
     "models/goToPose.json", "models/approachBall.json", "models/dribbleBall.json", "models/goToPose.collision.json",
