@@ -18,7 +18,8 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from sims.soccer.world import A_MAX, BALL_POINT_OFFSET, ROLL_DECELERATION, V_MAX, W_MAX, wrap
+from sims.soccer.dribble import dribbleBall
+from sims.soccer.world import A_MAX, BALL_POINT_OFFSET, V_MAX, W_MAX, wrap
 
 Command = tuple[float, float]
 Action = Callable[[float, float, float, float, float, float, float, float], Command]
@@ -39,15 +40,6 @@ CONE_APEX = 0.25  # m, apex of the cone behind the ball (axle positions from whi
 SIDESTEP_LATERAL = 0.5  # m, an axle closer than this beside the ball (outside the cone) first steps aside
 SIDESTEP_TARGET = (0.3, 0.9)  # m, (forward of the axle, lateral of the ball): where a sidestep heads
 DETOUR_POINT = (-1.1, 0.7)  # m, (behind, beside) the ball: the point driven to along the ball's side
-
-# --- dribbleBall -----------------------------------------------------------------------------------------
-V_DRIBBLE = 0.8  # m/s, top speed with the ball
-A_DRIBBLE_BRAKE = 0.3  # m/s^2, braking bound: below the ball's own rolling deceleration (0.49)
-A_LAT_DRIBBLE = 0.35  # m/s^2, bound on |phidot| * (|v| + LAT_SPEED_MARGIN): what the guide holds safely
-LAT_SPEED_MARGIN = 0.5  # m/s, keeps the bound finite at low speed
-R_DRIBBLE = 0.3  # m, tightest turn (radius of the axle's path) with the ball
-DRIBBLE_CONTROL_PERIOD = 0.05  # s, the period the braking bound is spread over (the simulator's)
-
 
 def _clip(value: float, bound: float) -> float:
     return -bound if value < -bound else bound if value > bound else value
@@ -115,40 +107,6 @@ def approachBall(x: float, y: float, phi: float, v: float, xg: float, yg: float,
     error, target_dist = _aim(x, y, phi, tx, ty)
     dist = math.hypot(tx - x, ty - y) + math.hypot(tx - xg, ty - yg)  # the way still to go, via the target
     return _drive(error, _profile_speed(dist, vg, V_MAX, A_PLAN), target_dist)
-
-
-def dribbleBall(x: float, y: float, phi: float, v: float, xg: float, yg: float, phig: float, vg: float) -> Command:
-    """goToPose with the ball in the guide: bounded lateral acceleration and braking, turns in arcs only.
-
-    The rotational speed is bounded by |phidot| (v + LAT_SPEED_MARGIN) <= A_LAT_DRIBBLE (less while braking,
-    which presses the ball into the guide less) and by v / R_DRIBBLE: only a rolling ball is pressed into the
-    guide (by its rolling friction), so the robot never turns on the spot with it. The speed is reduced so the
-    arc through the intermediate point needs no more than the bound: v (v + M) <= TURN_MARGIN A d / (2 sin e).
-    An intermediate point inside the circle of the tightest turn is not reached by turning toward it: the
-    robot then loops round the other way.
-    """
-    error, target_dist, dist = _lure(x, y, phi, xg, yg, phig, LURE_GAIN)
-    v_cmd = _profile_speed(dist, vg, V_DRIBBLE, A_DRIBBLE_BRAKE) * max(0.0, math.cos(error))
-    sin_e = abs(math.sin(error))
-    if sin_e > 1e-6:
-        q = TURN_MARGIN * A_LAT_DRIBBLE * target_dist / (2.0 * sin_e)
-        v_cmd = min(v_cmd, 0.5 * (math.sqrt(LAT_SPEED_MARGIN ** 2 + 4.0 * q) - LAT_SPEED_MARGIN))
-    w_cmd = _clip(K_HEADING * error, A_LAT_DRIBBLE / (v_cmd + LAT_SPEED_MARGIN))
-    # only a rolling ball is pressed into the guide (by its rolling friction): turn in arcs, never on the spot
-    v_cmd = max(v_cmd, abs(w_cmd) * R_DRIBBLE, v - A_DRIBBLE_BRAKE * DRIBBLE_CONTROL_PERIOD, 0.0)
-    braking = max(0.0, v - v_cmd) / DRIBBLE_CONTROL_PERIOD
-    w_bound = min(A_LAT_DRIBBLE * (1.0 - braking / ROLL_DECELERATION) / (v_cmd + LAT_SPEED_MARGIN),
-                  v_cmd / R_DRIBBLE)
-    w_cmd = _clip(w_cmd, w_bound)
-    # an intermediate point inside the circle of the tightest turn is never reached by turning toward it
-    ax, ay = x - BALL_POINT_OFFSET * math.cos(phi), y - BALL_POINT_OFFSET * math.sin(phi)
-    side = 1.0 if error >= 0.0 else -1.0
-    cx, cy = ax - side * R_DRIBBLE * math.sin(phi), ay + side * R_DRIBBLE * math.cos(phi)
-    lure = min(LURE_MAX, LURE_GAIN * dist)
-    tx, ty = xg - lure * math.cos(phig), yg - lure * math.sin(phig)
-    if dist > ALIGN_RADIUS and math.hypot(tx - cx, ty - cy) < R_DRIBBLE:
-        w_cmd = -side * w_bound  # loop round the other way
-    return v_cmd, w_cmd
 
 
 ACTION_FUNCTIONS: dict[str, Action] = {"goToPose": goToPose, "approachBall": approachBall, "dribbleBall": dribbleBall}
