@@ -91,7 +91,9 @@ def _read_message(child: subprocess.Popen, deadline: float | None, planner: str,
 
 def plan_in_worker(domain: Path, problem: Path, planner: str, timeout: float | None) -> AbstractPlan:
     """Plan in a child process with a fixed hash seed; kill it when its search exceeds `timeout` seconds."""
-    env = {**os.environ, "PYTHONHASHSEED": HASH_SEED}
+    package_root = str(Path(__file__).resolve().parent.parent)  # importable even when not installed
+    path = os.pathsep.join(p for p in (package_root, os.environ.get("PYTHONPATH")) if p)
+    env = {**os.environ, "PYTHONHASHSEED": HASH_SEED, "PYTHONPATH": path}
     request = {"domain": str(domain), "problem": str(problem), "planner": planner}
     with tempfile.TemporaryFile() as stderr:
         child = subprocess.Popen(

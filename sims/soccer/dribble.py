@@ -21,23 +21,39 @@ from __future__ import annotations
 
 import math
 
-from sims.soccer.control import axle_pose, clip, in_frame, profile_speed
-from sims.soccer.dubins import shortest_path
+from sims.soccer.control import Pose, axle_pose, clip, in_frame, profile_speed
+from sims.soccer.dubins import DubinsPath, shortest_path
 from sims.soccer.world import BALL_POINT_OFFSET, wrap
 
 R_DRIBBLE = 0.6  # m, turning radius of the axle's path with the ball (the ball point's: 0.68 m)
 A_LAT_DRIBBLE = 0.3  # m/s^2, lateral acceleration planned with (the guide holds about 0.45 at R = 0.6 m)
 V_DRIBBLE = 0.8  # m/s, top speed with the ball on a straight
-V_ARC = math.sqrt(A_LAT_DRIBBLE * R_DRIBBLE)  # m/s, speed cap on an arc (0.42)
 V_CREEP_DRIBBLE = 0.15  # m/s, minimum speed on an arc: the ball is held only while it rolls
 A_DRIBBLE_BRAKE = 0.3  # m/s^2, braking bound: below the ball's own rolling deceleration (0.49)
+A_DRIBBLE_PLAN = 0.2  # m/s^2, deceleration the speed profile plans with (below the bound, so it is kept)
+A_LAT_HOLD = 0.4  # m/s^2, the curvature command never asks for more lateral acceleration than this
 CONTROL_PERIOD = 0.05  # s, the control period the braking bound is spread over (the simulator's)
-ARC_TAPER = 0.15  # rad, the last radians of an arc are turned with proportionally less curvature
-NEAR_RANGE = 2.0 * R_DRIBBLE  # m, goal closer than this ahead: steer onto the goal line, no loop
-NEAR_HEADING = math.radians(60.0)  # rad, heading error up to which the robot counts as roughly aligned
-NEAR_LATERAL = 0.5 * R_DRIBBLE  # m, lateral offset from the goal line up to which that holds
-NEAR_DETOUR = 0.5 * R_DRIBBLE  # m, Dubins paths longer than the distance by more than this are replaced
-R_NEAR = 0.5  # m, tightest turn of the line follower (it runs slower there, near the goal)
+K_ARC_END = 2.0  # 1/s, heading gain at the end of an arc: phidot <= K_ARC_END * (heading still to turn)
+LEAD_TIME = 0.1  # s, an arc after a straight is begun this early (the motors lag the command)
+MIN_SEGMENT = 0.01  # m, shorter arcs are not slowed down for
+FINAL_STRAIGHT = 0.4  # m, the Dubins path ends this far behind the goal; the rest is a line follower
+CORRIDOR_LENGTH = FINAL_STRAIGHT + 0.3  # m, the line follower takes over this far behind the goal ...
+CORRIDOR_WIDTH = 0.1  # m, ... within this lateral offset plus CORRIDOR_SLOPE per metre still to go ...
+CORRIDOR_SLOPE = 0.3
+CORRIDOR_HEADING = math.radians(40.0)  # rad, ... and this heading error
+R_NEAR = 0.4  # m, tightest turn of the line follower (it runs slower there)
+
+
+def dribble_path(start: Pose, goal: Pose) -> DubinsPath:
+    """The Dubins path the robot follows from the axle pose `start` to the axle pose `goal`."""
+    pre = (goal[0] - FINAL_STRAIGHT * math.cos(goal[2]), goal[1] - FINAL_STRAIGHT * math.sin(goal[2]), goal[2])
+    return shortest_path(start, pre, R_DRIBBLE)
+
+
+def in_corridor(along: float, lateral: float, heading_error: float) -> bool:
+    """Whether the axle (along, lateral in the goal frame) is on the final approach the line follower takes."""
+    return (-CORRIDOR_LENGTH < along < 0.0 and abs(heading_error) < CORRIDOR_HEADING
+            and abs(lateral) < CORRIDOR_WIDTH + CORRIDOR_SLOPE * -along)
 
 
 def dribbleBall(x: float, y: float, phi: float, v: float, xg: float, yg: float, phig: float, vg: float
@@ -45,29 +61,34 @@ def dribbleBall(x: float, y: float, phi: float, v: float, xg: float, yg: float, 
     """Follow the shortest Dubins path to the goal pose with the ball in the guide; returns [v, phidot]."""
     start = axle_pose(x, y, phi)
     goal = (xg - BALL_POINT_OFFSET * math.cos(phig), yg - BALL_POINT_OFFSET * math.sin(phig), phig)
-    path = shortest_path(start, goal, R_DRIBBLE)
     along, lateral = in_frame(goal, start[0], start[1])  # axle in the goal frame, along < 0: behind the goal
     heading_error = wrap(phi - phig)
-    near = (-NEAR_RANGE < along < 0.0 and abs(lateral) < NEAR_LATERAL and abs(heading_error) < NEAR_HEADING
-            and path.length > -along + NEAR_DETOUR)
-    if near:
-        remaining = math.hypot(along, lateral)
+    if in_corridor(along, lateral, heading_error):
         # a critically damped line follower whose settling length shrinks with the distance to the goal
         gain = 4.0 / max(-along, 0.2)
         curvature = clip(-gain * gain * lateral - 2.0 * gain * math.sin(heading_error), 1.0 / R_NEAR)
-        v_target = min(profile_speed(remaining, vg, V_DRIBBLE, A_DRIBBLE_BRAKE),
+        v_target = min(profile_speed(-along, vg, V_DRIBBLE, A_DRIBBLE_PLAN),
                        math.sqrt(A_LAT_DRIBBLE / max(abs(curvature), 1e-6)))
     else:
+        path = dribble_path(start, goal)
         curvature = path.curvature(0)
-        if curvature != 0.0 and path.lengths[0] < ARC_TAPER * R_DRIBBLE:
-            curvature *= path.lengths[0] / (ARC_TAPER * R_DRIBBLE)
-        v_target = profile_speed(path.length, vg, V_DRIBBLE, A_DRIBBLE_BRAKE)
+        if curvature != 0.0:  # turn the last radians of an arc more gently, so noise does not chatter
+            curvature = math.copysign(min(abs(curvature), K_ARC_END * path.lengths[0] / path.radius / max(v, 0.05)),
+                                      curvature)
+        elif path.lengths[0] < LEAD_TIME * v:
+            curvature = path.curvature(1) * (1.0 - path.lengths[0] / (LEAD_TIME * v))
+        remaining = path.length + FINAL_STRAIGHT
+        v_target = profile_speed(remaining, vg, V_DRIBBLE, A_DRIBBLE_PLAN)
+        v_arc = math.sqrt(A_LAT_DRIBBLE * path.radius)
         travelled = 0.0
         for seg in range(3):  # slow down for the current and each upcoming arc in time
-            if path.word[seg] != "S" and path.lengths[seg] > 0.0:
-                v_target = min(v_target, math.sqrt(V_ARC * V_ARC + 2.0 * A_DRIBBLE_BRAKE * travelled))
+            if path.word[seg] != "S" and path.lengths[seg] > MIN_SEGMENT:
+                v_target = min(v_target, math.sqrt(v_arc * v_arc + 2.0 * A_DRIBBLE_PLAN * travelled))
             travelled += path.lengths[seg]
-    if curvature != 0.0:
-        v_target = max(v_target, V_CREEP_DRIBBLE)
+        if curvature != 0.0:
+            v_target = max(v_target, V_CREEP_DRIBBLE)
     v_cmd = max(v_target, v - A_DRIBBLE_BRAKE * CONTROL_PERIOD, 0.0)
-    return v_cmd, curvature * max(0.0, min(v, v_cmd))
+    speed = max(0.0, min(v, v_cmd))
+    if speed > 0.0:  # a turn too sharp for the current speed would lose the ball: turn wider
+        curvature = clip(curvature, A_LAT_HOLD / (speed * speed))
+    return v_cmd, curvature * speed
