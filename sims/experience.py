@@ -78,6 +78,37 @@ def sample_task(scenario: Scenario, rng: np.random.Generator):
     return (start[0], start[1], phi, v), ball, ActionCall(scenario.action, (goal[0], goal[1], phig, vg))
 
 
+CHAIN_SEPARATION = 1.0  # m, least distance between robot, ball and target in a random chain
+CHAIN_VG_RANGE = (0.0, 0.3)  # m/s, speed at which the robot arrives at the ball
+
+
+def sample_chain(rng: np.random.Generator):
+    """Draw a subgoal chain approachBall -> dribbleBall: (robot, ball, [approach call, dribble call]).
+
+    Robot, ball and target anywhere on the field (FIELD_MARGIN to the lines), pairwise CHAIN_SEPARATION
+    apart; the robot starts at rest with a random heading, arrives at the ball with a random heading phig and
+    speed vg in CHAIN_VG_RANGE, and dribbles to the target with a random heading, stopping there (vg = 0).
+    """
+    while True:
+        points = [_field_point(rng) for _ in range(3)]
+        if all(math.dist(a, b) >= CHAIN_SEPARATION for i, a in enumerate(points) for b in points[i + 1:]):
+            break
+    (x, y), ball, target = points
+    phi, phig, phit = (float(a) for a in rng.uniform(-math.pi, math.pi, 3))
+    vg = float(rng.uniform(*CHAIN_VG_RANGE))
+    calls = [ActionCall("approachBall", (ball[0], ball[1], phig, vg)),
+             ActionCall("dribbleBall", (target[0], target[1], phit, 0.0))]
+    return (x, y, phi, 0.0), ball, calls
+
+
+def run_chain(seed: int, noise: Noise | None = None):
+    """One random approachBall -> dribbleBall chain (sample_chain), dispatched without stopping."""
+    from sims.soccer.simulator import simulate_sequence
+
+    robot, ball, calls = sample_chain(np.random.default_rng((seed, _SAMPLING_STREAM)))
+    return simulate_sequence(robot, ball, calls, seed, noise)
+
+
 def run_episode(scenario: str, seed: int, noise: Noise | None = None) -> Episode:
     """One episode of a scenario; the task and the simulator's noise both follow from `seed`."""
     spec = _scenario(scenario)

@@ -7,7 +7,7 @@ import pytest
 
 from sims.episode import ActionCall
 from sims.errors import SimError
-from sims.experience import SCENARIOS, episode_seeds, run_episode
+from sims.experience import SCENARIOS, episode_seeds, run_chain, run_episode
 from sims.soccer import Noise, SoccerSim, simulate_sequence
 from sims.soccer import world as W
 from sims.soccer.simulator import CONTROL_HZ, DT, LOG_HZ, STEPS_PER_CONTROL
@@ -102,12 +102,61 @@ def test_ball_kept_at_speed_lost_on_hard_brake_and_sharp_turn():
     assert _dribble_then(sim, 0.8, W.W_MAX, 0.7) > 0.15
 
 
+def test_dribble_ball_succeeds_on_random_scenarios():
+    outcomes = [run_episode("dribbleBall", s).outcome for s in episode_seeds(31, 20)]
+    assert outcomes.count("success") >= 19, outcomes
+
+
+def test_approach_then_dribble_chain_succeeds_on_random_scenarios():
+    results = [run_chain(s) for s in episode_seeds(41, 20)]
+    assert sum(r.succeeded for r in results) >= 19, [[a.outcome for a in r.results] for r in results]
+    assert all(len(r.results) == 2 for r in results if r.succeeded)
+
+
+def _dribble_duration(phi, seed=0):
+    sim = SoccerSim(seed)
+    sim.reset((-2.0, 0.0, phi, 0.0), (-2.0, 0.0))
+    ep = sim.run(ActionCall("dribbleBall", (1.0, 0.0, 0.0, 0.0)))
+    assert ep.outcome == "success"
+    return ep.duration
+
+
+def test_dribble_duration_grows_with_the_turn_needed_at_the_start():
+    # facing the goal: 3 m straight; facing away: first a U-turn at R_DRIBBLE (pi R = 2.2 m at 0.35 m/s)
+    ahead, side, away = (_dribble_duration(phi) for phi in (0.0, math.pi / 2, math.pi))
+    assert ahead < side < away
+    assert away - ahead > math.pi * 0.7 / 0.35 * 0.7  # at least 70% of the U-turn's time at arc speed
+
+
+def _turn_holds_ball(v, w, seconds=6.0):
+    """Dribble straight up to speed v, then turn at rate w: whether the ball stays in the guide."""
+    sim = SoccerSim(7, Noise.off())
+    sim.reset((-2.0, 0.0, 0.0, 0.0), (-2.0, 0.0))
+    for v_cmd, w_cmd, duration in ((v, 0.0, 2.0), (v, w, seconds)):
+        for _ in range(int(duration * CONTROL_HZ)):
+            sim.command(v_cmd, w_cmd)
+            for _ in range(STEPS_PER_CONTROL):
+                sim.step()
+            x, y, _, _, bx, by = sim.true_state()
+            if math.hypot(bx - x, by - y) > 0.15:
+                return False
+    return True
+
+
+def test_guide_holds_the_dribble_turn_rate_but_not_a_sharper_turn():
+    from sims.soccer.dribble import R_DRIBBLE, W_DRIBBLE, W_HOLD
+
+    assert _turn_holds_ball(W_DRIBBLE * R_DRIBBLE, W_DRIBBLE)  # the arcs dribbleBall drives
+    assert _turn_holds_ball(0.3, W_HOLD)  # its largest rotational command, at a low speed
+    assert not _turn_holds_ball(W_DRIBBLE * R_DRIBBLE, 2.0 * W_HOLD)  # twice as sharp: lost
+
+
 def test_approach_ball_rarely_collides_unlike_plain_go_to_pose():
     seeds = episode_seeds(21, 20)
     approach = [run_episode("approachBall", s).outcome for s in seeds]
     plain = [run_episode("goToPoseAtBall", s).outcome for s in seeds]
     assert approach.count("collision") < plain.count("collision")
-    assert approach.count("success") >= 14
+    assert approach.count("success") >= 19
 
 
 def test_run_sequence_continues_without_stopping_and_logs_true_state():

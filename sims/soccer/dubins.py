@@ -118,7 +118,8 @@ def shortest_path(start: tuple[float, float, float], goal: tuple[float, float, f
     return all_paths(start, goal, radius)[0]
 
 
-def sample(start: tuple[float, float, float], path: DubinsPath, step: float) -> list[tuple[float, float, float]]:
+def sample(start: tuple[float, float, float], path: DubinsPath,
+           step: float) -> list[tuple[float, float, float]]:
     """Poses along the path from start, about `step` metres apart, including both ends."""
     x, y, h = start
     poses = [(x, y, h)]
@@ -138,3 +139,80 @@ def advance(pose: tuple[float, float, float], curvature: float, length: float) -
         return x + length * math.cos(h), y + length * math.sin(h), h
     h1 = h + curvature * length
     return (x + (math.sin(h1) - math.sin(h)) / curvature, y - (math.cos(h1) - math.cos(h)) / curvature, h1)
+
+
+def bounds(start: tuple[float, float, float], path: DubinsPath) -> tuple[float, float, float, float]:
+    """The axis-aligned bounding box (xmin, xmax, ymin, ymax) of the path driven from `start`, exactly."""
+    pose = start
+    xs, ys = [start[0]], [start[1]]
+    for seg in range(3):
+        length, k = path.lengths[seg], path.curvature(seg)
+        end = advance(pose, k, length)
+        xs.append(end[0])
+        ys.append(end[1])
+        if k != 0.0 and length > 0.0:
+            x, y, h = pose
+            r = 1.0 / abs(k)
+            cx, cy = x - math.sin(h) / k, y + math.cos(h) / k
+            theta0 = math.atan2(y - cy, x - cx)
+            sweep = abs(k) * length
+            for target, px, py in ((0.0, cx + r, cy), (0.5 * math.pi, cx, cy + r),
+                                   (math.pi, cx - r, cy), (1.5 * math.pi, cx, cy - r)):
+                offset = (target - theta0) % TWO_PI if k > 0.0 else (theta0 - target) % TWO_PI
+                if offset <= sweep:
+                    xs.append(px)
+                    ys.append(py)
+        pose = end
+    return min(xs), max(xs), min(ys), max(ys)
+
+
+def surely_inside(start: tuple[float, float, float], goal: tuple[float, float, float], radius: float,
+                  box: tuple[float, float, float, float]) -> bool:
+    """Whether every Dubins path between start and goal stays in the box: no point of one is further than
+    4 radii from both ends (a CCC path's middle circle lies within 3 radii of its first circle's centre)."""
+    m = 4.0 * radius
+    return all(box[0] + m <= p[0] <= box[1] - m and box[2] + m <= p[1] <= box[3] - m for p in (start, goal))
+
+
+def shortest_path_inside(start: tuple[float, float, float], goal: tuple[float, float, float], radius: float,
+                         box: tuple[float, float, float, float]) -> DubinsPath:
+    """The shortest Dubins path that stays inside box = (xmin, xmax, ymin, ymax); if none does, the one that
+    leaves it least (a robot already outside the box gets back in as directly as it can)."""
+    paths = all_paths(start, goal, radius)
+    if surely_inside(start, goal, radius, box):
+        return paths[0]
+    best, best_excess = None, math.inf
+    for path in paths:
+        x0, x1, y0, y1 = bounds(start, path)
+        excess = max(box[0] - x0, x1 - box[1], box[2] - y0, y1 - box[3])
+        if excess <= 0.0:
+            return path
+        if excess < best_excess - 1e-9:
+            best, best_excess = path, excess
+    return best
+
+
+def distance_to(start: tuple[float, float, float], path: DubinsPath, point: tuple[float, float]) -> float:
+    """The least distance from `point` to the path driven from `start` (exact: segments and arcs)."""
+    px, py = point
+    pose = start
+    best = math.hypot(px - start[0], py - start[1])
+    for seg in range(3):
+        length, k = path.lengths[seg], path.curvature(seg)
+        if length <= 0.0:
+            continue
+        end = advance(pose, k, length)
+        best = min(best, math.hypot(px - end[0], py - end[1]))
+        x, y, h = pose
+        if k == 0.0:
+            t = (px - x) * math.cos(h) + (py - y) * math.sin(h)
+            if 0.0 < t < length:
+                best = min(best, abs(-(px - x) * math.sin(h) + (py - y) * math.cos(h)))
+        else:
+            cx, cy = x - math.sin(h) / k, y + math.cos(h) / k
+            theta0 = math.atan2(y - cy, x - cx)
+            offset = (math.atan2(py - cy, px - cx) - theta0) % TWO_PI
+            if (offset if k > 0.0 else (TWO_PI - offset) % TWO_PI) <= abs(k) * length:
+                best = min(best, abs(math.hypot(px - cx, py - cy) - 1.0 / abs(k)))
+        pose = end
+    return best

@@ -1,0 +1,144 @@
+"""A reactive Dubins-path follower: the controller dribbleBall and approachBall share (a pure function).
+
+Every control tick, from the believed state only, the wheel axle (a unicycle) is steered toward the axle
+goal pose in one of three modes, checked in this order:
+
+1. final straight: behind the goal on its line, roughly aligned -> a line follower onto the goal line;
+2. final arc: on the circle of radius `radius` that ends tangentially in the pre-pose (`final_straight`
+   behind the goal), heading along it -> that circle is tracked with feedback on the distance to it;
+3. otherwise: the path `choose_path(start, pre_pose)` (a shortest Dubins path, possibly filtered) is
+   followed along its first segment, curvature +-1/radius or 0.
+
+Modes 1 and 2 exist because a replanned shortest Dubins path is fragile exactly where it is followed: a
+robot a centimetre inside its last arc, or late for it, needs a full loop to reach the pose exactly. The
+tracked circle and the line follower absorb such errors with the turning authority left beyond `radius`.
+Speeds: a braking profile over the remaining length arrives with vg; arcs are driven at `w_plan * radius`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from sims.soccer.control import Pose, clip, in_frame, profile_speed
+from sims.soccer.dubins import DubinsPath, bounds
+from sims.soccer.world import wrap
+
+CORRECTION_SHARE = 0.5  # a small first arc before a straight is turned within this share of the straight,
+CORRECTION_MIN, CORRECTION_MAX = 0.05, 0.5  # m, ... within these bounds (so sensing noise does not chatter)
+MIN_SEGMENT = 0.01  # m, shorter arcs are not slowed down for
+K_RADIAL = 2.0  # rad/m, heading offset toward the tracked circle per metre off it (atan-limited)
+K_TRACK = 2.0  # 1/s, rotational command per radian of heading error when tracking the circle
+
+
+@dataclass(frozen=True)
+class Follower:
+    """Parameters of one use of the follower (SI units)."""
+
+    radius: float  # m, turning radius of the axle's Dubins paths
+    w_plan: float  # rad/s, turn rate arcs are driven at (speed on an arc: w_plan * radius)
+    w_limit: float  # rad/s, the rotational command never exceeds this
+    v_top: float  # m/s, top speed on a straight
+    v_creep: float  # m/s, minimum speed while turning on an arc (0: may stop)
+    decel_plan: float  # m/s^2, deceleration the speed profile plans with
+    decel_limit: float  # m/s^2, the speed command never drops faster than this
+    final_straight: float  # m, the Dubins path ends this far behind the goal, on its line
+    corridor_heading: float  # rad, the line follower takes over within this heading error ...
+    corridor_width: float  # m, ... this lateral offset plus corridor_slope per metre still to go ...
+    corridor_slope: float
+    corridor_extra: float  # m, ... and from final_straight + corridor_extra behind the goal
+    r_line: float  # m, tightest turn of the line follower
+    line_gain_max: float  # 1/m, the line follower's gain (4 / distance to go: settles on the way) at most
+    capture_radial: float  # m, a robot this close to the final circle ...
+    capture_heading: float  # rad, ... heading along it within this ...
+    capture_angle: float  # rad, ... with at most this much of it to go, tracks it
+    box: tuple[float, float, float, float]  # the region (xmin, xmax, ymin, ymax) the axle's path stays in
+    lead_time: float = 0.1  # s, an arc after a straight is begun this early (the motors lag the command)
+    control_period: float = 0.05  # s, the period decel_limit is spread over (the simulator's)
+
+    def pre_pose(self, goal: Pose) -> Pose:
+        """The pose on the goal line final_straight behind the (axle) goal, where the Dubins path ends."""
+        d = self.final_straight
+        return goal[0] - d * math.cos(goal[2]), goal[1] - d * math.sin(goal[2]), goal[2]
+
+    def in_corridor(self, along: float, lateral: float, heading_error: float) -> bool:
+        """Whether the axle (along, lateral in the goal frame) is on the final straight."""
+        return (-(self.final_straight + self.corridor_extra) < along < 0.0
+                and abs(heading_error) < self.corridor_heading
+                and abs(lateral) < self.corridor_width + self.corridor_slope * -along)
+
+    def final_arc(self, start: Pose, pre: Pose) -> tuple[float, float, float] | None:
+        """(heading error, length to go, side) if the axle is on the circle ending tangentially in the
+        pre-pose (side +1: a left turn), heading along it, and that arc stays in the box; else None."""
+        x, y, phi = start
+        r = self.radius
+        for side in (1.0, -1.0):
+            cx, cy = pre[0] - side * r * math.sin(pre[2]), pre[1] + side * r * math.cos(pre[2])
+            rho = math.hypot(x - cx, y - cy)
+            if abs(rho - r) > self.capture_radial:
+                continue
+            at = math.atan2(y - cy, x - cx)
+            tangent = at + side * 0.5 * math.pi
+            if abs(wrap(tangent - phi)) > self.capture_heading:
+                continue
+            to_go = (side * (math.atan2(pre[1] - cy, pre[0] - cx) - at)) % (2.0 * math.pi)
+            if to_go > self.capture_angle:
+                continue
+            arc_path = DubinsPath("LSL" if side > 0.0 else "RSR", (to_go * r, 0.0, 0.0), r)
+            x0, x1, y0, y1 = bounds(start, arc_path)
+            if x0 < self.box[0] or x1 > self.box[1] or y0 < self.box[2] or y1 > self.box[3]:
+                continue
+            # aim toward the circle when off it (outside: turn in more; inside: less)
+            error = wrap(tangent + side * math.atan(K_RADIAL * (rho - r)) - phi)
+            return error, to_go * r, side
+        return None
+
+    def command(self, start: Pose, v: float, goal: Pose, vg: float,
+                choose_path: Callable[[Pose, Pose], DubinsPath]) -> tuple[float, float]:
+        """[v, phidot] steering the axle pose `start` (speed v) to the axle pose `goal`, arriving with vg."""
+        along, lateral = in_frame(goal, start[0], start[1])  # along < 0: behind the goal
+        heading_error = wrap(start[2] - goal[2])
+        speed = max(0.0, v)
+        arc_speed = self.w_plan * self.radius
+        if self.in_corridor(along, lateral, heading_error):
+            # a critically damped line follower whose settling length shrinks with the distance to the goal
+            gain = min(self.line_gain_max, 4.0 / max(-along, 1e-3))
+            curvature = clip(-gain * gain * lateral - 2.0 * gain * math.sin(heading_error), 1.0 / self.r_line)
+            v_target = min(profile_speed(-along, vg, self.v_top, self.decel_plan),
+                           self.w_plan / max(abs(curvature), 1e-6))
+            w = curvature * min(speed, v_target)
+        else:
+            pre = self.pre_pose(goal)
+            arc = self.final_arc(start, pre)
+            if arc is not None:
+                error, to_go, side = arc
+                to_goal = to_go + self.final_straight
+                v_target = max(min(arc_speed, profile_speed(to_goal, vg, self.v_top, self.decel_plan)), self.v_creep)
+                w = side * min(speed, v_target) / self.radius + K_TRACK * error
+            else:
+                path = choose_path(start, pre)
+                v_target, curvature = self._along_path(path, v, vg)
+                w = curvature * min(speed, v_target)
+        v_cmd = max(v_target, v - self.decel_limit * self.control_period, 0.0)
+        return v_cmd, clip(w, self.w_limit)
+
+    def _along_path(self, path: DubinsPath, v: float, vg: float) -> tuple[float, float]:
+        """Target speed and curvature on the first segment of a Dubins path ending at the pre-pose."""
+        curvature = path.curvature(0)
+        if curvature != 0.0 and path.word[1] == "S":  # a small correction before a straight: gently
+            span = min(CORRECTION_MAX, max(CORRECTION_MIN, CORRECTION_SHARE * path.lengths[1]))
+            curvature = math.copysign(min(abs(curvature), path.lengths[0] / path.radius / span), curvature)
+        elif curvature == 0.0 and path.lengths[0] < self.lead_time * v:
+            curvature = path.curvature(1) * (1.0 - path.lengths[0] / (self.lead_time * v))
+        v_target = profile_speed(path.length + self.final_straight, vg, self.v_top, self.decel_plan)
+        arc_speed = self.w_plan * path.radius
+        travelled = -self.lead_time * v  # the arc is begun this early
+        for seg in range(3):  # slow down for the current and each upcoming arc in time
+            if path.word[seg] != "S" and path.lengths[seg] > MIN_SEGMENT:
+                slack = max(0.0, travelled)
+                v_target = min(v_target, math.sqrt(arc_speed * arc_speed + 2.0 * self.decel_plan * slack))
+            travelled += path.lengths[seg]
+        if curvature != 0.0:
+            v_target = max(v_target, self.v_creep)
+        return v_target, curvature
