@@ -24,10 +24,10 @@ from refinement.features import compute_features, feature_names, first_examples
 from sims.episode import Episode
 
 FAIL, SUCCESS = 0, 1
-COSTS = (1.0, 2.0, 3.0, 5.0, 8.0)  # cost of a false "success" relative to a false "fail"
-MIN_SAMPLES_LEAF = (2, 5, 10, 20)
+COSTS = (1.5, 2.0, 3.0, 5.0, 8.0)  # cost of a false "success" relative to a false "fail"
+MIN_SAMPLES_LEAF = (5, 10, 20, 40)
 CV_FOLDS = 5
-TARGET_FALSE_SUCCESS = 0.01  # cross-validated share of failures predicted to succeed a candidate may have
+TARGET_FALSE_SUCCESS = 0.015  # cross-validated share of failures predicted to succeed a candidate may have
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,11 @@
 """The training protocol of duration models (Sec. 4.3, Fig. 4.9).
 
 Episodes are shuffled (seeded) and split: half train, a quarter validation, a quarter test.
-1. n_i is chosen from candidates by the validation MAE of models trained on the half (Fig. 4.5).
+1. n_i is chosen from candidates by the validation MAE of models trained on the half (Fig. 4.5), then the
+   model tree's leaf size: the most accurate on validation (the largest within LEAF_TOLERANCE of that) among
+   those whose stored tree is projected to stay within MAX_LEAVES. Intermediate examples of one episode are
+   near duplicates, so M5's pruning, which counts them as independent, keeps leaves in proportion to the
+   data; the leaf size is what keeps the tree readable (and quick to minimize over) as data grows.
 2. A model trained on train + validation (three quarters) with that n_i is tested on the last quarter: its
    MAE is the reported accuracy, beside the MAE of a gradient-boosting ensemble trained on the same examples.
 3. The stored model is trained on all episodes.
@@ -25,18 +29,22 @@ from sims.episode import Episode
 
 N_I_CANDIDATES = (1, 2, 3, 5, 10, 20, 30, 50)  # examples per episode tried (Fig. 4.5)
 EPISODE_FRACTIONS = (0.125, 0.25, 0.5, 1.0)  # of the three-quarter training set, for Fig. 4.6
+MIN_SAMPLES_LEAF = (5, 10, 20, 40, 80, 160, 320)  # candidate leaf sizes (examples) of the model tree
+MAX_LEAVES = 400  # leaves the stored tree may have ("a few hundred")
+DEFAULT_MIN_SAMPLES_LEAF = 10  # the leaf size while n_i is chosen
+LEAF_TOLERANCE = 0.03  # a larger leaf size is taken if its validation MAE is at most 3% above the best
 MIN_EPISODES = 8  # fewer successful episodes cannot be split into train / validation / test
 DEFAULT_FEATURE_SET = "pose"
 
-RegressorFactory = Callable[[int], RegressorMixin]  # seed -> unfitted regressor
+RegressorFactory = Callable[[int, int], RegressorMixin]  # (seed, min_samples_leaf) -> unfitted regressor
 
 
-def make_model_tree(seed: int) -> RegressorMixin:
+def make_model_tree(seed: int, min_samples_leaf: int) -> RegressorMixin:
     """The duration model: an M5-style model tree (App. C.2); the seed is unused (the tree is deterministic)."""
-    return ModelTree()
+    return ModelTree(min_samples_leaf=min_samples_leaf)
 
 
-def make_baseline(seed: int) -> RegressorMixin:
+def make_baseline(seed: int, min_samples_leaf: int) -> RegressorMixin:
     """The comparison of Table 4.3's MAE: scikit-learn's histogram gradient boosting, seeded."""
     return HistGradientBoostingRegressor(random_state=seed)
 
@@ -86,6 +94,7 @@ def train_duration_model(
     seed: int,
     feature_set: str = DEFAULT_FEATURE_SET,
     n_i_candidates: tuple[int, ...] = N_I_CANDIDATES,
+    leaf_candidates: tuple[int, ...] = MIN_SAMPLES_LEAF,
     episode_fractions: tuple[float, ...] = EPISODE_FRACTIONS,
     make_model: RegressorFactory = make_model_tree,
     make_reference: RegressorFactory = make_baseline,
@@ -100,19 +109,30 @@ def train_duration_model(
     train, validation, test = pick(split.train), pick(split.validation), pick(split.test)
     learn = train + validation
 
-    n_i_curve = []
-    for n_i in n_i_candidates:
-        step(f"{action}: n_i={n_i}")
-        model = fit_on_episodes(train, feature_set, n_i, make_model(seed))
-        n_i_curve.append({"n_i": n_i, "examples": count_examples(train, n_i), "mae": held_out_mae(model, validation, feature_set)})
+    def validate(n_i: int, leaf: int) -> dict:
+        step(f"{action}: n_i={n_i}, leaf={leaf}")
+        model = fit_on_episodes(train, feature_set, n_i, make_model(seed, leaf))
+        return {"n_i": n_i, "min_samples_leaf": leaf, "examples": count_examples(train, n_i),
+                "mae": held_out_mae(model, validation, feature_set), "leaves": _leaves(model)}
+
+    n_i_curve = [validate(n_i, DEFAULT_MIN_SAMPLES_LEAF) for n_i in n_i_candidates]
     n_i = min(n_i_curve, key=lambda row: (row["mae"], row["n_i"]))["n_i"]
+    leaf_curve = [next(r for r in n_i_curve if r["n_i"] == n_i) if leaf == DEFAULT_MIN_SAMPLES_LEAF
+                  else validate(n_i, leaf) for leaf in sorted(set(leaf_candidates) | {DEFAULT_MIN_SAMPLES_LEAF})]
+    growth = len(used) / len(train)  # leaves grow about in proportion to the episodes (Fig. 4.6 data)
+    for row in leaf_curve:
+        row["projected_leaves"] = None if row["leaves"] is None else round(row["leaves"] * growth)
+    small = [row for row in leaf_curve if row["projected_leaves"] is None or row["projected_leaves"] <= MAX_LEAVES]
+    small = small or [max(leaf_curve, key=lambda row: row["min_samples_leaf"])]
+    best = min(row["mae"] for row in small)
+    leaf = max(row["min_samples_leaf"] for row in small if row["mae"] <= (1.0 + LEAF_TOLERANCE) * best)
 
     episodes_curve = []
     for fraction in episode_fractions:
         subset = learn[: max(MIN_EPISODES // 2, round(fraction * len(learn)))]
         step(f"{action}: {len(subset)} episodes")
-        model = fit_on_episodes(subset, feature_set, n_i, make_model(seed))
-        reference = fit_on_episodes(subset, feature_set, n_i, make_reference(seed))
+        model = fit_on_episodes(subset, feature_set, n_i, make_model(seed, leaf))
+        reference = fit_on_episodes(subset, feature_set, n_i, make_reference(seed, leaf))
         episodes_curve.append({
             "episodes": len(subset),
             "mae": held_out_mae(model, test, feature_set),
@@ -122,13 +142,13 @@ def train_duration_model(
     evaluated = episodes_curve[-1] if len(episodes_curve) and episodes_curve[-1]["episodes"] == len(learn) else None
     if evaluated is None:  # the curve did not end with the full three quarters: evaluate them here
         step(f"{action}: {len(learn)} episodes")
-        model = fit_on_episodes(learn, feature_set, n_i, make_model(seed))
-        reference = fit_on_episodes(learn, feature_set, n_i, make_reference(seed))
+        model = fit_on_episodes(learn, feature_set, n_i, make_model(seed, leaf))
+        reference = fit_on_episodes(learn, feature_set, n_i, make_reference(seed, leaf))
         evaluated = {"mae": held_out_mae(model, test, feature_set), "mae_hgb": held_out_mae(reference, test, feature_set),
                      "leaves": _leaves(model)}
 
     step(f"{action}: final model")
-    final = fit_on_episodes(used, feature_set, n_i, make_model(seed))
+    final = fit_on_episodes(used, feature_set, n_i, make_model(seed, leaf))
     durations = np.array([e.duration for e in used])
     report = {
         "action": action,
@@ -138,6 +158,7 @@ def train_duration_model(
         "mean_duration": float(durations.mean()),
         "simulated_hours": float(sum(e.duration for e in episodes) / 3600.0),
         "n_i": n_i,
+        "min_samples_leaf": leaf,
         "examples": count_examples(used, n_i),
         "test_episodes": len(test),
         "mae": evaluated["mae"],
@@ -147,6 +168,7 @@ def train_duration_model(
         "leaves_evaluated": evaluated["leaves"],
         "leaves": _leaves(final),
         "n_i_curve": n_i_curve,
+        "leaf_curve": leaf_curve,
         "episodes_curve": episodes_curve,
         "seed": seed,
     }

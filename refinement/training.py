@@ -21,7 +21,7 @@ from planner_bridge.bundled import DOMAINS_DIR
 from refinement.action_models import COLLISION_SUFFIX
 from refinement.collision import train_collision_model
 from refinement.errors import DataError, TailorError
-from refinement.learning import EPISODE_FRACTIONS, N_I_CANDIDATES, train_duration_model
+from refinement.learning import EPISODE_FRACTIONS, MIN_SAMPLES_LEAF, N_I_CANDIDATES, train_duration_model
 from refinement.training_report import format_report
 from sims.episode import Episode
 
@@ -46,7 +46,7 @@ TRAINING_DOMAINS: dict[str, TrainingRecipe] = {
         duration_actions=("goToPose", "approachBall", "dribbleBall"),
         collision_scenario="goToPoseAtBall",
         collision_action="goToPose",
-        default_episodes=1000,
+        default_episodes=6000,
     ),
 }
 
@@ -95,7 +95,7 @@ def train_domain(
         raise DataError(f"fresh and training episodes share seeds {sorted(shared)[:3]}: choose another seed")
     gathered = time.perf_counter()
 
-    fits = len(recipe.duration_actions) * (len(n_i_candidates) + len(episode_fractions) + 2) + 2
+    fits = len(recipe.duration_actions) * (len(n_i_candidates) + len(MIN_SAMPLES_LEAF) + len(episode_fractions) + 1) + 2
     with tqdm(total=fits, desc="training", unit="fit", disable=not progress) as bar:
         def step(label: str) -> None:
             bar.set_postfix_str(label, refresh=False)

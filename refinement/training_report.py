@@ -14,13 +14,13 @@ def _percent(share: float) -> str:
 
 
 def duration_table(reports: dict[str, dict]) -> list[str]:
-    header = (f"{'action':<14}{'episodes':>9}{'mean t (s)':>11}{'sim. h:mm':>10}{'n_i':>5}{'MAE (s)':>9}"
+    header = (f"{'action':<14}{'episodes':>9}{'mean t (s)':>11}{'sim. h:mm':>10}{'n_i':>5}{'leaf':>5}{'MAE (s)':>9}"
               f"{'MAE/t':>7}{'HGB MAE (s)':>12}{'MAE/HGB':>8}{'leaves':>7}")
     lines = [header, "-" * len(header)]
     for action, r in reports.items():
         lines.append(
             f"{action:<14}{r['episodes']:>9d}{r['mean_duration']:>11.2f}{_hours_minutes(r['simulated_hours']):>10}"
-            f"{r['n_i']:>5d}{r['mae']:>9.3f}{_percent(r['mae_relative']):>7}{r['mae_hgb']:>12.3f}"
+            f"{r['n_i']:>5d}{r['min_samples_leaf']:>5d}{r['mae']:>9.3f}{_percent(r['mae_relative']):>7}{r['mae_hgb']:>12.3f}"
             f"{r['mae_over_hgb']:>8.2f}{r['leaves']:>7}"
         )
     return lines
@@ -53,8 +53,9 @@ def format_report(report: dict, models: dict, collision) -> str:
         f"gathering {report['gather_seconds']:.0f} s, training {report['train_seconds']:.0f} s)",
         "",
         "Duration models (Table 4.3): successful episodes, their mean duration, simulated time of all gathered",
-        "episodes, chosen n_i, MAE on the held-out quarter (first example of each episode), and the MAE of",
-        "HistGradientBoostingRegressor trained on the same examples; leaves of the stored model (all episodes).",
+        "episodes, chosen n_i and leaf size (min_samples_leaf), MAE on the held-out quarter (first example of each",
+        "episode), and the MAE of HistGradientBoostingRegressor trained on the same examples; leaves of the",
+        "stored model (trained on all episodes).",
         "",
         *duration_table(report["models"]),
         "",

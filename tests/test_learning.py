@@ -58,8 +58,9 @@ def test_duration_protocol_uses_each_part_for_its_purpose():
     test = [used[i] for i in split.test]
 
     Recorder.fitted = []
-    result = train_duration_model("goToPose", episodes, seed=9, n_i_candidates=(1, 4, 9), episode_fractions=(0.5, 1.0),
-                                  make_model=lambda seed: Recorder(), make_reference=lambda seed: LinearRegression())
+    result = train_duration_model("goToPose", episodes, seed=9, n_i_candidates=(1, 4, 9), leaf_candidates=(10,),
+                                  episode_fractions=(0.5, 1.0), make_model=lambda seed, leaf: Recorder(),
+                                  make_reference=lambda seed, leaf: LinearRegression())
     report, fits = result.report, list(Recorder.fitted)
     assert len(fits) == 6  # 3 n_i candidates, 2 points of Fig. 4.6, the stored model
     assert (report["episodes"], report["episodes_gathered"], report["test_episodes"]) == (46, 48, 12)
@@ -101,7 +102,7 @@ def test_duration_protocol_uses_each_part_for_its_purpose():
 def test_model_tree_learns_the_synthetic_durations():
     episodes = gather("goToPose", 400, seed=6)
     report = train_duration_model("goToPose", episodes, seed=0, n_i_candidates=(1, 5), episode_fractions=(1.0,),
-                                  make_model=lambda seed: ModelTree(min_samples_leaf=10)).report
+                                  leaf_candidates=(10, 40)).report
     # the synthetic noise is 0.05 s and durations average ~5.5 s
     assert report["mae"] < 0.1 * report["mean_duration"]
     assert report["leaves"] >= 2
@@ -136,3 +137,40 @@ def test_collision_classifier_is_pessimistic_and_evaluated_on_fresh_episodes():
               if (row["cost"], row["min_samples_leaf"]) == (report["cost_false_success"], report["min_samples_leaf"])]
     assert chosen[0]["false_success"] <= 0.01
     assert "angle_at" in result.model.rules_text()
+
+
+class Shrunk(RegressorMixin, BaseEstimator):
+    """A linear model pulled towards the mean by `pull` (its validation MAE grows with it), reporting
+    `leaves` leaves: lets a test set how accurate and how large each leaf size's tree is."""
+
+    def __init__(self, pull: float = 0.0, leaves: int = 1):
+        self.pull = pull
+        self.leaves = leaves
+
+    def fit(self, X, y):
+        self.model_, self.mean_ = LinearRegression().fit(X, y), float(np.mean(y))
+        self.n_leaves_ = self.leaves
+        return self
+
+    def predict(self, X):
+        return (1 - self.pull) * self.model_.predict(X) + self.pull * self.mean_
+
+
+@pytest.mark.parametrize("leaves, pulls, chosen", [
+    # small trees: the largest leaf size within 3% of the best MAE
+    ({5: 80, 10: 40, 20: 20, 40: 10}, {5: 0.0, 10: 0.0, 20: 0.01, 40: 0.5}, 20),
+    # 80 episodes, 40 of them in the half: the stored tree would have twice the leaves, at most 400
+    ({5: 800, 10: 400, 20: 200, 40: 100}, {5: 0.0, 10: 0.0, 20: 0.3, 40: 0.5}, 20),
+    # no leaf size keeps the tree small enough: the largest
+    ({5: 800, 10: 700, 20: 600, 40: 500}, {5: 0.0, 10: 0.0, 20: 0.3, 40: 0.5}, 40),
+])
+def test_leaf_size_choice(leaves, pulls, chosen):
+    episodes = gather("goToPose", 80, seed=8)
+    report = train_duration_model("goToPose", episodes, seed=1, n_i_candidates=(2,), leaf_candidates=(5, 10, 20, 40),
+                                  episode_fractions=(1.0,),
+                                  make_model=lambda seed, leaf: Shrunk(pulls[leaf], leaves[leaf])).report
+    curve = {row["min_samples_leaf"]: row for row in report["leaf_curve"]}
+    assert sorted(curve) == [5, 10, 20, 40]
+    assert [curve[leaf]["projected_leaves"] for leaf in (5, 10, 20, 40)] == [2 * leaves[k] for k in (5, 10, 20, 40)]
+    assert curve[5]["mae"] == curve[10]["mae"] < curve[20]["mae"] < curve[40]["mae"]
+    assert report["min_samples_leaf"] == chosen and report["leaves"] == leaves[chosen]

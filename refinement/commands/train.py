@@ -13,7 +13,7 @@ HELP = "gather experience in the simulator and learn the action models (duration
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("domain", help="domain to train (soccer)")
     parser.add_argument("--episodes", type=int, default=None, metavar="N",
-                        help="episodes gathered per scenario (default: the domain's, 1000 for soccer)")
+                        help="episodes gathered per scenario (default: the domain's, 6000 for soccer)")
     parser.add_argument("--fresh-episodes", type=int, default=None, metavar="M",
                         help="fresh episodes the collision classifier is evaluated on (default 1000)")
     parser.add_argument("--seed", type=int, default=0, help="seed of experience and training (default 0)")
