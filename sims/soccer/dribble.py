@@ -41,7 +41,7 @@ DRIBBLE = Follower(
     radius=R_DRIBBLE, w_plan=W_DRIBBLE, w_limit=W_HOLD, v_top=V_DRIBBLE, v_creep=V_CREEP_DRIBBLE,
     decel_plan=A_DRIBBLE_PLAN, decel_limit=A_DRIBBLE_BRAKE, final_straight=FINAL_STRAIGHT,
     corridor_heading=math.radians(50.0), corridor_width=0.1, corridor_slope=0.3, corridor_extra=0.3,
-    r_line=0.5, line_gain_max=20.0, capture_radial=0.12, capture_heading=0.4, capture_angle=math.pi,
+    r_line=0.5, line_gain_max=20.0, capture_radial=0.2, capture_heading=0.6, capture_angle=2.0 * math.pi,
     box=(-_HX, _HX, -_HY, _HY),
 )
 
