@@ -15,6 +15,7 @@ from dataclasses import dataclass
 TWO_PI = 2.0 * math.pi
 WORDS = ("LSL", "RSR", "LSR", "RSL", "RLR", "LRL")
 _EPS = 1e-9
+TANGENT_SLACK = 1.0  # (radius units)^2: a mixed word whose circles overlap this little is taken as tangent
 
 
 @dataclass(frozen=True)
@@ -24,6 +25,7 @@ class DubinsPath:
     word: str
     lengths: tuple[float, float, float]
     radius: float
+    exact: bool = True  # False: a mixed word taken as tangent within TANGENT_SLACK; it ends near the goal only
 
     @property
     def length(self) -> float:
@@ -39,7 +41,7 @@ def _mod(angle: float) -> float:
     return angle % TWO_PI
 
 
-def _words(alpha: float, beta: float, d: float) -> dict[str, tuple[float, float, float] | None]:
+def _words(alpha: float, beta: float, d: float) -> dict[str, tuple | None]:
     """Normalized segment lengths (t, p, q) of each word, None where the word does not exist."""
     sa, ca, sb, cb = math.sin(alpha), math.cos(alpha), math.sin(beta), math.cos(beta)
     cab = math.cos(alpha - beta)
@@ -57,18 +59,21 @@ def _words(alpha: float, beta: float, d: float) -> dict[str, tuple[float, float,
         out["RSR"] = (_mod(alpha - th), math.sqrt(p2), _mod(th - beta))
     else:
         out["RSR"] = None
+    # LSR and RSL: where the two circles (nearly) touch, the straight shrinks to nothing; a robot following
+    # such a path drifts across that boundary with any noise, so a slight overlap counts as touching
+    # instead of making the word vanish (and the robot switch to a path a loop longer).
     p2 = -2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb)  # LSR
-    if p2 >= 0.0:
-        p = math.sqrt(p2)
+    if p2 >= -TANGENT_SLACK:
+        p = math.sqrt(max(p2, 0.0))
         th = math.atan2(-ca - cb, d + sa + sb) - math.atan2(-2.0, p)
-        out["LSR"] = (_mod(th - alpha), p, _mod(th - beta))
+        out["LSR"] = (_mod(th - alpha), p, _mod(th - beta), p2 >= 0.0)
     else:
         out["LSR"] = None
     p2 = -2.0 + d * d + 2.0 * cab - 2.0 * d * (sa + sb)  # RSL
-    if p2 >= 0.0:
-        p = math.sqrt(p2)
+    if p2 >= -TANGENT_SLACK:
+        p = math.sqrt(max(p2, 0.0))
         th = math.atan2(ca + cb, d - sa - sb) - math.atan2(2.0, p)
-        out["RSL"] = (_mod(alpha - th), p, _mod(beta - th))
+        out["RSL"] = (_mod(alpha - th), p, _mod(beta - th), p2 >= 0.0)
     else:
         out["RSL"] = None
     c = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0  # RLR
@@ -105,9 +110,10 @@ def all_paths(start: tuple[float, float, float], goal: tuple[float, float, float
     paths = []
     for word, seg in _words(alpha, beta, d).items():
         if seg is not None:
-            t, p, q = seg
+            t, p, q = seg[:3]
             arc_p = p if word[1] == "S" else _clean(p)
-            paths.append(DubinsPath(word, (_clean(t) * radius, arc_p * radius, _clean(q) * radius), radius))
+            exact = seg[3] if len(seg) > 3 else True
+            paths.append(DubinsPath(word, (_clean(t) * radius, arc_p * radius, _clean(q) * radius), radius, exact))
     paths.sort(key=lambda path: path.length)
     return paths
 

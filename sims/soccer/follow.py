@@ -115,19 +115,21 @@ class Follower:
                 error, to_go, side = arc
                 to_goal = to_go + self.final_straight
                 v_target = max(min(arc_speed, profile_speed(to_goal, vg, self.v_top, self.decel_plan)), self.v_creep)
-                w = side * min(speed, v_target) / self.radius + K_TRACK * error
+                w = side * speed / self.radius + K_TRACK * error
             else:
                 path = choose_path(start, pre)
                 v_target, curvature = self._along_path(path, v, vg)
-                w = curvature * min(speed, v_target)
+                w = curvature * speed  # the actual speed: the robot brakes slower than v_target drops
         v_cmd = max(v_target, v - self.decel_limit * self.control_period, 0.0)
         return v_cmd, clip(w, self.w_limit)
 
     def _along_path(self, path: DubinsPath, v: float, vg: float) -> tuple[float, float]:
         """Target speed and curvature on the first segment of a Dubins path ending at the pre-pose."""
         curvature = path.curvature(0)
-        if curvature != 0.0 and path.word[1] == "S":  # a small correction before a straight: gently
-            span = min(CORRECTION_MAX, max(CORRECTION_MIN, CORRECTION_SHARE * path.lengths[1]))
+        span = min(CORRECTION_MAX, max(CORRECTION_MIN, CORRECTION_SHARE * path.lengths[1]))
+        if curvature != 0.0 and path.word[1] == "S" and path.lengths[1] > span:
+            # a small correction before a long straight: gently (before a short one the next arc follows at
+            # once, and a softened turn would drift off the circles until the word no longer exists)
             curvature = math.copysign(min(abs(curvature), path.lengths[0] / path.radius / span), curvature)
         elif curvature == 0.0 and path.lengths[0] < self.lead_time * v:
             curvature = path.curvature(1) * (1.0 - path.lengths[0] / (self.lead_time * v))
