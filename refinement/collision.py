@@ -3,7 +3,9 @@
 A scikit-learn decision tree on the goToPose features, made pessimistic by a cost matrix: predicting
 success for an episode that collides costs COST_FALSE_SUCCESS times as much as predicting a collision for
 one that succeeds. A tree learner takes a cost matrix by reweighting the examples by the cost of
-misclassifying them (Witten and Frank, 2005), here `class_weight={fail: cost, success: 1}`.
+misclassifying them (Witten and Frank, 2005): here `class_weight={fail: cost * n_success / n_fail,
+success: 1}`, the cost taken relative to the class balance, so cost 1 is a balanced tree whatever share of
+the episodes collide (how often they do depends on the simulator's controllers).
 The cost and the leaf size are chosen by stratified cross-validation on the training episodes; the tree is
 then evaluated on fresh episodes as a confusion matrix (Table 4.4).
 """
@@ -24,7 +26,7 @@ from refinement.features import compute_features, feature_names, first_examples
 from sims.episode import Episode
 
 FAIL, SUCCESS = 0, 1
-COSTS = (1.5, 2.0, 3.0, 5.0, 8.0)  # cost of a false "success" relative to a false "fail"
+COSTS = (1.0, 1.5, 2.0, 3.0, 5.0, 8.0, 13.0)  # cost of a false "success" relative to a false "fail"
 MIN_SAMPLES_LEAF = (5, 10, 20, 40)
 CV_FOLDS = 5
 TARGET_FALSE_SUCCESS = 0.015  # cross-validated share of failures predicted to succeed a candidate may have
@@ -61,9 +63,15 @@ def confusion(predicted: np.ndarray, observed: np.ndarray) -> dict:
     }
 
 
-def make_classifier(cost: float, min_samples_leaf: int, seed: int) -> DecisionTreeClassifier:
-    return DecisionTreeClassifier(class_weight={FAIL: cost, SUCCESS: 1.0}, min_samples_leaf=min_samples_leaf,
-                                  random_state=seed)
+def make_classifier(cost: float, balance: float, min_samples_leaf: int, seed: int) -> DecisionTreeClassifier:
+    """A tree whose failures weigh `cost * balance` (balance = n_success / n_fail) against successes."""
+    return DecisionTreeClassifier(class_weight={FAIL: cost * balance, SUCCESS: 1.0},
+                                  min_samples_leaf=min_samples_leaf, random_state=seed)
+
+
+def class_balance(y: np.ndarray) -> float:
+    counts = np.bincount(y, minlength=2)
+    return float(counts[SUCCESS] / counts[FAIL])
 
 
 def choose_hyperparameters(X: np.ndarray, y: np.ndarray, seed: int) -> tuple[float, int, list[dict]]:
@@ -76,7 +84,8 @@ def choose_hyperparameters(X: np.ndarray, y: np.ndarray, seed: int) -> tuple[flo
         for leaf in MIN_SAMPLES_LEAF:
             predicted = np.empty_like(y)
             for train, held_out in folds.split(X, y):
-                predicted[held_out] = make_classifier(cost, leaf, seed).fit(X[train], y[train]).predict(X[held_out])
+                classifier = make_classifier(cost, class_balance(y), leaf, seed).fit(X[train], y[train])
+                predicted[held_out] = classifier.predict(X[held_out])
             scores = confusion(predicted, y)
             table.append({"cost": cost, "min_samples_leaf": leaf, "accuracy": scores["accuracy"],
                           "false_success": scores["false_success"]})
@@ -119,7 +128,7 @@ def train_collision_model(
     step("collision: choosing cost and leaf size")
     cost, leaf, table = choose_hyperparameters(X, y, seed)
     step("collision: fitting the tree")
-    classifier = make_classifier(cost, leaf, seed).fit(X, y)
+    classifier = make_classifier(cost, class_balance(y), leaf, seed).fit(X, y)
     tree = tree_arrays(classifier).simplified()  # same predictions, no split between leaves that agree
     evaluation = confusion(tree.predict(compute_features(feature_set, first_examples(fresh)[0])), labels(fresh))
     outcomes, counts = np.unique([e.outcome for e in episodes], return_counts=True)
@@ -128,6 +137,7 @@ def train_collision_model(
         "episodes": len(episodes),
         "outcomes": {str(o): int(c) for o, c in zip(outcomes, counts)},
         "cost_false_success": cost,
+        "class_weight_fail": cost * class_balance(y),
         "min_samples_leaf": leaf,
         "leaves": tree.n_leaves,
         "fresh_episodes": len(fresh),

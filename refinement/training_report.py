@@ -60,7 +60,8 @@ def format_report(report: dict, models: dict, collision) -> str:
         *duration_table(report["models"]),
         "",
         f"Collision classifier ({c['action']} to a pose at the ball, Sec. 4.2.2): decision tree trained on "
-        f"{c['episodes']} episodes, cost of a false success {c['cost_false_success']:g}, "
+        f"{c['episodes']} episodes ({c['outcomes']}), cost of a false success {c['cost_false_success']:g} "
+        f"relative to the class balance (class weight of failures {c['class_weight_fail']:.3g}), "
         f"min_samples_leaf {c['min_samples_leaf']}, {c['leaves']} leaves.",
         f"Confusion matrix on {c['fresh_episodes']} fresh episodes (Table 4.4):",
         "",

@@ -1,10 +1,13 @@
-"""Regenerate the golden plans under tests/golden/plan/ and show what changed.
+"""Regenerate the golden plans (tests/golden/plan/) and refined sequences (tests/golden/refine/), show what changed.
 
     python tests/regenerate_golden.py           # rewrite the golden files, print a unified diff of changes
     python tests/regenerate_golden.py --check   # only print the diff; exit status 1 when anything differs
 
 For every bundled pair domains/<domain>/problems/<problem>.pddl the golden file <domain>/<problem>.json holds
 exactly what `tailor plan <domain> <problem> --json` prints; <domain>/<problem>.txt holds the text rendering.
+For every bundled problem of a domain with an action library binding (actions.toml), the golden file
+tests/golden/refine/<domain>/<problem>.json holds what `tailor refine <domain> <problem> --simulate --json`
+prints with seed 0, without the optimizers' wall-clock times ("seconds"), which differ from run to run.
 Files are written atomically (temporary file, then os.replace).
 """
 
@@ -21,6 +24,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 GOLDEN_DIR = ROOT / "tests" / "golden" / "plan"
+REFINE_GOLDEN_DIR = ROOT / "tests" / "golden" / "refine"
+REFINE_ARGS = ["--simulate", "--json", "--seed", "0"]
 RENDERINGS = {".json": ["--json"], ".txt": []}  # golden file suffix -> extra `tailor plan` arguments
 
 
@@ -45,6 +50,38 @@ def tailor_plan_output(domain: str, problem: str, extra: list[str]) -> str:
     return out.getvalue()
 
 
+def refine_pairs() -> list[tuple[str, str]]:
+    """(domain, problem) of every bundled problem whose domain binds its actions (can be refined)."""
+    return [(d, p) for d, p in bundled_pairs() if (ROOT / "domains" / d / "actions.toml").exists()]
+
+
+def refine_golden_path(domain: str, problem: str) -> Path:
+    return REFINE_GOLDEN_DIR / domain / f"{problem}.json"
+
+
+def without_timings(value):
+    """The JSON value without "seconds" entries (wall-clock times are not reproducible)."""
+    if isinstance(value, dict):
+        return {k: without_timings(v) for k, v in value.items() if k != "seconds"}
+    if isinstance(value, list):
+        return [without_timings(v) for v in value]
+    return value
+
+
+def tailor_refine_output(domain: str, problem: str) -> str:
+    """What `tailor refine DOMAIN PROBLEM --simulate --json --seed 0` prints, timings removed."""
+    import json
+
+    from refinement.cli import main
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        status = main(["refine", domain, problem, *REFINE_ARGS])
+    if status != 0:
+        raise SystemExit(f"tailor refine {domain} {problem} failed with status {status}")
+    return json.dumps(without_timings(json.loads(out.getvalue())), indent=1) + "\n"
+
+
 def write_atomically(path: Path, text: str) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp", encoding="utf-8") as tmp:
@@ -57,18 +94,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--check", action="store_true", help="do not write; exit 1 when a golden file differs")
     args = parser.parse_args(argv)
     changed = 0
-    for domain, problem in bundled_pairs():
-        for suffix, extra in RENDERINGS.items():
-            path = golden_path(domain, problem, suffix)
-            old = path.read_text(encoding="utf-8") if path.exists() else ""
-            new = tailor_plan_output(domain, problem, extra)
-            if new == old:
-                continue
-            changed += 1
-            name = str(path.relative_to(ROOT))
-            sys.stdout.writelines(difflib.unified_diff(old.splitlines(True), new.splitlines(True), name, name))
-            if not args.check:
-                write_atomically(path, new)
+    outputs = [(golden_path(d, p, suffix), lambda d=d, p=p, extra=extra: tailor_plan_output(d, p, extra))
+               for d, p in bundled_pairs() for suffix, extra in RENDERINGS.items()]
+    outputs += [(refine_golden_path(d, p), lambda d=d, p=p: tailor_refine_output(d, p)) for d, p in refine_pairs()]
+    for path, output in outputs:
+        old = path.read_text(encoding="utf-8") if path.exists() else ""
+        new = output()
+        if new == old:
+            continue
+        changed += 1
+        name = str(path.relative_to(ROOT))
+        sys.stdout.writelines(difflib.unified_diff(old.splitlines(True), new.splitlines(True), name, name))
+        if not args.check:
+            write_atomically(path, new)
     print(f"{changed} golden file(s) {'differ' if args.check else 'changed'}", file=sys.stderr)
     return 1 if (args.check and changed) else 0
 

@@ -1,0 +1,75 @@
+"""`tailor refine` on every bundled problem that can be refined, compared in full with tests/golden/refine/
+(regenerate with `python tests/regenerate_golden.py`), and its errors."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from regenerate_golden import refine_golden_path, refine_pairs, tailor_refine_output  # noqa: E402
+
+from refinement.cli import main  # noqa: E402
+
+PAIRS = refine_pairs()
+
+
+def test_the_soccer_problems_can_be_refined():
+    assert ("soccer", "score") in PAIRS and ("soccer", "waypoints") in PAIRS
+
+
+@pytest.mark.parametrize("domain, problem", PAIRS)
+def test_refine_json_matches_golden(domain, problem):
+    assert tailor_refine_output(domain, problem) == refine_golden_path(domain, problem).read_text(encoding="utf-8")
+
+
+def test_refined_score_is_consistent(capsys):
+    assert main(["refine", "soccer", "score", "--json", "--simulate"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert [a["action"] for a in data["actions"]] == ["approachBall", "dribbleBall"]
+    free = {p["id"]: p for p in data["free_parameters"]}
+    assert set(free) == {"pos2.phi", "pos2.v"}
+    approach, dribble = data["actions"]
+    # the shared subgoal: approachBall's goal heading and speed are dribbleBall's start
+    assert approach["params"]["phig"] == dribble["params"]["phi"] == pytest.approx(free["pos2.phi"]["value"], abs=1e-6)
+    assert approach["params"]["vg"] == dribble["params"]["v"] == pytest.approx(free["pos2.v"]["value"], abs=1e-6)
+    assert 0.0 <= free["pos2.v"]["value"] <= 0.3
+    for execution in (data, data["greedy"]):
+        assert execution["predicted_total"] == pytest.approx(sum(a["predicted"] for a in execution["actions"]), abs=1e-3)
+        assert execution["simulated_total"] == pytest.approx(sum(a["simulated"] for a in execution["actions"]), abs=1e-3)
+    # refinement minimizes the summed prediction, greedy only the first action's
+    assert data["predicted_total"] <= data["greedy"]["predicted_total"] + 1e-9
+    assert approach["predicted"] >= data["greedy"]["actions"][0]["predicted"] - 1e-9
+
+
+def test_refine_plot_writes_trajectories_and_polar_plot(tmp_path, capsys):
+    out = tmp_path / "score.png"
+    assert main(["refine", "soccer", "score", "--plot", str(out)]) == 0
+    assert out.stat().st_size > 10_000 and (tmp_path / "score_polar.png").stat().st_size > 10_000
+    assert f"Wrote {out}" in capsys.readouterr().out
+
+
+def _tailor(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "refinement.cli", *args], capture_output=True, text=True)
+
+
+def test_bad_belief_file_is_one_line_with_its_exit_status(tmp_path):
+    belief = tmp_path / "bad.toml"
+    belief.write_text("[objects.pos1]\nx = 0.0\ny = 'one'\n")
+    result = _tailor("refine", "soccer", "score", "--belief", str(belief))
+    assert result.returncode == 10 and result.stdout == ""
+    assert result.stderr.count("\n") == 1 and str(belief) in result.stderr and "Traceback" not in result.stderr
+
+
+def test_missing_models_are_one_line_with_their_exit_status(tmp_path):
+    domain = Path(__file__).resolve().parent.parent / "domains" / "soccer"
+    copy = tmp_path / "soccer"
+    (copy / "problems").mkdir(parents=True)
+    for name in ("domain.pddl", "actions.toml", "problems/score.pddl", "problems/score.toml"):
+        (copy / name).write_text((domain / name).read_text())
+    result = _tailor("refine", str(copy / "domain.pddl"), str(copy / "problems/score.pddl"))
+    assert result.returncode == 12 and "models" in result.stderr and result.stderr.count("\n") == 1
