@@ -70,8 +70,9 @@ def make_classifier(cost: float, balance: float, min_samples_leaf: int, seed: in
 
 
 def class_balance(y: np.ndarray) -> float:
+    """n_success / n_fail (1 if either class is missing: the tree then has one leaf anyway)."""
     counts = np.bincount(y, minlength=2)
-    return float(counts[SUCCESS] / counts[FAIL])
+    return float(counts[SUCCESS] / counts[FAIL]) if counts.min() > 0 else 1.0
 
 
 def choose_hyperparameters(X: np.ndarray, y: np.ndarray, seed: int) -> tuple[float, int, list[dict]]:
@@ -121,12 +122,16 @@ def train_collision_model(
 ) -> CollisionTraining:
     """Learn the pessimistic collision tree from `episodes`; evaluate it on the `fresh` ones."""
     y = labels(episodes)
-    if len(episodes) < 2 * CV_FOLDS or np.bincount(y, minlength=2).min() < 2:
-        raise DataError(f"{action} collision data: {len(episodes)} episodes, "
-                        f"{int(np.sum(y == SUCCESS))} successes; need both outcomes several times")
+    if not episodes or not fresh:
+        raise DataError(f"{action} collision data: {len(episodes)} training and {len(fresh)} fresh episodes")
     X = compute_features(feature_set, first_examples(episodes)[0])
     step("collision: choosing cost and leaf size")
-    cost, leaf, table = choose_hyperparameters(X, y, seed)
+    note = ""
+    if np.bincount(y, minlength=2).min() >= CV_FOLDS:
+        cost, leaf, table = choose_hyperparameters(X, y, seed)
+    else:  # too few of one outcome to cross-validate: the most pessimistic candidate
+        cost, leaf, table = max(COSTS), max(MIN_SAMPLES_LEAF), []
+        note = f"fewer than {CV_FOLDS} episodes of one outcome: no cross-validation, most pessimistic candidate"
     step("collision: fitting the tree")
     classifier = make_classifier(cost, class_balance(y), leaf, seed).fit(X, y)
     tree = tree_arrays(classifier).simplified()  # same predictions, no split between leaves that agree
@@ -145,6 +150,7 @@ def train_collision_model(
         "false_success": evaluation["false_success"],
         "confusion": evaluation,
         "cross_validation": table,
+        "note": note,
         "seed": seed,
     }
     model = CollisionModel(action, feature_set, feature_names(feature_set), tree, report)

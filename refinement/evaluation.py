@@ -96,7 +96,7 @@ def _sequence(job: Job, objects: dict):
 
 
 def _models(job: Job, sequence):
-    key = ("models", str(job.task.domain))
+    key = ("models", str(job.task.domain), tuple(sorted({a.action for a in sequence.actions})))
     if key not in _CACHE:
         _CACHE[key] = load_models(job.task, sequence)
     return _CACHE[key]

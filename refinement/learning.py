@@ -117,7 +117,7 @@ def train_duration_model(
 
     n_i_curve = [validate(n_i, DEFAULT_MIN_SAMPLES_LEAF) for n_i in n_i_candidates]
     n_i = min(n_i_curve, key=lambda row: (row["mae"], row["n_i"]))["n_i"]
-    leaf_curve = [next(r for r in n_i_curve if r["n_i"] == n_i) if leaf == DEFAULT_MIN_SAMPLES_LEAF
+    leaf_curve = [dict(next(r for r in n_i_curve if r["n_i"] == n_i)) if leaf == DEFAULT_MIN_SAMPLES_LEAF
                   else validate(n_i, leaf) for leaf in sorted(set(leaf_candidates) | {DEFAULT_MIN_SAMPLES_LEAF})]
     growth = len(used) / len(train)  # leaves grow about in proportion to the episodes (Fig. 4.6 data)
     for row in leaf_curve:
@@ -164,7 +164,7 @@ def train_duration_model(
         "mae": evaluated["mae"],
         "mae_hgb": evaluated["mae_hgb"],
         "mae_relative": evaluated["mae"] / float(durations.mean()),
-        "mae_over_hgb": evaluated["mae"] / evaluated["mae_hgb"] if evaluated["mae_hgb"] > 0 else float("inf"),
+        "mae_over_hgb": evaluated["mae"] / evaluated["mae_hgb"] if evaluated["mae_hgb"] > 0 else None,
         "leaves_evaluated": evaluated["leaves"],
         "leaves": _leaves(final),
         "n_i_curve": n_i_curve,

@@ -31,6 +31,9 @@ def plot_mae_vs_n_i(reports: Mapping[str, dict], path: Path) -> None:
         ax.plot([r["n_i"] for r in curve], [r["mae"] for r in curve], marker="o", label=f"{action} (n_i={report['n_i']})")
     ax.set(xscale="log", xlabel="examples per episode n_i", ylabel="MAE on validation episodes (s)",
            title="Accuracy against intermediate examples (Fig. 4.5)")
+    n_i = sorted({r["n_i"] for report in reports.values() for r in report["n_i_curve"]})
+    ax.set_xticks(n_i, [str(v) for v in n_i])
+    ax.minorticks_off()
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     _save(fig, path)

@@ -25,6 +25,7 @@ from refinement.learning import EPISODE_FRACTIONS, MIN_SAMPLES_LEAF, N_I_CANDIDA
 from refinement.training_report import format_report
 from sims.episode import Episode
 
+FILE_MODE = 0o644  # permissions of the written files
 FRESH_SEED_OFFSET = 7_919_000  # the fresh test episodes of the classifier use seed + this: no shared episode
 
 
@@ -149,6 +150,7 @@ def write_outputs(out: Path, models: dict, collision, report: dict) -> None:
             os.close(fd)
             staged.append((Path(tmp), target))
             write(Path(tmp))
+            os.chmod(tmp, FILE_MODE)  # mkstemp makes files private; models and reports are for everyone
         for tmp, target in staged:
             os.replace(tmp, target)
     finally:

@@ -21,7 +21,7 @@ def duration_table(reports: dict[str, dict]) -> list[str]:
         lines.append(
             f"{action:<14}{r['episodes']:>9d}{r['mean_duration']:>11.2f}{_hours_minutes(r['simulated_hours']):>10}"
             f"{r['n_i']:>5d}{r['min_samples_leaf']:>5d}{r['mae']:>9.3f}{_percent(r['mae_relative']):>7}{r['mae_hgb']:>12.3f}"
-            f"{r['mae_over_hgb']:>8.2f}{r['leaves']:>7}"
+            f"{'-' if r['mae_over_hgb'] is None else format(r['mae_over_hgb'], '.2f'):>8}{r['leaves']:>7}"
         )
     return lines
 

@@ -30,7 +30,7 @@ def test_soccer_binding():
         "ball": (("x", "y"), {}, "ball", None),
         "atball": ((), {"v": (0.0, 0.3)}, None, None),
         "final": (("x", "y", "phi", "v"), {}, None, None),
-        "waypoint": (("x", "y"), {}, None, None),
+        "waypoint": (("x", "y"), {"v": (0.0, 0.6)}, None, None),
     }
     assert {n: dict(t) for n, t in b.types.items()} == {
         "pos": {"x": (-4.0, 4.0), "y": (-3.0, 3.0), "phi": (-math.pi, math.pi), "v": (0.0, 1.0)}}

@@ -81,10 +81,10 @@ def test_waypoint_chain_shares_ids_and_frees_heading_and_speed():
         assert [p.id for p in before.params[4:]] == [p.id for p in after.params[:4]]
     assert [p.id for p in seq.free_parameters()] == [
         "w1.phi", "w1.v", "w2.phi", "w2.v", "w3.phi", "w3.v"]
-    assert all((p.low, p.high) in [(-PI, PI), (0.0, 1.0)] for p in seq.free_parameters())
+    assert all((p.low, p.high) in [(-PI, PI), (0.0, 0.6)] for p in seq.free_parameters())
     assert table(seq.actions[0]) == {"x": -3.0, "y": -1.0, "phi": 0.0, "v": 0.0,
-                                     "xg": -2.0, "yg": 0.5, "phig": (-PI, PI), "vg": (0.0, 1.0)}
-    assert table(seq.actions[3]) == {"x": 1.0, "y": 0.5, "phi": (-PI, PI), "v": (0.0, 1.0),
+                                     "xg": -2.0, "yg": 0.5, "phig": (-PI, PI), "vg": (0.0, 0.6)}
+    assert table(seq.actions[3]) == {"x": 1.0, "y": 0.5, "phi": (-PI, PI), "v": (0.0, 0.6),
                                      "xg": 2.5, "yg": -0.5, "phig": -0.588, "vg": 0.0}
     assert dict(seq.scene) == {"robot": (-3.0, -1.0, 0.0, 0.0)}
 
@@ -139,7 +139,7 @@ def test_bind_partial_and_errors():
         seq.bind({"w9.phi": 0.0}, partial=True)
     with pytest.raises(TailorError, match="cannot bind 'p0.x': not a free parameter"):
         seq.bind({"p0.x": 0.0}, partial=True)
-    with pytest.raises(EmptyRangeError, match=r"value 1.5 for 'w1.v' lies outside its range \[0, 1\]"):
+    with pytest.raises(EmptyRangeError, match=r"value 1.5 for 'w1.v' lies outside its range \[0, 0.6\]"):
         seq.bind({"w1.v": 1.5}, partial=True)
     with pytest.raises(EmptyRangeError, match="value nan for 'w1.v' is not a finite number"):
         seq.bind({"w1.v": float("nan")}, partial=True)

@@ -24,7 +24,7 @@ def files_under(root) -> set[str]:
     return {str(p.relative_to(root)) for p in root.rglob("*") if p.is_file()}
 
 
-def check_outputs(out, report: dict, episodes: int) -> None:
+def check_outputs(out, report: dict, episodes: int, fresh: int) -> None:
     assert files_under(out) == EXPECTED_FILES
     assert json.loads((out / "training" / "report.json").read_text()) == report
     models = load_action_models(out / "models")
@@ -38,7 +38,7 @@ def check_outputs(out, report: dict, episodes: int) -> None:
         assert np.all(np.isfinite(model.predict_duration(params)))
     collision = load_collision_model(out / "models" / "goToPose.collision.json")
     c = report["collision"]
-    assert 0.0 <= c["accuracy"] <= 1.0 and 0.0 <= c["false_success"] <= 1.0 and c["fresh_episodes"] == 40
+    assert 0.0 <= c["accuracy"] <= 1.0 and 0.0 <= c["false_success"] <= 1.0 and c["fresh_episodes"] == fresh
     assert collision.predict_success(params).dtype == bool
     text = (out / "training" / "report.txt").read_text()
     for action in models:
@@ -49,21 +49,21 @@ def check_outputs(out, report: dict, episodes: int) -> None:
 
 
 def test_train_soccer_end_to_end_in_the_simulator(tmp_path, capsys):
-    """The real pipeline on 40 episodes per scenario (n_i candidates cut down to keep it quick)."""
-    code = main(["train", "soccer", "--episodes", "40", "--fresh-episodes", "40", "--n-i", "1,5", "--seed", "1",
+    """The real pipeline on 24 episodes per scenario (n_i candidates cut down to keep it quick)."""
+    code = main(["train", "soccer", "--episodes", "24", "--fresh-episodes", "20", "--n-i", "1,3", "--seed", "1",
                  "--out", str(tmp_path), "--json"])
     assert code == 0
     report = json.loads(capsys.readouterr().out)
-    check_outputs(tmp_path, report, 40)
-    assert [row["n_i"] for row in report["models"]["goToPose"]["n_i_curve"]] == [1, 5]
+    check_outputs(tmp_path, report, 24, 20)
+    assert [row["n_i"] for row in report["models"]["goToPose"]["n_i_curve"]] == [1, 3]
 
 
 def test_train_is_reproducible_and_prints_the_table(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr("sims.experience.gather", synthetic_episodes.gather)
-    args = ["train", "soccer", "--episodes", "40", "--fresh-episodes", "40", "--n-i", "1,3", "--out"]
+    args = ["train", "soccer", "--episodes", "24", "--fresh-episodes", "20", "--n-i", "1,3", "--out"]
     assert main([*args, str(tmp_path / "a")]) == 0
     printed = capsys.readouterr().out
-    assert printed.startswith("Action models of domain soccer (seed 0, 40 episodes per scenario;")
+    assert printed.startswith("Action models of domain soccer (seed 0, 24 episodes per scenario;")
     assert f"wrote {tmp_path / 'a' / 'models'}" in printed
     assert main([*args, str(tmp_path / "b")]) == 0
     for name in ("goToPose.json", "approachBall.json", "dribbleBall.json", "goToPose.collision.json"):
