@@ -61,7 +61,7 @@ class AbstractPlan:
             "problem": self.problem,
             "planner": self.planner,
             "steps": [{"id": s.id, "action": s.action, "args": list(s.args)} for s in self.steps],
-            "links": [{"from": l.producer, "fact": list(l.fact), "to": l.consumer} for l in self.links],
+            "links": [{"from": k.producer, "fact": list(k.fact), "to": k.consumer} for k in self.links],
             "orderings": [list(o) for o in self.orderings],
         }
 
@@ -73,8 +73,8 @@ class AbstractPlan:
             planner=data["planner"],
             steps=tuple(Step(int(s["id"]), s["action"], tuple(s["args"])) for s in data["steps"]),
             links=tuple(
-                CausalLink(int(l["from"]), tuple(l["fact"]), l["to"] if l["to"] == GOAL else int(l["to"]))
-                for l in data["links"]
+                CausalLink(int(k["from"]), tuple(k["fact"]), k["to"] if k["to"] == GOAL else int(k["to"]))
+                for k in data["links"]
             ),
             orderings=tuple((int(a), int(b)) for a, b in data["orderings"]),
         )

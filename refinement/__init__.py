@@ -1,0 +1,48 @@
+"""Refinement: bind a plan to executable actions, learn action models, choose free parameters, dispatch.
+
+The Python API, read top to bottom (the same stages `tailor refine` runs):
+
+    plan = planner_bridge.plan_files(domain, problem)          # AbstractPlan with causal links
+    sequence = instantiate(plan, load_domain_binding(dir), belief)   # Algorithm 3: BOUND / FREE parameters
+    refined = refine(sequence, load_action_models(dir / "models"), horizon=2)   # Sec. 5.4
+    result = dispatch(refined.sequence, seed=0)                # simulated durations and outcomes
+
+Names are imported lazily, so that `tailor plan` does not pay for the learners and the simulator.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+_EXPORTS = {
+    "load_domain_binding": "refinement.binding",
+    "load_binding": "refinement.binding",
+    "BeliefState": "refinement.belief",
+    "load_belief": "refinement.belief",
+    "parse_belief": "refinement.belief",
+    "belief_path_for": "refinement.belief",
+    "instantiate": "refinement.instantiate",
+    "ActionSequence": "refinement.action_sequence",
+    "ExecutableAction": "refinement.action_sequence",
+    "Parameter": "refinement.action_sequence",
+    "ActionModel": "refinement.action_models",
+    "load_action_models": "refinement.action_models",
+    "load_collision_model": "refinement.action_models",
+    "ModelTree": "refinement.model_tree",
+    "refine": "refinement.refine",
+    "RefinedSequence": "refinement.refine",
+    "OPTIMIZERS": "refinement.optimizers",
+    "optimize": "refinement.optimizers",
+    "dispatch": "refinement.dispatch",
+    "TailorError": "refinement.errors",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name not in _EXPORTS:
+        raise AttributeError(f"module 'refinement' has no attribute {name!r}")
+    value = getattr(importlib.import_module(_EXPORTS[name]), name)
+    globals()[name] = value
+    return value

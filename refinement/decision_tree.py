@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from refinement.rules import leaf_boxes
+
 LEAF = -1
 
 
@@ -108,20 +110,10 @@ class DecisionTree:
 
     def leaf_boxes(self, n_features: int) -> list[LeafBox]:
         """Every leaf as a box in feature space, in depth-first order (left before right)."""
-        boxes: list[LeafBox] = []
-        stack = [(0, np.full(n_features, -np.inf), np.full(n_features, np.inf))]
-        while stack:
-            node, lower, upper = stack.pop()
-            if self.children_left[node] == LEAF:
-                boxes.append(LeafBox(lower, upper, bool(self.success[node]), int(self.samples[node])))
-                continue
-            f, t = self.feature[node], self.threshold[node]
-            left_upper, right_lower = upper.copy(), lower.copy()
-            left_upper[f] = min(upper[f], t)
-            right_lower[f] = max(lower[f], t)
-            stack.append((self.children_right[node], right_lower, upper))
-            stack.append((self.children_left[node], lower, left_upper))
-        return boxes
+        return [LeafBox(lower, upper, bool(self.success[node]), int(self.samples[node]))
+                for node, lower, upper in leaf_boxes(self.children_left, self.children_right, self.feature,
+                                                     self.threshold, lambda k: self.children_left[k] == LEAF,
+                                                     n_features)]
 
     def export_text(self, feature_names: tuple[str, ...], labels: tuple[str, str] = ("Fail", "Success")) -> str:
         """Readable rules, one test per line, indented by depth (like WEKA's J48 output, Fig. 4.8)."""

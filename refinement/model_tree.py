@@ -18,7 +18,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 from refinement.errors import ModelFileError
 from refinement.model_tree_grow import GrowParams, TreeArrays, grow_tree
 from refinement.model_tree_io import export_text, tree_from_json, tree_to_json
-from refinement.rules import Rule
+from refinement.rules import Rule, leaf_boxes
 
 HYPERPARAMETERS = (
     "min_samples_leaf",
@@ -128,22 +128,10 @@ class ModelTree(RegressorMixin, BaseEstimator):
     def rules(self) -> list[Rule]:
         """One Rule per leaf, in leaf order: its box (lower exclusive, upper inclusive) and hyperplane."""
         check_is_fitted(self)
-        tree, d = self.tree_, self.n_features_in_
-        rules: list[Rule] = []
-        stack = [(0, np.full(d, -np.inf), np.full(d, np.inf))]
-        while stack:
-            node, lower, upper = stack.pop()
-            if tree.leaf[node] >= 0:
-                leaf = tree.leaf[node]
-                rules.append(Rule(lower, upper, tree.coef[leaf].copy(), float(tree.intercept[leaf])))
-                continue
-            f, t = tree.feature[node], tree.threshold[node]
-            left_upper, right_lower = upper.copy(), lower.copy()
-            left_upper[f] = min(upper[f], t)
-            right_lower[f] = max(lower[f], t)
-            stack.append((tree.right[node], right_lower, upper))
-            stack.append((tree.left[node], lower, left_upper))
-        return rules
+        tree = self.tree_
+        return [Rule(lower, upper, tree.coef[tree.leaf[node]].copy(), float(tree.intercept[tree.leaf[node]]))
+                for node, lower, upper in leaf_boxes(tree.left, tree.right, tree.feature, tree.threshold,
+                                                     lambda k: tree.leaf[k] >= 0, self.n_features_in_)]
 
     def export_text(self, feature_names=None) -> str:
         """The tree and its linear models in WEKA's M5 layout (App. C.3.1)."""

@@ -13,7 +13,6 @@ from refinement.collision import FAIL, SUCCESS, confusion, labels, train_collisi
 from refinement.errors import DataError
 from refinement.features import compute_features, first_examples, intermediate_examples
 from refinement.learning import held_out_mae, split_episodes, train_duration_model
-from refinement.model_tree import ModelTree
 from synthetic_episodes import gather
 
 

@@ -123,7 +123,7 @@ def check_plan(problem, plan: AbstractPlan) -> None:
     for step, instance, state in zip(plan.steps, sequence, states):
         expected += [(fact_of(f), step.id) for f in dict.fromkeys(grounded(problem, instance, state)[0])]
     expected += [(fact_of(g), GOAL) for g in dict.fromkeys(c for g in problem.goals for c in conjuncts(g)) if g.is_fluent_exp()]
-    assert sorted((l.fact, str(l.consumer)) for l in plan.links) == sorted((f, str(c)) for f, c in expected)
+    assert sorted((k.fact, str(k.consumer)) for k in plan.links) == sorted((f, str(c)) for f, c in expected)
     manager = problem.environment.expression_manager
     for link in plan.links:
         atom = manager.FluentExp(problem.fluent(link.fact[0]), [problem.object(o) for o in link.fact[1:]])

@@ -6,31 +6,23 @@ import argparse
 import json
 import sys
 
+from refinement.commands.arguments import whole_number
+
 HELP = "measure refined vs greedy execution in the simulator over random scenarios"
 
 HORIZONS = (1, 2, 3, 4)
 
 
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must not be negative: {text!r}")
-    return value
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("domain", metavar="DOMAIN", help="bundled domain (soccer) or its domain.pddl")
-    parser.add_argument("--episodes", type=_count, default=1000, metavar="N",
+    parser.add_argument("--episodes", type=whole_number(0), default=1000, metavar="N",
                         help="approachBall -> dribbleBall scenarios (default 1000)")
-    parser.add_argument("--oracle-episodes", type=_count, default=100, metavar="N",
+    parser.add_argument("--oracle-episodes", type=whole_number(0), default=100, metavar="N",
                         help="of these, how many are also searched exhaustively in the simulator (default 100)")
-    parser.add_argument("--waypoint-episodes", type=_count, default=100, metavar="N",
+    parser.add_argument("--waypoint-episodes", type=whole_number(0), default=100, metavar="N",
                         help="four-way-point navigations run with horizons 1-4 (default 100)")
     parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed of scenarios and simulator")
-    parser.add_argument("--jobs", type=int, default=1, metavar="J", help="worker processes (default 1)")
+    parser.add_argument("--jobs", type=whole_number(1), default=1, metavar="J", help="worker processes (default 1)")
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
 
 
@@ -87,7 +79,6 @@ def _print_text(report: dict) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from refinement.errors import TailorError
     from refinement.evaluation import (
         prepared_job,
         score_episode,
@@ -97,8 +88,6 @@ def run(args: argparse.Namespace) -> int:
     )
     from refinement.pipeline import prepare, resolve_task
 
-    if args.jobs < 1:
-        raise TailorError(f"--jobs must be at least 1, not {args.jobs}")
     score = prepare(resolve_task(args.domain, "score"))
     job = prepared_job(score, args.seed)
     rows = _run_parallel(score_episode, [(job, i, i < args.oracle_episodes) for i in range(args.episodes)],

@@ -5,17 +5,9 @@ from __future__ import annotations
 import argparse
 import json
 
+from refinement.commands.arguments import positive_seconds
+
 HELP = "plan a PDDL domain/problem pair into a validated partial-order plan with causal links"
-
-
-def _positive_seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be positive: {text!r}")
-    return value
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -25,7 +17,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--planner", default="pyperplan", metavar="NAME", help="any installed unified-planning engine (default: pyperplan)"
     )
     parser.add_argument(
-        "--timeout", type=_positive_seconds, default=None, metavar="S", help="seconds the planner may search (default: no limit)"
+        "--timeout", type=positive_seconds, default=None, metavar="S", help="seconds the planner may search (default: no limit)"
     )
     parser.add_argument("--json", action="store_true", help="print the plan as JSON instead of VHPOP-like text")
 

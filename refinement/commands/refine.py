@@ -10,21 +10,12 @@ import json
 import math
 import sys
 
+from refinement.commands.arguments import positive_seconds, whole_number
+
 HELP = "refine the free parameters of a plan for the fastest predicted execution, optionally simulate it"
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1: {text!r}")
-    return value
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from refinement.commands.plan import _positive_seconds
     from refinement.optimizers import OPTIMIZERS
 
     parser.add_argument("domain", metavar="DOMAIN", help="domain.pddl file, or the name of a bundled domain (soccer)")
@@ -32,12 +23,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--optimizer", choices=sorted(OPTIMIZERS), default="analytic",
                         help="analytic model-tree minimization (falls back to ga where it does not apply), "
                              "genetic algorithm, or random sampling (default: analytic)")
-    parser.add_argument("--horizon", type=_positive_int, default=2, metavar="H",
+    parser.add_argument("--horizon", type=whole_number(1), default=2, metavar="H",
                         help="actions optimized together (default 2; 1 is greedy)")
     parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed of optimizer and simulator (default 0)")
     parser.add_argument("--belief", metavar="FILE", help="belief state file (default: PROBLEM's stem + .toml)")
     parser.add_argument("--planner", default="pyperplan", metavar="NAME", help="unified-planning engine")
-    parser.add_argument("--timeout", type=_positive_seconds, default=None, metavar="S", help="planner time limit")
+    parser.add_argument("--timeout", type=positive_seconds, default=None, metavar="S", help="planner time limit")
     parser.add_argument("--simulate", action="store_true", help="execute greedy and refined sequences in the simulator")
     parser.add_argument("--plot", metavar="FILE.png",
                         help="draw greedy and refined trajectories side by side (simulates them); where the first "
