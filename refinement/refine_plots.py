@@ -75,6 +75,7 @@ def plot_polar_costs(path: Path, angles: np.ndarray, curves: list[tuple[str, np.
     fig, axes = plt.subplots(1, len(curves), subplot_kw={"projection": "polar"}, figsize=(4.2 * len(curves), 4.2))
     for ax, (title, values) in zip(np.atleast_1d(axes), curves):
         ax.plot(angles, values, color="tab:blue")
+        ax.set_rlabel_position(202.5)  # radial labels off the 0°/180° axis labels
         for label, angle in marks:
             k = int(np.argmin(np.abs(np.angle(np.exp(1j * (angles - angle))))))
             ax.plot([angle], [values[k]], "o", ms=6, label=f"{label}: {np.degrees(angle):.0f}°, {values[k]:.2f} s")
