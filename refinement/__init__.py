@@ -7,12 +7,18 @@ The Python API, read top to bottom (the same stages `tailor refine` runs):
     refined = refine(sequence, load_action_models(dir / "models"), horizon=2)   # Sec. 5.4
     result = dispatch(refined.sequence, seed=0)                # simulated durations and outcomes
 
-Names are imported lazily, so that `tailor plan` does not pay for the learners and the simulator.
+`instantiate`, `refine` and `dispatch` share their names with their modules, so they are imported here (an
+import of the module would otherwise shadow a lazily looked-up function); the other names are imported
+lazily, so that `tailor plan` does not pay for the learners.
 """
 
 from __future__ import annotations
 
 import importlib
+
+from refinement.dispatch import dispatch as dispatch
+from refinement.instantiate import instantiate as instantiate
+from refinement.refine import refine as refine
 
 _EXPORTS = {
     "load_domain_binding": "refinement.binding",
@@ -21,7 +27,6 @@ _EXPORTS = {
     "load_belief": "refinement.belief",
     "parse_belief": "refinement.belief",
     "belief_path_for": "refinement.belief",
-    "instantiate": "refinement.instantiate",
     "ActionSequence": "refinement.action_sequence",
     "ExecutableAction": "refinement.action_sequence",
     "Parameter": "refinement.action_sequence",
@@ -29,15 +34,13 @@ _EXPORTS = {
     "load_action_models": "refinement.action_models",
     "load_collision_model": "refinement.action_models",
     "ModelTree": "refinement.model_tree",
-    "refine": "refinement.refine",
     "RefinedSequence": "refinement.refine",
     "OPTIMIZERS": "refinement.optimizers",
     "optimize": "refinement.optimizers",
-    "dispatch": "refinement.dispatch",
     "TailorError": "refinement.errors",
 }
 
-__all__ = sorted(_EXPORTS)
+__all__ = sorted([*_EXPORTS, "dispatch", "instantiate", "refine"])
 
 
 def __getattr__(name: str):

@@ -9,14 +9,16 @@ action that reaches it only.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Mapping
+from typing import TYPE_CHECKING, Mapping
 
 import numpy as np
 
-from refinement.action_models import ActionModel
 from refinement.action_sequence import ActionSequence, ExecutableAction
 from refinement.errors import ModelFileError
 from refinement.optimizers import FreeParameter, Objective, OptimizationResult, Term, optimize
+
+if TYPE_CHECKING:  # the models' module imports scikit-learn; refining needs only their methods
+    from refinement.action_models import ActionModel
 
 
 @dataclass(frozen=True)
