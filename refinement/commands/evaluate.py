@@ -88,6 +88,18 @@ def run(args: argparse.Namespace) -> int:
     )
     from refinement.pipeline import prepare, resolve_task
 
+    from planner_bridge import resolve_problem
+    from planner_bridge.errors import InputFileError
+    from refinement.errors import TailorError
+
+    for problem in ("score", "waypoints"):
+        try:
+            resolve_problem(args.domain, problem)
+        except InputFileError as exc:
+            if exc.file != problem:  # the domain itself is unknown: that error says so
+                raise
+            raise TailorError(f"the evaluation needs the soccer problems 'score' and 'waypoints' beside the domain, "
+                              f"and {problem!r} is not there", file=args.domain) from None
     score = prepare(resolve_task(args.domain, "score"))
     job = prepared_job(score, args.seed)
     rows = _run_parallel(score_episode, [(job, i, i < args.oracle_episodes) for i in range(args.episodes)],
