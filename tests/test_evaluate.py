@@ -1,0 +1,54 @@
+"""`tailor evaluate`: the statistics of Sec. 5.5 on hand-made rows, and a tiny end-to-end run."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from refinement.cli import main
+from refinement.evaluation import summarize_score, summarize_waypoints
+
+
+def _row(greedy, refined, oracle=None, ok=(True, True)):
+    return {"greedy": greedy, "refined": refined, "greedy_ok": ok[0], "refined_ok": ok[1],
+            "predicted_greedy": greedy, "predicted_refined": refined, "analytic_seconds": 0.002,
+            "analytic_method": "analytic", "ga_seconds": 0.05, "analytic_cost": refined, "ga_cost": refined * 1.02,
+            "oracle": oracle}
+
+
+def test_score_statistics_follow_eq_5_3_and_table_5_4():
+    rows = [_row(10.0, 8.0, oracle=7.5), _row(10.0, 10.05), _row(10.0, 11.0, oracle=10.0), _row(12.0, 9.0),
+            _row(10.0, 9.0, ok=(False, True))]
+    s = summarize_score(rows)
+    assert (s["scenarios"], s["episodes"], s["failed_greedy"], s["failed_refined"]) == (5, 4, 1, 0)
+    assert s["improvement"] == pytest.approx(np.mean([0.2, -0.005, -0.1, 0.25]))  # mean of 1 - t_h2 / t_h1
+    assert (s["better"], s["equal"], s["worse"]) == (2, 1, 1)  # within 1% counts as equal
+    assert s["oracle_ratio"] == pytest.approx((8.0 + 11.0) / (7.5 + 10.0))
+    assert s["greedy_oracle_ratio"] == pytest.approx(20.0 / 17.5)
+    assert s["analytic_ga_agree"] == 0.0  # 2% apart in every row
+    assert s["p_value"] == pytest.approx(__import__("scipy").stats.ttest_rel([10, 10, 10, 12], [8, 10.05, 11, 9]).pvalue)
+
+
+def test_waypoint_statistics_compare_each_horizon_with_greedy_and_the_previous():
+    rows = [{f"h{h}": t, f"h{h}_ok": True, f"h{h}_methods": ["analytic"]} for h, t in ((1, 20.0), (2, 18.0))]
+    rows = [{**rows[0], **rows[1]}, {"h1": 10.0, "h1_ok": True, "h1_methods": ["analytic"], "h2": 9.0,
+                                      "h2_ok": True, "h2_methods": ["ga"]}]
+    w = summarize_waypoints(rows, (1, 2))
+    assert [h["mean"] for h in w["horizons"]] == [15.0, 13.5]
+    assert w["horizons"][1]["improvement"] == pytest.approx(0.1)
+    assert w["horizons"][1]["methods"] == ["analytic", "ga"]
+
+
+def test_tiny_evaluation_end_to_end(capsys):
+    assert main(["evaluate", "soccer", "--episodes", "3", "--oracle-episodes", "1", "--waypoint-episodes", "1",
+                 "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    for key in ("episodes", "greedy_mean", "refined_mean", "improvement", "p_value", "better", "equal", "worse",
+                "oracle_ratio", "waypoints"):
+        assert key in report
+    assert report["better"] + report["equal"] + report["worse"] == report["episodes"] <= 3
+    assert report["oracle_episodes"] <= 1 and [h["horizon"] for h in report["waypoints"]["horizons"]] == [1, 2, 3, 4]
+    if report["oracle_episodes"]:
+        assert report["oracle_ratio"] > 0.9  # the grid optimum is a real simulated time, near the refined one
