@@ -26,6 +26,9 @@ from sims.soccer.world import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, V_MAX
 SCHEMA = 1  # version of the .npz episode file
 FIELD_MARGIN = 0.5  # m, start and goal positions keep this distance to the field lines
 BALL_CLEARANCE = 0.8  # m, minimum start distance of the ball point to a ball lying at the goal
+# m, the longest distance between two field points: experience covers every distance a task on the field has
+# (an upper bound of 5-6 m left a tenth of the soccer evaluation's dribbles outside the learned range)
+FIELD_DIAGONAL = math.hypot(2 * (FIELD_HALF_LENGTH - FIELD_MARGIN), 2 * (FIELD_HALF_WIDTH - FIELD_MARGIN))
 EPISODES_PER_TASK = 10  # episodes one worker runs per joblib task
 _SAMPLING_STREAM = 1  # second seed word: the scenario's draws are independent of the simulator's noise
 
@@ -48,15 +51,16 @@ class Scenario:
 
 SCENARIOS: dict[str, Scenario] = {
     # navigation without a ball: random start and goal poses anywhere on the field
-    "goToPose": Scenario("goToPose", "goToPose", "none", (0.0, 0.8 * V_MAX), (0.0, 0.6), (0.5, 6.0)),
+    "goToPose": Scenario("goToPose", "goToPose", "none", (0.0, 0.8 * V_MAX), (0.0, 0.6), (0.5, FIELD_DIAGONAL)),
     # ball-aware approach to a ball lying at the goal position, arriving slowly
     "approachBall": Scenario("approachBall", "approachBall", "goal", (0.0, 0.6), (0.0, 0.3),
-                             (BALL_CLEARANCE, 6.0)),
+                             (BALL_CLEARANCE, FIELD_DIAGONAL)),
     # dribbling from standstill or the speed after an approach, ending slowly
-    "dribbleBall": Scenario("dribbleBall", "dribbleBall", "guide", (0.0, 0.3), (0.0, 0.2), (0.5, 5.0)),
+    "dribbleBall": Scenario("dribbleBall", "dribbleBall", "guide", (0.0, 0.3), (0.0, 0.2),
+                            (0.5, FIELD_DIAGONAL)),
     # plain (ball-unaware) goToPose to a ball at the goal: the data of the collision classifier (Sec. 4.2.2)
     "goToPoseAtBall": Scenario("goToPoseAtBall", "goToPose", "goal", (0.0, 0.6), (0.0, 0.3),
-                               (BALL_CLEARANCE, 6.0)),
+                               (BALL_CLEARANCE, FIELD_DIAGONAL)),
 }
 
 
