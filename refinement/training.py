@@ -39,6 +39,8 @@ class TrainingRecipe:
     collision_action: str  # the action the classifier guards
     default_episodes: int  # per scenario; chosen so the floors hold and a run takes < 15 min on 2 cores
     fresh_episodes: int = 1000  # fresh episodes the classifier is evaluated on (Table 4.4)
+    subgoal_problem: str | None = None  # a chain whose second action also learns from refined subgoals ...
+    subgoal_share: float = 0.0  # ... this many episodes per episode of a scenario (refinement.subgoal_experience)
 
 
 TRAINING_DOMAINS: dict[str, TrainingRecipe] = {
@@ -48,6 +50,8 @@ TRAINING_DOMAINS: dict[str, TrainingRecipe] = {
         collision_scenario="goToPoseAtBall",
         collision_action="goToPose",
         default_episodes=6000,
+        subgoal_problem="score",  # approachBall -> dribbleBall: dribbleBall also learns from refined subgoals
+        subgoal_share=0.5,
     ),
 }
 
@@ -111,6 +115,8 @@ def train_domain(
                                           seed, step=step).model
         bar.n = bar.total
         bar.refresh()
+    subgoal = _learn_at_subgoals(recipe, models, experience, round(recipe.subgoal_share * episodes), seed, jobs,
+                                 progress, n_i_candidates, episode_fractions)
 
     report = {
         "schema": "tailor.training_report/1",
@@ -119,11 +125,32 @@ def train_domain(
         "episodes_per_scenario": episodes,
         "models": {action: model.report for action, model in models.items()},
         "collision": collision.report,
+        "subgoal_experience": subgoal,
         "gather_seconds": gathered - started,
         "train_seconds": time.perf_counter() - gathered,
     }
     write_outputs(out, models, collision, report)
     return report
+
+
+def _learn_at_subgoals(recipe: TrainingRecipe, models: dict, experience: dict, episodes: int, seed: int,
+                       jobs: int, progress: bool, n_i_candidates, episode_fractions) -> dict | None:
+    """Gather episodes of the chain's second action from the subgoals refinement chooses with the first models,
+    and retrain that action's model on its experience plus them (its report then covers both)."""
+    if not recipe.subgoal_problem or episodes < 1:
+        return None
+    from refinement.subgoal_experience import gather_subgoal_experience
+
+    extra = gather_subgoal_experience(recipe.domain, recipe.subgoal_problem, models, episodes, seed, jobs=jobs,
+                                      progress=progress)
+    action = extra[0].action
+    fits = len(n_i_candidates) + len(MIN_SAMPLES_LEAF) + len(episode_fractions) + 1
+    with tqdm(total=fits, desc=f"retraining {action}", unit="fit", disable=not progress) as bar:
+        models[action] = train_duration_model(action, experience[action] + extra, seed,
+                                              step=lambda label: bar.update(1), n_i_candidates=n_i_candidates,
+                                              episode_fractions=episode_fractions).model
+    return {"problem": recipe.subgoal_problem, "action": action, "episodes": len(extra),
+            "succeeded": sum(e.succeeded for e in extra)}
 
 
 def write_outputs(out: Path, models: dict, collision, report: dict) -> None:

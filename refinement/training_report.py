@@ -44,6 +44,14 @@ def confusion_table(evaluation: dict) -> list[str]:
     ]
 
 
+def _subgoal_lines(subgoal: dict | None) -> list[str]:
+    if not subgoal:
+        return []
+    return ["", f"{subgoal['action']} also learned from {subgoal['episodes']} episodes started at the subgoals refinement "
+                f"chose in random '{subgoal['problem']}' situations",
+            "(greedy and horizon 2 in turn, with the first models; Sec. 8.1); its row covers both."]
+
+
 def format_report(report: dict, models: dict, collision) -> str:
     """The whole report as text; `models` and `collision` give the rules."""
     c = report["collision"]
@@ -58,6 +66,7 @@ def format_report(report: dict, models: dict, collision) -> str:
         "stored model (trained on all episodes).",
         "",
         *duration_table(report["models"]),
+        *_subgoal_lines(report.get("subgoal_experience")),
         "",
         f"Collision classifier ({c['action']} to a pose at the ball, Sec. 4.2.2): decision tree trained on "
         f"{c['episodes']} episodes ({c['outcomes']}), cost of a false success {c['cost_false_success']:g} "

@@ -33,9 +33,13 @@ def check_outputs(out, report: dict, episodes: int, fresh: int) -> None:
     for action, model in models.items():
         row = report["models"][action]
         assert set(row) >= {"episodes", "mean_duration", "mae", "mae_hgb", "leaves"}
-        assert 8 <= row["episodes"] <= episodes and row["leaves"] == model.duration.n_leaves_
+        extra = report["subgoal_experience"]["episodes"] if action == report["subgoal_experience"]["action"] else 0
+        assert 8 <= row["episodes"] <= episodes + extra and row["leaves"] == model.duration.n_leaves_
         assert model.report == row and model.n_i == row["n_i"]
         assert np.all(np.isfinite(model.predict_duration(params)))
+    # dribbleBall also learned from the subgoals refinement chose in random `score` situations (Sec. 8.1)
+    assert report["subgoal_experience"]["action"] == "dribbleBall"
+    assert report["subgoal_experience"]["episodes"] == round(0.5 * episodes)
     collision = load_collision_model(out / "models" / "goToPose.collision.json")
     c = report["collision"]
     assert 0.0 <= c["accuracy"] <= 1.0 and 0.0 <= c["false_success"] <= 1.0 and c["fresh_episodes"] == fresh

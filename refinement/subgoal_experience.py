@@ -1,0 +1,59 @@
+"""Experience where refinement acts (the outlook of Sec. 8.1): episodes of the action after a subgoal, started
+from the subgoals subgoal refinement chooses.
+
+Refinement picks the subgoal where the summed prediction is lowest, which is also where a model's error
+happens to be most optimistic (the optimizer's curse): the refined dribble was predicted 1 s too fast on average
+while the greedy one was not. Episodes from those subgoals teach the model exactly the region it is used in.
+The scenarios are random situations of the chain's problem (a seed stream of their own, so none is one of
+`tailor evaluate`'s), refined greedily and with horizon 2 in turn; each yields one episode of the second action
+from the chosen subgoal, ball in the guide.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from joblib import Parallel, delayed
+from tqdm import tqdm
+
+from sims.episode import ActionCall, Episode
+from sims.soccer import SoccerSim
+
+from refinement.evaluation import BELIEFS, Job, _sequence, prepared_job
+from refinement.pipeline import prepare, resolve_task
+from refinement.refine import refine
+
+SUBGOAL_STREAM = 2  # second seed word: apart from the evaluation's scenarios (SeedSequence([seed, index]))
+CHUNK = 50  # scenarios a worker refines per task
+
+
+def _seed(seed: int, index: int) -> int:
+    return int(np.random.SeedSequence([seed, SUBGOAL_STREAM, index]).generate_state(1)[0])
+
+
+def _episodes(job: Job, problem: str, models: dict, indices: list[int]) -> list[Episode]:
+    out = []
+    for i in indices:
+        seed = _seed(job.seed, i)
+        sequence = _sequence(job, BELIEFS[problem](np.random.default_rng(seed)))
+        refined = refine(sequence, models, horizon=1 + i % 2, method="analytic", seed=seed)
+        follow = refined.sequence.actions[1]
+        p = follow.values()
+        sim = SoccerSim(seed)
+        sim.reset((p[0], p[1], p[2], p[3]), ball=(p[0], p[1]))
+        out.append(sim.run(ActionCall(follow.action, tuple(float(v) for v in p[4:]))))
+    return out
+
+
+def gather_subgoal_experience(domain: str, problem: str, models: dict, episodes: int, seed: int, jobs: int = 1,
+                              progress: bool = True) -> list[Episode]:
+    """`episodes` episodes of the second action of `problem`'s plan, from the subgoals refinement chooses with
+    `models` (a dict action -> ActionModel) in random situations of the problem."""
+    job = prepared_job(prepare(resolve_task(domain, problem)), seed)
+    chunks = [list(range(k, min(k + CHUNK, episodes))) for k in range(0, episodes, CHUNK)]
+    out: list[Episode] = []
+    with tqdm(total=episodes, desc=f"{problem} subgoals", unit="ep", disable=not progress) as bar:
+        calls = (delayed(_episodes)(job, problem, models, chunk) for chunk in chunks)
+        for batch in Parallel(n_jobs=jobs, return_as="generator")(calls):
+            out.extend(batch)
+            bar.update(len(batch))
+    return out
