@@ -81,7 +81,7 @@ class Job:
 _CACHE: dict = {}
 
 
-def _context(job: Job):
+def _binding(job: Job):
     """The action library binding, loaded once per worker process."""
     key = (str(job.task.domain), str(job.task.problem))
     if key not in _CACHE:
@@ -89,8 +89,9 @@ def _context(job: Job):
     return _CACHE[key]
 
 
-def _sequence(job: Job, objects: dict):
-    binding = _context(job)
+def scenario_sequence(job: Job, objects: dict):
+    """The instantiated plan of `job` for one random situation (belief values per object)."""
+    binding = _binding(job)
     belief = BeliefState(MappingProxyType({k: MappingProxyType(v) for k, v in objects.items()}))
     return instantiate(job.plan, binding, belief, object_types=job.facts.types, initial_state=job.facts.initial)
 
@@ -110,7 +111,7 @@ def score_episode(job: Job, index: int, oracle: bool) -> dict:
     """One approachBall -> dribbleBall scenario: greedy, refined (analytic and ga), and optionally the oracle."""
     seed = _episode_seed(job, index)
     rng = np.random.default_rng(seed)
-    sequence = _sequence(job, score_belief(rng))
+    sequence = scenario_sequence(job, score_belief(rng))
     models = _models(job, sequence)
     greedy = refine(sequence, models, horizon=1, method="analytic", seed=seed)
     refined = refine(sequence, models, horizon=2, method="analytic", seed=seed)
@@ -150,7 +151,7 @@ def waypoint_episode(job: Job, index: int, horizons: tuple[int, ...]) -> dict:
     """One four-way-point navigation, executed with each horizon (same simulator seed for all)."""
     seed = _episode_seed(job, index)
     rng = np.random.default_rng(seed)
-    sequence = _sequence(job, waypoints_belief(rng))
+    sequence = scenario_sequence(job, waypoints_belief(rng))
     models = _models(job, sequence)
     out = {"index": index, "seed": seed}
     for h in horizons:

@@ -18,7 +18,7 @@ from tqdm import tqdm
 from sims.episode import ActionCall, Episode
 from sims.soccer import SoccerSim
 
-from refinement.evaluation import BELIEFS, Job, _sequence, prepared_job
+from refinement.evaluation import BELIEFS, Job, prepared_job, scenario_sequence
 from refinement.pipeline import prepare, resolve_task
 from refinement.refine import refine
 
@@ -34,7 +34,7 @@ def _episodes(job: Job, problem: str, models: dict, indices: list[int]) -> list[
     out = []
     for i in indices:
         seed = _seed(job.seed, i)
-        sequence = _sequence(job, BELIEFS[problem](np.random.default_rng(seed)))
+        sequence = scenario_sequence(job, BELIEFS[problem](np.random.default_rng(seed)))
         refined = refine(sequence, models, horizon=1 + i % 2, method="analytic", seed=seed)
         follow = refined.sequence.actions[1]
         p = follow.values()
