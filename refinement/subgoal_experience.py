@@ -45,11 +45,13 @@ def _episodes(job: Job, problem: str, models: dict, indices: list[int]) -> list[
 
 
 def gather_subgoal_experience(domain: str, problem: str, models: dict, episodes: int, seed: int, jobs: int = 1,
-                              progress: bool = True) -> list[Episode]:
+                              progress: bool = True, first: int = 0) -> list[Episode]:
     """`episodes` episodes of the second action of `problem`'s plan, from the subgoals refinement chooses with
-    `models` (a dict action -> ActionModel) in random situations of the problem."""
+    `models` (a dict action -> ActionModel) in random situations of the problem: situations first, first + 1, ...
+    of the seed's stream (so successive calls with consecutive ranges never repeat a situation)."""
     job = prepared_job(prepare(resolve_task(domain, problem)), seed)
-    chunks = [list(range(k, min(k + CHUNK, episodes))) for k in range(0, episodes, CHUNK)]
+    last = first + episodes
+    chunks = [list(range(k, min(k + CHUNK, last))) for k in range(first, last, CHUNK)]
     out: list[Episode] = []
     with tqdm(total=episodes, desc=f"{problem} subgoals", unit="ep", disable=not progress) as bar:
         calls = (delayed(_episodes)(job, problem, models, chunk) for chunk in chunks)

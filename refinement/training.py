@@ -41,6 +41,7 @@ class TrainingRecipe:
     fresh_episodes: int = 1000  # fresh episodes the classifier is evaluated on (Table 4.4)
     subgoal_problem: str | None = None  # a chain whose second action also learns from refined subgoals ...
     subgoal_share: float = 0.0  # ... this many episodes per episode of a scenario (refinement.subgoal_experience)
+    subgoal_rounds: int = 1  # ... gathered in this many rounds, each with the models the previous one retrained
 
 
 TRAINING_DOMAINS: dict[str, TrainingRecipe] = {
@@ -52,6 +53,7 @@ TRAINING_DOMAINS: dict[str, TrainingRecipe] = {
         default_episodes=6000,
         subgoal_problem="score",  # approachBall -> dribbleBall: dribbleBall also learns from refined subgoals
         subgoal_share=0.5,
+        subgoal_rounds=3,
     ),
 }
 
@@ -135,21 +137,28 @@ def train_domain(
 
 def _learn_at_subgoals(recipe: TrainingRecipe, models: dict, experience: dict, episodes: int, seed: int,
                        jobs: int, progress: bool, n_i_candidates, episode_fractions) -> dict | None:
-    """Gather episodes of the chain's second action from the subgoals refinement chooses with the first models,
-    and retrain that action's model on its experience plus them (its report then covers both)."""
+    """Gather episodes of the chain's second action from the subgoals refinement chooses, and retrain that action's
+    model on its experience plus them (its report then covers both). In rounds: each round's subgoals are chosen
+    with the models the previous round retrained, so the optimistic spots a retrained model has in turn are
+    visited too (the optimizer's curse moves with the model)."""
     if not recipe.subgoal_problem or episodes < 1:
         return None
     from refinement.subgoal_experience import gather_subgoal_experience
 
-    extra = gather_subgoal_experience(recipe.domain, recipe.subgoal_problem, models, episodes, seed, jobs=jobs,
-                                      progress=progress)
-    action = extra[0].action
+    rounds = max(1, min(recipe.subgoal_rounds, episodes))
+    bounds = [round(episodes * k / rounds) for k in range(rounds + 1)]
+    extra: list[Episode] = []
     fits = len(n_i_candidates) + len(MIN_SAMPLES_LEAF) + len(episode_fractions) + 1
-    with tqdm(total=fits, desc=f"retraining {action}", unit="fit", disable=not progress) as bar:
-        models[action] = train_duration_model(action, experience[action] + extra, seed,
-                                              step=lambda label: bar.update(1), n_i_candidates=n_i_candidates,
-                                              episode_fractions=episode_fractions).model
-    return {"problem": recipe.subgoal_problem, "action": action, "episodes": len(extra),
+    for k in range(rounds):
+        extra += gather_subgoal_experience(recipe.domain, recipe.subgoal_problem, models, bounds[k + 1] - bounds[k],
+                                           seed, jobs=jobs, progress=progress, first=bounds[k])
+        action = extra[0].action
+        label = f"retraining {action} ({k + 1}/{rounds})"
+        with tqdm(total=fits, desc=label, unit="fit", disable=not progress) as bar:
+            models[action] = train_duration_model(action, experience[action] + extra, seed,
+                                                  step=lambda label: bar.update(1), n_i_candidates=n_i_candidates,
+                                                  episode_fractions=episode_fractions).model
+    return {"problem": recipe.subgoal_problem, "action": action, "episodes": len(extra), "rounds": rounds,
             "succeeded": sum(e.succeeded for e in extra)}
 
 

@@ -49,7 +49,8 @@ def _subgoal_lines(subgoal: dict | None) -> list[str]:
         return []
     return ["", f"{subgoal['action']} also learned from {subgoal['episodes']} episodes started at the subgoals refinement "
                 f"chose in random '{subgoal['problem']}' situations",
-            "(greedy and horizon 2 in turn, with the first models; Sec. 8.1); its row covers both."]
+            f"(greedy and horizon 2 in turn, in {subgoal.get('rounds', 1)} round(s), each with the models the one before "
+            "retrained; Sec. 8.1); its row covers both."]
 
 
 def format_report(report: dict, models: dict, collision) -> str:

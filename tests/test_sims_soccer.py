@@ -122,10 +122,12 @@ def _dribble_duration(phi, seed=0):
 
 
 def test_dribble_duration_grows_with_the_turn_needed_at_the_start():
-    # facing the goal: 3 m straight; facing away: first a U-turn at R_DRIBBLE (pi R = 2.2 m at 0.35 m/s)
+    # facing the goal: 3 m straight; facing away: first a U-turn at W_DRIBBLE (pi / W_DRIBBLE = 5.2 s)
+    from sims.soccer.dribble import W_DRIBBLE
+
     ahead, side, away = (_dribble_duration(phi) for phi in (0.0, math.pi / 2, math.pi))
     assert ahead < side < away
-    assert away - ahead > math.pi * 0.7 / 0.35 * 0.7  # at least 70% of the U-turn's time at arc speed
+    assert away - ahead > math.pi / W_DRIBBLE * 0.7  # at least 70% of the U-turn's time at arc speed
 
 
 def _turn_holds_ball(v, w, seconds=6.0):

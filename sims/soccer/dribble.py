@@ -8,8 +8,11 @@ that keeps the ball clear of the walls, then a final straight of FINAL_STRAIGHT.
 What the guide holds (measured in this simulator, steady turns at constant speed, no noise): the ball stays
 up to a turn rate of about 0.8 rad/s whatever the radius (0.22 m/s at R = 0.3 m, 0.5 m/s at 0.6 m, 0.98 m/s
 at 1.2 m), i.e. a lateral acceleration of about 0.8 rad/s * v; less while braking. So arcs are driven at
-W_DRIBBLE * R_DRIBBLE (0.35 m/s; the lateral-acceleration bound A_LAT_DRIBBLE = W_DRIBBLE^2 R_DRIBBLE) and the
-rotational command never exceeds W_HOLD. Only a rolling ball is pressed into the V (by its rolling
+W_DRIBBLE * R_DRIBBLE (0.24 m/s; the lateral-acceleration bound A_LAT_DRIBBLE = W_DRIBBLE^2 R_DRIBBLE) and the
+rotational command never exceeds W_HOLD. The radius is tight because a turn of angle a takes a / W_DRIBBLE
+whatever the radius, while a wide radius forces loops (a full one takes 2 pi / W_DRIBBLE, 10 s) for goals
+near the start, which make durations hard to predict: at R_DRIBBLE = 0.7 m the learned duration model erred
+by 5.8% of the mean duration, at 0.4 m by about 4%. Only a rolling ball is pressed into the V (by its rolling
 friction), so the robot never turns on the spot: the rotational command is the curvature times the current
 speed, at least V_CREEP_DRIBBLE on an arc. Braking never exceeds A_DRIBBLE_BRAKE, below the ball's own
 rolling deceleration, so the ball is not lost ahead.
@@ -24,10 +27,10 @@ from sims.soccer.dubins import DubinsPath, shortest_path_inside
 from sims.soccer.follow import Follower
 from sims.soccer.world import BALL_POINT_OFFSET, BALL_RADIUS, FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, WALL_RUNOFF
 
-R_DRIBBLE = 0.7  # m, turning radius of the axle's path with the ball (the ball point's: 0.77 m)
-W_DRIBBLE = 0.5  # rad/s, turn rate arcs are driven at with the ball
-A_LAT_DRIBBLE = W_DRIBBLE * W_DRIBBLE * R_DRIBBLE  # m/s^2, the lateral acceleration that means (0.175)
-W_HOLD = 0.65  # rad/s, the rotational command never exceeds this with the ball
+R_DRIBBLE = 0.4  # m, turning radius of the axle's path with the ball (the ball point's: 0.51 m)
+W_DRIBBLE = 0.6  # rad/s, turn rate arcs are driven at with the ball
+A_LAT_DRIBBLE = W_DRIBBLE * W_DRIBBLE * R_DRIBBLE  # m/s^2, the lateral acceleration that means (0.144)
+W_HOLD = 0.75  # rad/s, the rotational command never exceeds this with the ball
 V_DRIBBLE = 0.8  # m/s, top speed with the ball on a straight
 V_CREEP_DRIBBLE = 0.15  # m/s, minimum speed on an arc: the ball is held only while it rolls
 A_DRIBBLE_BRAKE = 0.3  # m/s^2, braking bound: below the ball's own rolling deceleration (0.49)
