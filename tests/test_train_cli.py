@@ -40,6 +40,7 @@ def check_outputs(out, report: dict, episodes: int, fresh: int) -> None:
     # dribbleBall also learned from the subgoals refinement chose in random `score` situations (Sec. 8.1)
     assert report["subgoal_experience"]["action"] == "dribbleBall"
     assert report["subgoal_experience"]["episodes"] == round(0.5 * episodes)
+    assert report["subgoal_experience"]["rounds"] == min(3, round(0.5 * episodes))
     collision = load_collision_model(out / "models" / "goToPose.collision.json")
     c = report["collision"]
     assert 0.0 <= c["accuracy"] <= 1.0 and 0.0 <= c["false_success"] <= 1.0 and c["fresh_episodes"] == fresh
