@@ -115,15 +115,33 @@ def train_duration_model(
         return {"n_i": n_i, "min_samples_leaf": leaf, "examples": count_examples(train, n_i),
                 "mae": held_out_mae(model, validation, feature_set), "leaves": _leaves(model)}
 
-    n_i_curve = [validate(n_i, DEFAULT_MIN_SAMPLES_LEAF) for n_i in n_i_candidates]
-    n_i = min(n_i_curve, key=lambda row: (row["mae"], row["n_i"]))["n_i"]
-    leaf_curve = [dict(next(r for r in n_i_curve if r["n_i"] == n_i)) if leaf == DEFAULT_MIN_SAMPLES_LEAF
-                  else validate(n_i, leaf) for leaf in sorted(set(leaf_candidates) | {DEFAULT_MIN_SAMPLES_LEAF})]
     growth = len(used) / len(train)  # leaves grow about in proportion to the episodes (Fig. 4.6 data)
-    for row in leaf_curve:
-        row["projected_leaves"] = None if row["leaves"] is None else round(row["leaves"] * growth)
-    small = [row for row in leaf_curve if row["projected_leaves"] is None or row["projected_leaves"] <= MAX_LEAVES]
-    small = small or [max(leaf_curve, key=lambda row: row["min_samples_leaf"])]
+    fitted: dict[tuple[int, int], dict] = {}
+
+    def row_for(n_i: int, leaf: int) -> dict:
+        if (n_i, leaf) not in fitted:
+            row = validate(n_i, leaf)
+            row["projected_leaves"] = None if row["leaves"] is None else round(row["leaves"] * growth)
+            fitted[n_i, leaf] = row
+        return dict(fitted[n_i, leaf])
+
+    # n_i (Fig. 4.5) at the default leaf size; where that tree outgrows MAX_LEAVES, also with the smallest leaf
+    # size that keeps it within (estimated: leaves shrink about in proportion), unless it cannot win anyway
+    n_i_curve = [row_for(n_i, DEFAULT_MIN_SAMPLES_LEAF) for n_i in n_i_candidates]
+    small = [row for row in n_i_curve if _within_cap(row)]
+    for row in sorted(n_i_curve, key=lambda row: row["mae"]):
+        if _within_cap(row) or (small and row["mae"] >= min(r["mae"] for r in small)):
+            continue
+        needed = row["projected_leaves"] * DEFAULT_MIN_SAMPLES_LEAF / MAX_LEAVES
+        larger = [leaf for leaf in leaf_candidates if leaf >= needed]
+        if larger:
+            capped = row_for(row["n_i"], min(larger))
+            small += [capped] if _within_cap(capped) else []
+    n_i = min(small or n_i_curve, key=lambda row: (row["mae"], row["n_i"]))["n_i"]
+
+    # the leaf size for that n_i: the largest within LEAF_TOLERANCE of the best that keeps the tree small
+    leaf_curve = [row_for(n_i, leaf) for leaf in sorted(set(leaf_candidates) | {DEFAULT_MIN_SAMPLES_LEAF})]
+    small = [row for row in leaf_curve if _within_cap(row)] or [max(leaf_curve, key=lambda r: r["min_samples_leaf"])]
     best = min(row["mae"] for row in small)
     leaf = max(row["min_samples_leaf"] for row in small if row["mae"] <= (1.0 + LEAF_TOLERANCE) * best)
 
@@ -174,6 +192,11 @@ def train_duration_model(
     }
     model = ActionModel(action, feature_set, feature_names(feature_set), final, n_i, report)
     return DurationTraining(model, report)
+
+
+def _within_cap(row: dict) -> bool:
+    """Whether the stored tree of a validation row's (n_i, leaf size) would have at most MAX_LEAVES leaves."""
+    return row["projected_leaves"] is None or row["projected_leaves"] <= MAX_LEAVES
 
 
 def _leaves(model: RegressorMixin) -> int | None:

@@ -102,7 +102,7 @@ def train_domain(
         raise DataError(f"fresh and training episodes share seeds {sorted(shared)[:3]}: choose another seed")
     gathered = time.perf_counter()
 
-    fits = len(recipe.duration_actions) * (len(n_i_candidates) + len(MIN_SAMPLES_LEAF) + len(episode_fractions) + 1) + 2
+    fits = len(recipe.duration_actions) * _fits_per_model(n_i_candidates, episode_fractions) + 2
     with tqdm(total=fits, desc="training", unit="fit", disable=not progress) as bar:
         def step(label: str) -> None:
             bar.set_postfix_str(label, refresh=False)
@@ -148,7 +148,7 @@ def _learn_at_subgoals(recipe: TrainingRecipe, models: dict, experience: dict, e
     rounds = max(1, min(recipe.subgoal_rounds, episodes))
     bounds = [round(episodes * k / rounds) for k in range(rounds + 1)]
     extra: list[Episode] = []
-    fits = len(n_i_candidates) + len(MIN_SAMPLES_LEAF) + len(episode_fractions) + 1
+    fits = _fits_per_model(n_i_candidates, episode_fractions)
     for k in range(rounds):
         extra += gather_subgoal_experience(recipe.domain, recipe.subgoal_problem, models, bounds[k + 1] - bounds[k],
                                            seed, jobs=jobs, progress=progress, first=bounds[k])
@@ -158,8 +158,15 @@ def _learn_at_subgoals(recipe: TrainingRecipe, models: dict, experience: dict, e
             models[action] = train_duration_model(action, experience[action] + extra, seed,
                                                   step=lambda label: bar.update(1), n_i_candidates=n_i_candidates,
                                                   episode_fractions=episode_fractions).model
+            bar.n = bar.total
+            bar.refresh()
     return {"problem": recipe.subgoal_problem, "action": action, "episodes": len(extra), "rounds": rounds,
             "succeeded": sum(e.succeeded for e in extra)}
+
+
+def _fits_per_model(n_i_candidates: tuple[int, ...], episode_fractions: tuple[float, ...]) -> int:
+    """At most this many fits train one duration model (the bar may finish early: fits are shared)."""
+    return 2 * len(n_i_candidates) + len(MIN_SAMPLES_LEAF) + 2 * len(episode_fractions) + 2
 
 
 def write_outputs(out: Path, models: dict, collision, report: dict) -> None:

@@ -173,3 +173,53 @@ def test_leaf_size_choice(leaves, pulls, chosen):
     assert [curve[leaf]["projected_leaves"] for leaf in (5, 10, 20, 40)] == [2 * leaves[k] for k in (5, 10, 20, 40)]
     assert curve[5]["mae"] == curve[10]["mae"] < curve[20]["mae"] < curve[40]["mae"]
     assert report["min_samples_leaf"] == chosen and report["leaves"] == leaves[chosen]
+
+
+class Sized(RegressorMixin, BaseEstimator):
+    """Shrunk whose size and accuracy follow from its examples and leaf size: `leaves_per_example` * rows / leaf
+    leaves; pull `pulls[(many, leaf)]`, `many` meaning more rows than `few`."""
+
+    def __init__(self, leaf: int = 10, few: int = 0, pulls: dict | None = None):
+        self.leaf = leaf
+        self.few = few
+        self.pulls = pulls
+
+    def fit(self, X, y):
+        rows = len(X)
+        self.inner_ = Shrunk(self.pulls[(rows > self.few, self.leaf)]).fit(X, y)
+        self.n_leaves_ = 15 * rows // self.leaf
+        return self
+
+    def predict(self, X):
+        return self.inner_.predict(X)
+
+
+def test_n_i_is_chosen_among_trees_small_enough_to_store():
+    """The best n_i at the default leaf size would need 600 leaves; made small enough (leaf 20) it loses to a
+    smaller n_i whose tree fits at the default leaf size, and that is chosen."""
+    episodes = gather("goToPose", 80, seed=8)
+    used = [e for e in episodes if e.succeeded]
+    train = [used[i] for i in split_episodes(len(used), seed=1).train]
+    few = len(rows_of(train, 2))
+    assert len(rows_of(train, 5)) > few
+    pulls = {(True, 10): 0.0, (True, 20): 0.3, (False, 10): 0.1, (False, 20): 0.5}
+    report = train_duration_model("goToPose", episodes, seed=1, n_i_candidates=(2, 5), leaf_candidates=(10, 20),
+                                  episode_fractions=(1.0,),
+                                  make_model=lambda seed, leaf: Sized(leaf, few, pulls)).report
+    n_i_curve = {row["n_i"]: row for row in report["n_i_curve"]}
+    assert n_i_curve[5]["mae"] < n_i_curve[2]["mae"]  # uncapped, n_i = 5 is better ...
+    assert n_i_curve[5]["projected_leaves"] > 400 >= n_i_curve[2]["projected_leaves"]  # ... but too large
+    assert (report["n_i"], report["min_samples_leaf"]) == (2, 10)
+    assert [(row["n_i"], row["min_samples_leaf"]) for row in report["leaf_curve"]] == [(2, 10), (2, 20)]
+    assert report["leaves"] <= 400
+
+
+def test_n_i_whose_capped_tree_wins_is_chosen_with_its_leaf_size():
+    episodes = gather("goToPose", 80, seed=8)
+    used = [e for e in episodes if e.succeeded]
+    few = len(rows_of([used[i] for i in split_episodes(len(used), seed=1).train], 2))
+    pulls = {(True, 10): 0.0, (True, 20): 0.05, (False, 10): 0.3, (False, 20): 0.5}
+    report = train_duration_model("goToPose", episodes, seed=1, n_i_candidates=(2, 5), leaf_candidates=(10, 20),
+                                  episode_fractions=(1.0,),
+                                  make_model=lambda seed, leaf: Sized(leaf, few, pulls)).report
+    assert (report["n_i"], report["min_samples_leaf"]) == (5, 20)
