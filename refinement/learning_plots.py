@@ -24,18 +24,29 @@ ANGLE_SAMPLES = 361
 
 
 def plot_mae_vs_n_i(reports: Mapping[str, dict], path: Path) -> None:
-    """Validation MAE of models trained on half the episodes, against examples per episode (Fig. 4.5)."""
+    """Validation MAE of models trained on half the episodes, against examples per episode (Fig. 4.5), at the
+    default leaf size; hollow where that tree would be too large to store, a star at the chosen n_i and leaf."""
+    from refinement.learning import MAX_LEAVES
+
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
-    for action, report in reports.items():
-        curve = report["n_i_curve"]
-        ax.plot([r["n_i"] for r in curve], [r["mae"] for r in curve], marker="o", label=f"{action} (n_i={report['n_i']})")
+    for index, (action, report) in enumerate(reports.items()):
+        curve, color = report["n_i_curve"], f"C{index}"
+        n_i, mae = [r["n_i"] for r in curve], [r["mae"] for r in curve]
+        ax.plot(n_i, mae, color=color, label=f"{action} (n_i={report['n_i']}, leaf {report['min_samples_leaf']})")
+        large = [(r.get("projected_leaves") or 0) > MAX_LEAVES for r in curve]
+        ax.scatter(n_i, mae, marker="o", edgecolors=color, facecolors=["none" if big else color for big in large])
+        chosen = [r for r in report.get("leaf_curve", []) if r["min_samples_leaf"] == report["min_samples_leaf"]]
+        if chosen:
+            ax.scatter([report["n_i"]], [chosen[0]["mae"]], marker="*", s=160, color=color, edgecolors="black",
+                       zorder=3)
     ax.set(xscale="log", xlabel="examples per episode n_i", ylabel="MAE on validation episodes (s)",
            title="Accuracy against intermediate examples (Fig. 4.5)")
     n_i = sorted({r["n_i"] for report in reports.values() for r in report["n_i_curve"]})
     ax.set_xticks(n_i, [str(v) for v in n_i])
     ax.minorticks_off()
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
+    ax.legend(fontsize="small", title=f"hollow: > {MAX_LEAVES} leaves at leaf size 10; star: chosen",
+              title_fontsize="small")
     _save(fig, path)
 
 
