@@ -156,7 +156,7 @@ def _learn_at_subgoals(recipe: TrainingRecipe, models: dict, experience: dict, e
         label = f"retraining {action} ({k + 1}/{rounds})"
         with tqdm(total=fits, desc=label, unit="fit", disable=not progress) as bar:
             models[action] = train_duration_model(action, experience[action] + extra, seed,
-                                                  step=lambda label: bar.update(1), n_i_candidates=n_i_candidates,
+                                                  step=lambda _: bar.update(1), n_i_candidates=n_i_candidates,
                                                   episode_fractions=episode_fractions).model
             bar.n = bar.total
             bar.refresh()
