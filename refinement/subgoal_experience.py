@@ -44,12 +44,18 @@ def _episodes(job: Job, problem: str, models: dict, indices: list[int]) -> list[
     return out
 
 
+def subgoal_job(domain: str, problem: str, seed: int) -> Job:
+    """The planned and instantiated problem the subgoal situations are drawn for."""
+    return prepared_job(prepare(resolve_task(domain, problem)), seed)
+
+
 def gather_subgoal_experience(domain: str, problem: str, models: dict, episodes: int, seed: int, jobs: int = 1,
-                              progress: bool = True, first: int = 0) -> list[Episode]:
+                              progress: bool = True, first: int = 0, job: Job | None = None) -> list[Episode]:
     """`episodes` episodes of the second action of `problem`'s plan, from the subgoals refinement chooses with
     `models` (a dict action -> ActionModel) in random situations of the problem: situations first, first + 1, ...
-    of the seed's stream (so successive calls with consecutive ranges never repeat a situation)."""
-    job = prepared_job(prepare(resolve_task(domain, problem)), seed)
+    of the seed's stream (so successive calls with consecutive ranges never repeat a situation). `job`, from
+    `subgoal_job`, spares planning the problem again on each call."""
+    job = subgoal_job(domain, problem, seed) if job is None else job
     last = first + episodes
     chunks = [list(range(k, min(k + CHUNK, last))) for k in range(first, last, CHUNK)]
     out: list[Episode] = []

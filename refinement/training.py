@@ -143,15 +143,16 @@ def _learn_at_subgoals(recipe: TrainingRecipe, models: dict, experience: dict, e
     visited too (the optimizer's curse moves with the model)."""
     if not recipe.subgoal_problem or episodes < 1:
         return None
-    from refinement.subgoal_experience import gather_subgoal_experience
+    from refinement.subgoal_experience import gather_subgoal_experience, subgoal_job
 
+    job = subgoal_job(recipe.domain, recipe.subgoal_problem, seed)  # planned once for all rounds
     rounds = max(1, min(recipe.subgoal_rounds, episodes))
     bounds = [round(episodes * k / rounds) for k in range(rounds + 1)]
     extra: list[Episode] = []
     fits = _fits_per_model(n_i_candidates, episode_fractions)
     for k in range(rounds):
         extra += gather_subgoal_experience(recipe.domain, recipe.subgoal_problem, models, bounds[k + 1] - bounds[k],
-                                           seed, jobs=jobs, progress=progress, first=bounds[k])
+                                           seed, jobs=jobs, progress=progress, first=bounds[k], job=job)
         action = extra[0].action
         label = f"retraining {action} ({k + 1}/{rounds})"
         with tqdm(total=fits, desc=label, unit="fit", disable=not progress) as bar:

@@ -27,7 +27,7 @@ def test_consecutive_ranges_continue_one_stream_of_situations():
 def test_each_round_chooses_subgoals_with_the_model_the_round_before_retrained(monkeypatch):
     seen, trained = [], []
 
-    def gather(domain, problem, models, episodes, seed, jobs=1, progress=True, first=0):
+    def gather(domain, problem, models, episodes, seed, jobs=1, progress=True, first=0, job=None):
         seen.append((models["dribbleBall"], first, episodes))
         return [SimpleNamespace(action="dribbleBall", succeeded=True, index=first + i) for i in range(episodes)]
 
@@ -37,6 +37,7 @@ def test_each_round_chooses_subgoals_with_the_model_the_round_before_retrained(m
         return SimpleNamespace(model=model)
 
     monkeypatch.setattr("refinement.subgoal_experience.gather_subgoal_experience", gather)
+    monkeypatch.setattr("refinement.subgoal_experience.subgoal_job", lambda domain, problem, seed: "job")
     monkeypatch.setattr(training, "train_duration_model", train)
     recipe = training.TRAINING_DOMAINS["soccer"]
     models = {"dribbleBall": "first model"}
