@@ -1,5 +1,6 @@
-"""Figures of the training report: MAE over n_i (Fig. 4.5), MAE over episodes (Fig. 4.6), and the predicted
-duration over the angle of approach for one situation (Fig. 4.7). Drawn headless (Agg), saved atomically."""
+"""Figures of the training report: MAE over n_i (Fig. 4.5), MAE over episodes (Fig. 4.6), the predicted
+duration over the angle of approach for one situation (Fig. 4.7), and where the collision classifier predicts
+a bump (Fig. 4.8). Drawn headless (Agg), saved atomically."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from refinement.action_models import ActionModel  # noqa: E402
+from refinement.action_models import ActionModel, CollisionModel  # noqa: E402
 
 # the situation of Fig. 4.7: goal 1.5 m straight ahead, robot standing, arriving at rest
 SITUATION_DIST = 1.5  # m
@@ -93,6 +94,40 @@ def plot_angle_at(models: Mapping[str, ActionModel], path: Path) -> None:
     cartesian.grid(True, alpha=0.3)
     cartesian.legend()
     polar.set_title("predicted duration (s) over angle_at (Fig. 4.7)", fontsize="medium")
+    _save(fig, path)
+
+
+REGION_HALF_SIZE = 3.0  # m, the start positions of Fig. 4.8's picture: a square this far round the goal
+REGION_SAMPLES = 121  # per side
+REGION_VG = 0.15  # m/s, mid-range of the collision experience (0 to 0.3 m/s)
+
+
+def region_params(start_heading: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(x, y, params): starts on a grid round the goal (ball point at the origin, heading +x), standing,
+    with heading `start_heading` relative to the direction toward the goal (0: facing it)."""
+    axis = np.linspace(-REGION_HALF_SIZE, REGION_HALF_SIZE, REGION_SAMPLES)
+    x, y = np.meshgrid(axis, axis)
+    params = np.zeros((x.size, 8))
+    params[:, 0], params[:, 1] = x.ravel(), y.ravel()
+    params[:, 2] = np.arctan2(-params[:, 1], -params[:, 0]) + start_heading
+    params[:, 7] = REGION_VG
+    return x, y, params
+
+
+def plot_collision_region(model: CollisionModel, path: Path) -> None:
+    """Where the classifier predicts that goToPose bumps a ball lying at its goal, over start positions round
+    the goal pose (Fig. 4.8): facing the goal, and turned 135 degrees from it (not 180: there the sign of
+    angle_at flips with the last bit of the heading, which would speckle the picture)."""
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.8))
+    for ax, (heading, label) in zip(axes, ((0.0, "facing the goal"), (0.75 * np.pi, "turned 135 deg from the goal"))):
+        x, y, params = region_params(heading)
+        success = model.predict_success(params).reshape(x.shape)
+        ax.contourf(x, y, success.astype(float), levels=[-0.5, 0.5, 1.5], colors=["#d62728", "#2ca02c"], alpha=0.45)
+        ax.add_patch(plt.Circle((0.0, 0.0), 0.11, color="black", fill=False))
+        ax.annotate("", xy=(0.6, 0.0), xytext=(0.0, 0.0), arrowprops={"arrowstyle": "->", "lw": 2})
+        ax.set(aspect="equal", xlabel="start x (m)", ylabel="start y (m)", title=f"robot standing, {label}")
+    fig.suptitle(f"goToPose to a ball at the goal (heading +x, arriving at {REGION_VG} m/s): predicted collision "
+                 "(red) or success (green) (Fig. 4.8)", fontsize="medium")
     _save(fig, path)
 
 

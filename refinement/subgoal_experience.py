@@ -1,12 +1,13 @@
-"""Experience where refinement acts (the outlook of Sec. 8.1): episodes of the action after a subgoal, started
-from the subgoals subgoal refinement chooses.
+"""Experience where refinement acts (the outlook of Sec. 8.1): episodes of an action started from the subgoals
+subgoal refinement chooses.
 
 Refinement picks the subgoal where the summed prediction is lowest, which is also where a model's error
 happens to be most optimistic (the optimizer's curse): the refined dribble was predicted 1 s too fast on average
-while the greedy one was not. Episodes from those subgoals teach the model exactly the region it is used in.
-The scenarios are random situations of the chain's problem (a seed stream of their own, so none is one of
-`tailor evaluate`'s), refined greedily and with horizon 2 in turn; each yields one episode of the second action
-from the chosen subgoal, ball in the guide.
+while the greedy one was not, and so were refined way-point navigations. Episodes from those subgoals teach the
+model exactly the region it is used in. The situations are random situations of a chain problem (a seed stream
+of their own, so none is one of `tailor evaluate`'s), refined greedily and with horizon 2 in turn; each
+occurrence of the learning action after the chain's first action yields one episode from its refined start to
+its refined goal, the ball placed as in the action's experience scenario (in the guide for dribbleBall).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from joblib import Parallel, delayed
 from tqdm import tqdm
 
 from sims.episode import ActionCall, Episode
+from sims.experience import SCENARIOS
 from sims.soccer import SoccerSim
 
 from refinement.evaluation import BELIEFS, Job, prepared_job, scenario_sequence
@@ -23,25 +25,29 @@ from refinement.pipeline import prepare, resolve_task
 from refinement.refine import refine
 
 SUBGOAL_STREAM = 2  # second seed word: apart from the evaluation's scenarios (SeedSequence([seed, index]))
-CHUNK = 50  # scenarios a worker refines per task
+CHUNK = 50  # situations a worker refines per task
 
 
 def _seed(seed: int, index: int) -> int:
     return int(np.random.SeedSequence([seed, SUBGOAL_STREAM, index]).generate_state(1)[0])
 
 
-def _episodes(job: Job, problem: str, models: dict, indices: list[int]) -> list[Episode]:
+def _episodes(job: Job, problem: str, models: dict, indices: list[int], action: str) -> tuple[int, list[Episode]]:
+    """(situations, episodes) of the situations `indices`."""
     out = []
     for i in indices:
         seed = _seed(job.seed, i)
         sequence = scenario_sequence(job, BELIEFS[problem](np.random.default_rng(seed)))
         refined = refine(sequence, models, horizon=1 + i % 2, method="analytic", seed=seed)
-        follow = refined.sequence.actions[1]
-        p = follow.values()
-        sim = SoccerSim(seed)
-        sim.reset((p[0], p[1], p[2], p[3]), ball=(p[0], p[1]))
-        out.append(sim.run(ActionCall(follow.action, tuple(float(v) for v in p[4:]))))
-    return out
+        for k, follow in enumerate(refined.sequence.actions):
+            if k == 0 or follow.action != action:  # the first action starts from the belief, not a subgoal
+                continue
+            p = follow.values()
+            ball = {"guide": (p[0], p[1]), "goal": (p[4], p[5]), "none": None}[SCENARIOS[action].ball]
+            sim = SoccerSim(seed + k - 1)
+            sim.reset((p[0], p[1], p[2], p[3]), ball=ball)
+            out.append(sim.run(ActionCall(action, tuple(float(v) for v in p[4:]))))
+    return len(indices), out
 
 
 def subgoal_job(domain: str, problem: str, seed: int) -> Job:
@@ -49,19 +55,20 @@ def subgoal_job(domain: str, problem: str, seed: int) -> Job:
     return prepared_job(prepare(resolve_task(domain, problem)), seed)
 
 
-def gather_subgoal_experience(domain: str, problem: str, models: dict, episodes: int, seed: int, jobs: int = 1,
-                              progress: bool = True, first: int = 0, job: Job | None = None) -> list[Episode]:
-    """`episodes` episodes of the second action of `problem`'s plan, from the subgoals refinement chooses with
-    `models` (a dict action -> ActionModel) in random situations of the problem: situations first, first + 1, ...
-    of the seed's stream (so successive calls with consecutive ranges never repeat a situation). `job`, from
-    `subgoal_job`, spares planning the problem again on each call."""
+def gather_subgoal_experience(domain: str, problem: str, action: str, models: dict, situations: int, seed: int,
+                              jobs: int = 1, progress: bool = True, first: int = 0, job: Job | None = None
+                              ) -> list[Episode]:
+    """Episodes of `action` from the subgoals refinement chooses with `models` (a dict action -> ActionModel) in
+    `situations` random situations of `problem`: situations first, first + 1, ... of the seed's stream (so
+    successive calls with consecutive ranges never repeat a situation). `job`, from `subgoal_job`, spares
+    planning the problem again on each call."""
     job = subgoal_job(domain, problem, seed) if job is None else job
-    last = first + episodes
+    last = first + situations
     chunks = [list(range(k, min(k + CHUNK, last))) for k in range(first, last, CHUNK)]
     out: list[Episode] = []
-    with tqdm(total=episodes, desc=f"{problem} subgoals", unit="ep", disable=not progress) as bar:
-        calls = (delayed(_episodes)(job, problem, models, chunk) for chunk in chunks)
-        for batch in Parallel(n_jobs=jobs, return_as="generator")(calls):
-            out.extend(batch)
-            bar.update(len(batch))
+    with tqdm(total=situations, desc=f"{problem} subgoals ({action})", unit="situation", disable=not progress) as bar:
+        calls = (delayed(_episodes)(job, problem, models, chunk, action) for chunk in chunks)
+        for count, episodes in Parallel(n_jobs=jobs, return_as="generator")(calls):
+            out.extend(episodes)
+            bar.update(count)
     return out

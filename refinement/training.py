@@ -30,6 +30,17 @@ FRESH_SEED_OFFSET = 7_919_000  # the fresh test episodes of the classifier use s
 
 
 @dataclass(frozen=True)
+class SubgoalExperience:
+    """Experience at refined subgoals (Sec. 8.1, refinement.subgoal_experience): `action` also learns from
+    episodes that start at the subgoals refinement chooses in random situations of the chain `problem`."""
+
+    problem: str  # a problem beside the domain whose plan is the chain
+    action: str  # the action that learns; one episode per occurrence of it after the chain's first action
+    share: float  # situations per episode of a scenario
+    rounds: int  # gathered in this many rounds, each with the model the previous one retrained
+
+
+@dataclass(frozen=True)
 class TrainingRecipe:
     """What `tailor train DOMAIN` learns."""
 
@@ -39,9 +50,7 @@ class TrainingRecipe:
     collision_action: str  # the action the classifier guards
     default_episodes: int  # per scenario; chosen so the floors hold and a run takes < 15 min on 2 cores
     fresh_episodes: int = 1000  # fresh episodes the classifier is evaluated on (Table 4.4)
-    subgoal_problem: str | None = None  # a chain whose second action also learns from refined subgoals ...
-    subgoal_share: float = 0.0  # ... this many episodes per episode of a scenario (refinement.subgoal_experience)
-    subgoal_rounds: int = 1  # ... gathered in this many rounds, each with the models the previous one retrained
+    subgoal_experience: tuple[SubgoalExperience, ...] = ()
 
 
 TRAINING_DOMAINS: dict[str, TrainingRecipe] = {
@@ -51,9 +60,10 @@ TRAINING_DOMAINS: dict[str, TrainingRecipe] = {
         collision_scenario="goToPoseAtBall",
         collision_action="goToPose",
         default_episodes=6000,
-        subgoal_problem="score",  # approachBall -> dribbleBall: dribbleBall also learns from refined subgoals
-        subgoal_share=0.5,
-        subgoal_rounds=3,
+        subgoal_experience=(
+            SubgoalExperience("score", "dribbleBall", share=0.5, rounds=3),  # approachBall -> dribbleBall
+            SubgoalExperience("waypoints", "goToPose", share=1 / 6, rounds=3),  # three goToPose per situation
+        ),
     ),
 }
 
@@ -117,8 +127,9 @@ def train_domain(
                                           seed, step=step).model
         bar.n = bar.total
         bar.refresh()
-    subgoal = _learn_at_subgoals(recipe, models, experience, round(recipe.subgoal_share * episodes), seed, jobs,
-                                 progress, n_i_candidates, episode_fractions)
+    subgoal = [_learn_at_subgoals(recipe.domain, chain, models, experience, round(chain.share * episodes), seed,
+                                  jobs, progress, n_i_candidates, episode_fractions)
+               for chain in recipe.subgoal_experience]
 
     report = {
         "schema": "tailor.training_report/1",
@@ -127,7 +138,7 @@ def train_domain(
         "episodes_per_scenario": episodes,
         "models": {action: model.report for action, model in models.items()},
         "collision": collision.report,
-        "subgoal_experience": subgoal,
+        "subgoal_experience": [row for row in subgoal if row is not None],
         "gather_seconds": gathered - started,
         "train_seconds": time.perf_counter() - gathered,
     }
@@ -135,34 +146,33 @@ def train_domain(
     return report
 
 
-def _learn_at_subgoals(recipe: TrainingRecipe, models: dict, experience: dict, episodes: int, seed: int,
-                       jobs: int, progress: bool, n_i_candidates, episode_fractions) -> dict | None:
-    """Gather episodes of the chain's second action from the subgoals refinement chooses, and retrain that action's
-    model on its experience plus them (its report then covers both). In rounds: each round's subgoals are chosen
-    with the models the previous round retrained, so the optimistic spots a retrained model has in turn are
-    visited too (the optimizer's curse moves with the model)."""
-    if not recipe.subgoal_problem or episodes < 1:
+def _learn_at_subgoals(domain: str, chain: SubgoalExperience, models: dict, experience: dict, situations: int,
+                       seed: int, jobs: int, progress: bool, n_i_candidates, episode_fractions) -> dict | None:
+    """Gather episodes of `chain.action` from the subgoals refinement chooses in `situations` situations of the
+    chain, and retrain the action's model on its experience plus them (its report then covers both). In rounds:
+    each round's subgoals are chosen with the models the previous round retrained, so the optimistic spots a
+    retrained model has in turn are visited too (the optimizer's curse moves with the model)."""
+    if situations < 1:
         return None
     from refinement.subgoal_experience import gather_subgoal_experience, subgoal_job
 
-    job = subgoal_job(recipe.domain, recipe.subgoal_problem, seed)  # planned once for all rounds
-    rounds = max(1, min(recipe.subgoal_rounds, episodes))
-    bounds = [round(episodes * k / rounds) for k in range(rounds + 1)]
+    job = subgoal_job(domain, chain.problem, seed)  # planned once for all rounds
+    rounds = max(1, min(chain.rounds, situations))
+    bounds = [round(situations * k / rounds) for k in range(rounds + 1)]
     extra: list[Episode] = []
     fits = _fits_per_model(n_i_candidates, episode_fractions)
     for k in range(rounds):
-        extra += gather_subgoal_experience(recipe.domain, recipe.subgoal_problem, models, bounds[k + 1] - bounds[k],
+        extra += gather_subgoal_experience(domain, chain.problem, chain.action, models, bounds[k + 1] - bounds[k],
                                            seed, jobs=jobs, progress=progress, first=bounds[k], job=job)
-        action = extra[0].action
-        label = f"retraining {action} ({k + 1}/{rounds})"
+        label = f"retraining {chain.action} ({k + 1}/{rounds})"
         with tqdm(total=fits, desc=label, unit="fit", disable=not progress) as bar:
-            models[action] = train_duration_model(action, experience[action] + extra, seed,
-                                                  step=lambda _: bar.update(1), n_i_candidates=n_i_candidates,
-                                                  episode_fractions=episode_fractions).model
+            models[chain.action] = train_duration_model(chain.action, experience[chain.action] + extra, seed,
+                                                        step=lambda _: bar.update(1), n_i_candidates=n_i_candidates,
+                                                        episode_fractions=episode_fractions).model
             bar.n = bar.total
             bar.refresh()
-    return {"problem": recipe.subgoal_problem, "action": action, "episodes": len(extra), "rounds": rounds,
-            "succeeded": sum(e.succeeded for e in extra)}
+    return {"problem": chain.problem, "action": chain.action, "situations": situations, "episodes": len(extra),
+            "rounds": rounds, "succeeded": sum(e.succeeded for e in extra)}
 
 
 def _fits_per_model(n_i_candidates: tuple[int, ...], episode_fractions: tuple[float, ...]) -> int:
@@ -185,6 +195,7 @@ def write_outputs(out: Path, models: dict, collision, report: dict) -> None:
     files[training_dir / "mae_vs_n_i.png"] = lambda p: learning_plots.plot_mae_vs_n_i(reports, p)
     files[training_dir / "mae_vs_episodes.png"] = lambda p: learning_plots.plot_mae_vs_episodes(reports, p)
     files[training_dir / "angle_at_polar.png"] = lambda p: learning_plots.plot_angle_at(models, p)
+    files[training_dir / "collision_region.png"] = lambda p: learning_plots.plot_collision_region(collision, p)
 
     staged: list[tuple[Path, Path]] = []
     try:

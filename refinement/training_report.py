@@ -44,13 +44,14 @@ def confusion_table(evaluation: dict) -> list[str]:
     ]
 
 
-def _subgoal_lines(subgoal: dict | None) -> list[str]:
-    if not subgoal:
-        return []
-    return ["", f"{subgoal['action']} also learned from {subgoal['episodes']} episodes started at the subgoals refinement "
-                f"chose in random '{subgoal['problem']}' situations",
-            f"(greedy and horizon 2 in turn, in {subgoal.get('rounds', 1)} round(s), each with the models the one before "
-            "retrained; Sec. 8.1); its row covers both."]
+def _subgoal_lines(chains: list[dict] | None) -> list[str]:
+    lines = []
+    for chain in chains or ():
+        lines += ["", f"{chain['action']} also learned from {chain['episodes']} episodes started at the subgoals "
+                      f"refinement chose in {chain['situations']} random '{chain['problem']}' situations",
+                  f"(greedy and horizon 2 in turn, in {chain['rounds']} round(s), each with the models the one "
+                  "before retrained; Sec. 8.1); its row covers both."]
+    return lines
 
 
 def format_report(report: dict, models: dict, collision) -> str:

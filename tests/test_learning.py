@@ -11,7 +11,7 @@ from sklearn.linear_model import LinearRegression
 
 from refinement.collision import FAIL, SUCCESS, confusion, labels, train_collision_model
 from refinement.errors import DataError
-from refinement.features import compute_features, first_examples, intermediate_examples
+from refinement.features import compute_features, feature_names, first_examples, intermediate_examples
 from refinement.learning import held_out_mae, split_episodes, train_duration_model
 from synthetic_episodes import gather
 
@@ -223,3 +223,21 @@ def test_n_i_whose_capped_tree_wins_is_chosen_with_its_leaf_size():
                                   episode_fractions=(1.0,),
                                   make_model=lambda seed, leaf: Sized(leaf, few, pulls)).report
     assert (report["n_i"], report["min_samples_leaf"]) == (5, 20)
+
+
+def test_collision_region_grid_faces_the_goal_and_matches_the_features():
+    from refinement.learning_plots import REGION_SAMPLES, region_params
+
+    x, y, params = region_params(0.0)
+    assert x.shape == (REGION_SAMPLES, REGION_SAMPLES)
+    features = compute_features("pose", params)
+    names = feature_names("pose")
+    np.testing.assert_allclose(features[:, names.index("dist")], np.hypot(x, y).ravel())
+    away = ~np.isclose(features[:, names.index("dist")], 0.0)
+    np.testing.assert_allclose(features[away, names.index("angle_to")], 0.0, atol=1e-9)  # facing the goal
+    # the goal heads +x: a start on the +x axis approaches head-on (angle_at pi), one on -x from behind (0)
+    row = REGION_SAMPLES // 2
+    assert abs(features[row * REGION_SAMPLES + REGION_SAMPLES - 1, names.index("angle_at")]) == pytest.approx(np.pi)
+    assert features[row * REGION_SAMPLES, names.index("angle_at")] == pytest.approx(0.0)
+    _, _, turned = region_params(np.pi)
+    np.testing.assert_allclose(compute_features("pose", turned)[away, names.index("angle_to")], np.pi, atol=1e-9)

@@ -14,9 +14,9 @@ from refinement.subgoal_experience import gather_subgoal_experience
 
 def test_consecutive_ranges_continue_one_stream_of_situations():
     models = load_action_models(DOMAINS_DIR / "soccer" / "models")
-    whole = gather_subgoal_experience("soccer", "score", models, 4, seed=3, progress=False)
-    parts = (gather_subgoal_experience("soccer", "score", models, 2, seed=3, progress=False)
-             + gather_subgoal_experience("soccer", "score", models, 2, seed=3, progress=False, first=2))
+    whole = gather_subgoal_experience("soccer", "score", "dribbleBall", models, 4, seed=3, progress=False)
+    parts = (gather_subgoal_experience("soccer", "score", "dribbleBall", models, 2, seed=3, progress=False)
+             + gather_subgoal_experience("soccer", "score", "dribbleBall", models, 2, seed=3, progress=False, first=2))
     assert [e.action for e in whole] == ["dribbleBall"] * 4
     assert len({tuple(e.params) for e in whole}) == 4  # four different situations
     for a, b in zip(whole, parts):
@@ -24,12 +24,22 @@ def test_consecutive_ranges_continue_one_stream_of_situations():
         assert (a.duration, a.outcome) == (b.duration, b.outcome)
 
 
+def test_every_way_point_after_the_first_is_a_subgoal_goto_pose_starts_from():
+    models = load_action_models(DOMAINS_DIR / "soccer" / "models")
+    episodes = gather_subgoal_experience("soccer", "waypoints", "goToPose", models, 2, seed=3, progress=False)
+    assert [e.action for e in episodes] == ["goToPose"] * 6  # p0 -> w1 -> w2 -> w3 -> w4: three start at a subgoal
+    for a, b in zip(episodes, episodes[1:]):
+        if a is not episodes[2]:  # within one situation the next starts where the last was to end (as believed)
+            np.testing.assert_allclose(b.params[:4], a.params[4:], atol=0.06)
+    assert all(np.isnan(e.ball[0]).all() for e in episodes)  # no ball in a goToPose episode
+
+
 def test_each_round_chooses_subgoals_with_the_model_the_round_before_retrained(monkeypatch):
     seen, trained = [], []
 
-    def gather(domain, problem, models, episodes, seed, jobs=1, progress=True, first=0, job=None):
-        seen.append((models["dribbleBall"], first, episodes))
-        return [SimpleNamespace(action="dribbleBall", succeeded=True, index=first + i) for i in range(episodes)]
+    def gather(domain, problem, action, models, situations, seed, jobs=1, progress=True, first=0, job=None):
+        seen.append((models[action], first, situations))
+        return [SimpleNamespace(action=action, succeeded=True, index=first + i) for i in range(situations)]
 
     def train(action, episodes, seed, **kwargs):
         model = f"model {len(trained)} on {len(episodes)}"
@@ -39,11 +49,13 @@ def test_each_round_chooses_subgoals_with_the_model_the_round_before_retrained(m
     monkeypatch.setattr("refinement.subgoal_experience.gather_subgoal_experience", gather)
     monkeypatch.setattr("refinement.subgoal_experience.subgoal_job", lambda domain, problem, seed: "job")
     monkeypatch.setattr(training, "train_duration_model", train)
-    recipe = training.TRAINING_DOMAINS["soccer"]
+    chain = training.TRAINING_DOMAINS["soccer"].subgoal_experience[0]
     models = {"dribbleBall": "first model"}
-    report = training._learn_at_subgoals(recipe, models, {"dribbleBall": ["own"] * 10}, 7, 0, 1, False, (1,), (1.0,))
+    report = training._learn_at_subgoals("soccer", chain, models, {"dribbleBall": ["own"] * 10}, 7, 0, 1, False,
+                                         (1,), (1.0,))
 
-    assert recipe.subgoal_rounds == 3
+    assert (chain.problem, chain.action, chain.rounds) == ("score", "dribbleBall", 3)
     assert seen == [("first model", 0, 2), ("model 0 on 12", 2, 3), ("model 1 on 15", 5, 2)]
     assert models["dribbleBall"] == "model 2 on 17"  # the last retraining used all 7 subgoal episodes
-    assert report == {"problem": "score", "action": "dribbleBall", "episodes": 7, "rounds": 3, "succeeded": 7}
+    assert report == {"problem": "score", "action": "dribbleBall", "situations": 7, "episodes": 7, "rounds": 3,
+                      "succeeded": 7}

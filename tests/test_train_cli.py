@@ -16,7 +16,7 @@ from synthetic_episodes import random_params
 EXPECTED_FILES = {
     "models/goToPose.json", "models/approachBall.json", "models/dribbleBall.json", "models/goToPose.collision.json",
     "training/report.json", "training/report.txt", "training/mae_vs_n_i.png", "training/mae_vs_episodes.png",
-    "training/angle_at_polar.png",
+    "training/angle_at_polar.png", "training/collision_region.png",
 }
 
 
@@ -33,14 +33,18 @@ def check_outputs(out, report: dict, episodes: int, fresh: int) -> None:
     for action, model in models.items():
         row = report["models"][action]
         assert set(row) >= {"episodes", "mean_duration", "mae", "mae_hgb", "leaves"}
-        extra = report["subgoal_experience"]["episodes"] if action == report["subgoal_experience"]["action"] else 0
+        extra = sum(chain["episodes"] for chain in report["subgoal_experience"] if chain["action"] == action)
         assert 8 <= row["episodes"] <= episodes + extra and row["leaves"] == model.duration.n_leaves_
         assert model.report == row and model.n_i == row["n_i"]
         assert np.all(np.isfinite(model.predict_duration(params)))
-    # dribbleBall also learned from the subgoals refinement chose in random `score` situations (Sec. 8.1)
-    assert report["subgoal_experience"]["action"] == "dribbleBall"
-    assert report["subgoal_experience"]["episodes"] == round(0.5 * episodes)
-    assert report["subgoal_experience"]["rounds"] == min(3, round(0.5 * episodes))
+    # dribbleBall also learned from the subgoals refinement chose in random `score` situations, goToPose from
+    # those in random `waypoints` situations (three way-points after the first in each) (Sec. 8.1)
+    score, waypoints = report["subgoal_experience"]
+    assert (score["problem"], score["action"], waypoints["problem"], waypoints["action"]) == (
+        "score", "dribbleBall", "waypoints", "goToPose")
+    assert score["situations"] == score["episodes"] == round(0.5 * episodes)
+    assert waypoints["situations"] == round(episodes / 6) and waypoints["episodes"] == 3 * waypoints["situations"]
+    assert score["rounds"] == min(3, score["situations"]) and waypoints["rounds"] == min(3, waypoints["situations"])
     collision = load_collision_model(out / "models" / "goToPose.collision.json")
     c = report["collision"]
     assert 0.0 <= c["accuracy"] <= 1.0 and 0.0 <= c["false_success"] <= 1.0 and c["fresh_episodes"] == fresh
@@ -49,7 +53,7 @@ def check_outputs(out, report: dict, episodes: int, fresh: int) -> None:
     for action in models:
         assert f"Rules of {action}" in text
     assert "predicted Success" in text and "observed Fail" in text
-    for png in ("mae_vs_n_i", "mae_vs_episodes", "angle_at_polar"):
+    for png in ("mae_vs_n_i", "mae_vs_episodes", "angle_at_polar", "collision_region"):
         assert (out / "training" / f"{png}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
