@@ -65,3 +65,12 @@ def test_the_cone_does_not_depend_on_the_noise():
             sim.reset(start, (0.0, 0.0))
             outcomes.add(sim.run(ActionCall("goToPose", GOAL)).outcome)
         assert len(outcomes) == 1, (start, outcomes)
+
+
+def test_a_robot_beside_the_goal_is_not_stranded_by_the_line_follower():
+    # found in a way-point chain: with a 30 cm wide line corridor at the goal, the robot stopped beside it (its
+    # speed profile along the line had run out) and waited there until the timeout, on one noise seed of four
+    robot, goal = (2.434, 1.018, 0.364, 0.6), (1.407, 1.588, 2.938, 0.0)
+    for seed in range(4):
+        result = simulate_sequence(robot, None, [ActionCall("goToPose", goal)], seed)
+        assert result.results[0].outcome == "success" and result.results[0].duration < 15.0
