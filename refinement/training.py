@@ -132,7 +132,7 @@ def train_domain(
                for chain in recipe.subgoal_experience]
 
     report = {
-        "schema": "tailor.training_report/1",
+        "schema": "tailor.training_report/2",  # 2: subgoal_experience is a list of chains
         "domain": recipe.domain,
         "seed": seed,
         "episodes_per_scenario": episodes,
