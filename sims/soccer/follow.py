@@ -94,34 +94,41 @@ class Follower:
             return error, to_go * r, side
         return None
 
-    def command(self, start: Pose, v: float, goal: Pose, vg: float,
-                choose_path: Callable[[Pose, Pose], DubinsPath]) -> tuple[float, float]:
-        """[v, phidot] steering the axle pose `start` (speed v) to the axle pose `goal`, arriving with vg."""
+    def final_command(self, start: Pose, v: float, goal: Pose, vg: float) -> tuple[float, float] | None:
+        """[v, phidot] on the final straight (mode 1) or the final arc (mode 2); None elsewhere."""
         along, lateral = in_frame(goal, start[0], start[1])  # along < 0: behind the goal
         heading_error = wrap(start[2] - goal[2])
         speed = max(0.0, v)
-        arc_speed = self.w_plan * self.radius
         if self.in_corridor(along, lateral, heading_error):
             # a critically damped line follower whose settling length shrinks with the distance to the goal
             gain = min(self.line_gain_max, 4.0 / max(-along, 1e-3))
             curvature = clip(-gain * gain * lateral - 2.0 * gain * math.sin(heading_error), 1.0 / self.r_line)
             v_target = min(profile_speed(-along, vg, self.v_top, self.decel_plan),
                            self.w_plan / max(abs(curvature), 1e-6))
-            w = curvature * min(speed, v_target)
-        else:
-            pre = self.pre_pose(goal)
-            arc = self.final_arc(start, pre)
-            if arc is not None:
-                error, to_go, side = arc
-                to_goal = to_go + self.final_straight
-                v_target = max(min(arc_speed, profile_speed(to_goal, vg, self.v_top, self.decel_plan)), self.v_creep)
-                w = side * speed / self.radius + K_TRACK * error
-            else:
-                path = choose_path(start, pre)
-                v_target, curvature = self._along_path(path, v, vg)
-                w = curvature * speed  # the actual speed: the robot brakes slower than v_target drops
-        v_cmd = max(v_target, v - self.decel_limit * self.control_period, 0.0)
-        return v_cmd, clip(w, self.w_limit)
+            return self._limited(v_target, curvature * min(speed, v_target), v)
+        arc = self.final_arc(start, self.pre_pose(goal))
+        if arc is None:
+            return None
+        error, to_go, side = arc
+        to_goal = to_go + self.final_straight
+        v_target = max(min(self.w_plan * self.radius, profile_speed(to_goal, vg, self.v_top, self.decel_plan)),
+                       self.v_creep)
+        return self._limited(v_target, side * speed / self.radius + K_TRACK * error, v)
+
+    def command(self, start: Pose, v: float, goal: Pose, vg: float,
+                choose_path: Callable[[Pose, Pose], DubinsPath]) -> tuple[float, float]:
+        """[v, phidot] steering the axle pose `start` (speed v) to the axle pose `goal`, arriving with vg."""
+        final = self.final_command(start, v, goal, vg)
+        return final if final is not None else self.path_command(choose_path(start, self.pre_pose(goal)), v, vg)
+
+    def path_command(self, path: DubinsPath, v: float, vg: float) -> tuple[float, float]:
+        """[v, phidot] along the first segment of `path`, a Dubins path from the axle to the pre-pose (mode 3)."""
+        v_target, curvature = self._along_path(path, v, vg)
+        return self._limited(v_target, curvature * max(0.0, v), v)  # the actual speed: braking lags v_target
+
+    def _limited(self, v_target: float, w: float, v: float) -> tuple[float, float]:
+        """The command within the braking bound (per control period) and the rotational limit."""
+        return max(v_target, v - self.decel_limit * self.control_period, 0.0), clip(w, self.w_limit)
 
     def _along_path(self, path: DubinsPath, v: float, vg: float) -> tuple[float, float]:
         """Target speed and curvature on the first segment of a Dubins path ending at the pre-pose."""

@@ -89,14 +89,14 @@ def goToPose(x: float, y: float, phi: float, v: float, xg: float, yg: float, phi
     """Navigate to the goal pose, arriving with heading phig and speed vg (App. A.1); returns [v, phidot].
     It knows nothing of a ball: on the way it may bump one."""
     start, goal = axle_pose(x, y, phi), axle_pose(xg, yg, phig)
+    final = GOTO.final_command(start, v, goal, vg)
+    if final is not None:
+        return final
     along, lateral = in_frame(goal, start[0], start[1])
-    heading_error = wrap(start[2] - goal[2])
+    if LURE_CORRIDOR.in_corridor(along, lateral, wrap(start[2] - goal[2])):
+        return LURE_CORRIDOR.final_command(start, v, goal, vg)
     pre = GOTO.pre_pose(goal)
-    if GOTO.in_corridor(along, lateral, heading_error) or GOTO.final_arc(start, pre) is not None:
-        return GOTO.command(start, v, goal, vg, goto_path)
-    if LURE_CORRIDOR.in_corridor(along, lateral, heading_error):
-        return LURE_CORRIDOR.command(start, v, goal, vg, goto_path)
     path = goto_path(start, pre)
     if path.length - math.hypot(pre[0] - start[0], pre[1] - start[1]) <= MAX_DETOUR:
-        return GOTO.command(start, v, goal, vg, lambda _start, _pre: path)
+        return GOTO.path_command(path, v, vg)
     return lure_command(start, v, goal, vg)
