@@ -43,7 +43,7 @@ def _episodes(job: Job, problem: str, models: dict, indices: list[int], action: 
             if k == 0 or follow.action != action:  # the first action starts from the belief, not a subgoal
                 continue
             p = follow.values()
-            ball = {"guide": (p[0], p[1]), "goal": (p[4], p[5]), "none": None}[SCENARIOS[action].ball]
+            ball = SCENARIOS[action].ball_at((p[0], p[1]), (p[4], p[5]))
             sim = SoccerSim(seed + k - 1)
             sim.reset((p[0], p[1], p[2], p[3]), ball=ball)
             out.append(sim.run(ActionCall(action, tuple(float(v) for v in p[4:]))))

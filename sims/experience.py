@@ -48,6 +48,10 @@ class Scenario:
     vg_range: tuple[float, float]
     dist_range: tuple[float, float]
 
+    def ball_at(self, start: tuple[float, float], goal: tuple[float, float]) -> tuple[float, float] | None:
+        """Where the ball lies at the start of an episode from position `start` to `goal` (None: no ball)."""
+        return {"none": None, "goal": goal, "guide": start}[self.ball]
+
 
 SCENARIOS: dict[str, Scenario] = {
     # navigation without a ball: random start and goal poses anywhere on the field
@@ -78,7 +82,7 @@ def sample_task(scenario: Scenario, rng: np.random.Generator):
             break
     phi, phig = (float(a) for a in rng.uniform(-math.pi, math.pi, 2))
     v, vg = float(rng.uniform(*scenario.v_range)), float(rng.uniform(*scenario.vg_range))
-    ball = {"none": None, "goal": goal, "guide": start}[scenario.ball]
+    ball = scenario.ball_at(start, goal)
     return (start[0], start[1], phi, v), ball, ActionCall(scenario.action, (goal[0], goal[1], phig, vg))
 
 

@@ -98,14 +98,8 @@ class Follower:
         """[v, phidot] on the final straight (mode 1) or the final arc (mode 2); None elsewhere."""
         along, lateral = in_frame(goal, start[0], start[1])  # along < 0: behind the goal
         heading_error = wrap(start[2] - goal[2])
-        speed = max(0.0, v)
         if self.in_corridor(along, lateral, heading_error):
-            # a critically damped line follower whose settling length shrinks with the distance to the goal
-            gain = min(self.line_gain_max, 4.0 / max(-along, 1e-3))
-            curvature = clip(-gain * gain * lateral - 2.0 * gain * math.sin(heading_error), 1.0 / self.r_line)
-            v_target = min(profile_speed(-along, vg, self.v_top, self.decel_plan),
-                           self.w_plan / max(abs(curvature), 1e-6))
-            return self._limited(v_target, curvature * min(speed, v_target), v)
+            return self.line_command(along, lateral, heading_error, v, vg)
         arc = self.final_arc(start, self.pre_pose(goal))
         if arc is None:
             return None
@@ -113,7 +107,16 @@ class Follower:
         to_goal = to_go + self.final_straight
         v_target = max(min(self.w_plan * self.radius, profile_speed(to_goal, vg, self.v_top, self.decel_plan)),
                        self.v_creep)
-        return self._limited(v_target, side * speed / self.radius + K_TRACK * error, v)
+        return self.limited(v_target, side * max(0.0, v) / self.radius + K_TRACK * error, v)
+
+    def line_command(self, along: float, lateral: float, heading_error: float, v: float, vg: float
+                     ) -> tuple[float, float]:
+        """[v, phidot] onto the goal line from (along, lateral, heading error) in the goal frame: a critically
+        damped line follower whose settling length shrinks with the distance to the goal."""
+        gain = min(self.line_gain_max, 4.0 / max(-along, 1e-3))
+        curvature = clip(-gain * gain * lateral - 2.0 * gain * math.sin(heading_error), 1.0 / self.r_line)
+        v_target = min(profile_speed(-along, vg, self.v_top, self.decel_plan), self.w_plan / max(abs(curvature), 1e-6))
+        return self.limited(v_target, curvature * min(max(0.0, v), v_target), v)
 
     def command(self, start: Pose, v: float, goal: Pose, vg: float,
                 choose_path: Callable[[Pose, Pose], DubinsPath]) -> tuple[float, float]:
@@ -124,9 +127,9 @@ class Follower:
     def path_command(self, path: DubinsPath, v: float, vg: float) -> tuple[float, float]:
         """[v, phidot] along the first segment of `path`, a Dubins path from the axle to the pre-pose (mode 3)."""
         v_target, curvature = self._along_path(path, v, vg)
-        return self._limited(v_target, curvature * max(0.0, v), v)  # the actual speed: braking lags v_target
+        return self.limited(v_target, curvature * max(0.0, v), v)  # the actual speed: braking lags v_target
 
-    def _limited(self, v_target: float, w: float, v: float) -> tuple[float, float]:
+    def limited(self, v_target: float, w: float, v: float) -> tuple[float, float]:
         """The command within the braking bound (per control period) and the rotational limit."""
         return max(v_target, v - self.decel_limit * self.control_period, 0.0), clip(w, self.w_limit)
 

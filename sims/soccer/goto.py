@@ -61,18 +61,20 @@ def goto_path(start: Pose, pre: Pose) -> DubinsPath:
     return shortest_path_inside(start, pre, R_APPROACH, GOTO.box)
 
 
-def lure_point(start: Pose, goal: Pose) -> tuple[float, float]:
-    """The IP: on the goal line behind the goal, nearer the goal the nearer the robot comes from behind."""
-    along, _ = in_frame(goal, start[0], start[1])
+def lure_point(start: Pose, goal: Pose, along: float | None = None) -> tuple[float, float]:
+    """The IP: on the goal line behind the goal, nearer the goal the nearer the robot comes from behind
+    (`along`: the robot's coordinate along the goal heading, if the caller has it)."""
+    if along is None:
+        along = in_frame(goal, start[0], start[1])[0]
     d = min(LURE_MAX, LURE_MIN + LURE_GAIN * max(0.0, -along))
     box = GOTO.box
     return (min(box[1], max(box[0], goal[0] - d * math.cos(goal[2]))),
             min(box[3], max(box[2], goal[1] - d * math.sin(goal[2]))))
 
 
-def lure_command(start: Pose, v: float, goal: Pose, vg: float) -> tuple[float, float]:
+def lure_command(start: Pose, v: float, goal: Pose, vg: float, along: float) -> tuple[float, float]:
     """[v, phidot] heading the axle for the IP: slower the more it must turn, on the spot if it lies behind."""
-    ix, iy = lure_point(start, goal)
+    ix, iy = lure_point(start, goal, along)
     bearing_error = wrap(math.atan2(iy - start[1], ix - start[0]) - start[2])
     rest = math.hypot(ix - start[0], iy - start[1]) + math.hypot(goal[0] - ix, goal[1] - iy)
     v_target = profile_speed(rest, vg, GOTO.v_top, GOTO.decel_plan)
@@ -80,8 +82,7 @@ def lure_command(start: Pose, v: float, goal: Pose, vg: float) -> tuple[float, f
         v_target = min(v_target, max(V_CREEP, GOTO.v_top * math.cos(bearing_error)))
     else:
         v_target = V_CREEP
-    v_cmd = max(v_target, v - GOTO.decel_limit * GOTO.control_period, 0.0)
-    return v_cmd, clip(K_LURE * bearing_error, W_LURE)
+    return GOTO.limited(v_target, clip(K_LURE * bearing_error, W_LURE), v)  # W_LURE < GOTO.w_limit
 
 
 def goToPose(x: float, y: float, phi: float, v: float, xg: float, yg: float, phig: float, vg: float
@@ -93,10 +94,11 @@ def goToPose(x: float, y: float, phi: float, v: float, xg: float, yg: float, phi
     if final is not None:
         return final
     along, lateral = in_frame(goal, start[0], start[1])
-    if LURE_CORRIDOR.in_corridor(along, lateral, wrap(start[2] - goal[2])):
-        return LURE_CORRIDOR.final_command(start, v, goal, vg)
+    heading_error = wrap(start[2] - goal[2])
+    if LURE_CORRIDOR.in_corridor(along, lateral, heading_error):
+        return LURE_CORRIDOR.line_command(along, lateral, heading_error, v, vg)
     pre = GOTO.pre_pose(goal)
     path = goto_path(start, pre)
     if path.length - math.hypot(pre[0] - start[0], pre[1] - start[1]) <= MAX_DETOUR:
         return GOTO.path_command(path, v, vg)
-    return lure_command(start, v, goal, vg)
+    return lure_command(start, v, goal, vg, along)
