@@ -1,9 +1,9 @@
 """PDDL in, a validated partial-order plan with causal links out (Sec. 5.2 of the dissertation)."""
 
-from planner_bridge.abstract_plan import GOAL, INITIAL, AbstractPlan, CausalLink, Step
-from planner_bridge.bridge import DEFAULT_PLANNER, plan_files, plan_here
-from planner_bridge.bundled import bundled_domains, bundled_problems, resolve_problem
-from planner_bridge.errors import (
+from tailor.planner_bridge.abstract_plan import GOAL, INITIAL, AbstractPlan, CausalLink, Step
+from tailor.planner_bridge.bridge import DEFAULT_PLANNER, plan_files, plan_here
+from tailor.planner_bridge.bundled import bundled_domains, bundled_problems, resolve_problem
+from tailor.planner_bridge.errors import (
     InputFileError,
     NoPlanError,
     PDDLSemanticError,
@@ -12,7 +12,7 @@ from planner_bridge.errors import (
     PlannerTimeoutError,
     PlannerUnavailableError,
 )
-from planner_bridge.text import render_text
+from tailor.planner_bridge.text import render_text
 
 __all__ = [
     "GOAL",

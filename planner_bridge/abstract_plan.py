@@ -51,7 +51,7 @@ class AbstractPlan:
 
     def to_text(self) -> str:
         """The VHPOP-like text rendering of Fig. 5.6 (see planner_bridge.text)."""
-        from planner_bridge.text import render_text
+        from tailor.planner_bridge.text import render_text
 
         return render_text(self)
 

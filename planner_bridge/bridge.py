@@ -5,10 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Callable
 
-from planner_bridge.abstract_plan import AbstractPlan
-from planner_bridge.causal import partial_order
-from planner_bridge.reading import check_files, read_problem
-from planner_bridge.solving import solve
+from tailor.planner_bridge.abstract_plan import AbstractPlan
+from tailor.planner_bridge.causal import partial_order
+from tailor.planner_bridge.reading import check_files, read_problem
+from tailor.planner_bridge.solving import solve
 
 DEFAULT_PLANNER = "pyperplan"
 
@@ -22,7 +22,7 @@ def plan_files(
     Raises the errors of planner_bridge.errors: InputFileError, PDDLSyntaxError, PDDLSemanticError, NoPlanError,
     PlannerTimeoutError, PlannerUnavailableError (and PlannerError itself for an engine's failure).
     """
-    from planner_bridge.worker import plan_in_worker
+    from tailor.planner_bridge.worker import plan_in_worker
 
     if timeout is not None and not timeout > 0:
         raise ValueError(f"the timeout must be positive, not {timeout}")

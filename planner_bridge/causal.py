@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from planner_bridge.abstract_plan import GOAL, INITIAL, CausalLink, Step
+from tailor.planner_bridge.abstract_plan import GOAL, INITIAL, CausalLink, Step
 
 Fact = tuple[str, ...]
 

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from planner_bridge.errors import PDDLSemanticError, PDDLSyntaxError
-from planner_bridge.sexpr import Expr, SList, Symbol
+from tailor.planner_bridge.errors import PDDLSemanticError, PDDLSyntaxError
+from tailor.planner_bridge.sexpr import Expr, SList, Symbol
 
 CONNECTIVES = {"and", "or", "not", "imply"}
 QUANTIFIERS = {"forall", "exists"}

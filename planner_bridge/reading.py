@@ -6,9 +6,9 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from planner_bridge.errors import InputFileError, PDDLSemanticError, PDDLSyntaxError, PlannerError
-from planner_bridge.lint import check_domain, check_problem
-from planner_bridge.sexpr import read_sexpr
+from tailor.planner_bridge.errors import InputFileError, PDDLSemanticError, PDDLSyntaxError, PlannerError
+from tailor.planner_bridge.lint import check_domain, check_problem
+from tailor.planner_bridge.sexpr import read_sexpr
 
 # unified-planning's reader reports places as "line: 16, col 38" or "line: 15, col: 18"; pyparsing as "line:19, col:3".
 _UP_PLACE = re.compile(r"line:\s*(\d+),\s*col:?\s*(\d+)")

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Union
 
-from planner_bridge.errors import PDDLSyntaxError
+from tailor.planner_bridge.errors import PDDLSyntaxError
 
 
 @dataclass(frozen=True)

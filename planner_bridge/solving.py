@@ -12,7 +12,7 @@ import io
 import warnings
 from typing import Callable
 
-from planner_bridge.errors import NoPlanError, PlannerError, PlannerTimeoutError, PlannerUnavailableError
+from tailor.planner_bridge.errors import NoPlanError, PlannerError, PlannerTimeoutError, PlannerUnavailableError
 
 # Compilations tried, in this order, until the engine supports what is left of the problem.
 REMOVALS = (

@@ -3,7 +3,7 @@ it, then the goal's links, then the ordering constraints of the partial order.""
 
 from __future__ import annotations
 
-from planner_bridge.abstract_plan import GOAL, INITIAL, AbstractPlan
+from tailor.planner_bridge.abstract_plan import GOAL, INITIAL, AbstractPlan
 
 LINK_INDENT = "    "
 

@@ -22,8 +22,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from planner_bridge import errors
-from planner_bridge.abstract_plan import AbstractPlan
+from tailor.planner_bridge import errors
+from tailor.planner_bridge.abstract_plan import AbstractPlan
 
 HASH_SEED = "0"  # fixed string hashing in the child: the engines' set iteration order, hence the plan, is fixed
 KILL_WAIT_S = 5.0  # how long to wait for a killed child to go away
@@ -61,7 +61,7 @@ def _child_main() -> int:
         answer.flush()
 
     request = json.loads(sys.stdin.readline())
-    from planner_bridge.bridge import plan_here
+    from tailor.planner_bridge.bridge import plan_here
 
     try:
         plan = plan_here(request["domain"], request["problem"], request["planner"], lambda: send({"event": "searching"}))
@@ -97,7 +97,7 @@ def plan_in_worker(domain: Path, problem: Path, planner: str, timeout: float | N
     request = {"domain": str(domain), "problem": str(problem), "planner": planner}
     with tempfile.TemporaryFile() as stderr:
         child = subprocess.Popen(
-            [sys.executable, "-m", "planner_bridge.worker"],
+            [sys.executable, "-m", "tailor.planner_bridge.worker"],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=stderr, env=env, text=True,
         )
         try:

@@ -16,28 +16,28 @@ from __future__ import annotations
 
 import importlib
 
-from refinement.dispatch import dispatch as dispatch
-from refinement.instantiate import instantiate as instantiate
-from refinement.refine import refine as refine
+from tailor.refinement.dispatch import dispatch as dispatch
+from tailor.refinement.instantiate import instantiate as instantiate
+from tailor.refinement.refine import refine as refine
 
 _EXPORTS = {
-    "load_domain_binding": "refinement.binding",
-    "load_binding": "refinement.binding",
-    "BeliefState": "refinement.belief",
-    "load_belief": "refinement.belief",
-    "parse_belief": "refinement.belief",
-    "belief_path_for": "refinement.belief",
-    "ActionSequence": "refinement.action_sequence",
-    "ExecutableAction": "refinement.action_sequence",
-    "Parameter": "refinement.action_sequence",
-    "ActionModel": "refinement.action_models",
-    "load_action_models": "refinement.action_models",
-    "load_collision_model": "refinement.action_models",
-    "ModelTree": "refinement.model_tree",
-    "RefinedSequence": "refinement.refine",
-    "OPTIMIZERS": "refinement.optimizers",
-    "optimize": "refinement.optimizers",
-    "TailorError": "refinement.errors",
+    "load_domain_binding": "tailor.refinement.binding",
+    "load_binding": "tailor.refinement.binding",
+    "BeliefState": "tailor.refinement.belief",
+    "load_belief": "tailor.refinement.belief",
+    "parse_belief": "tailor.refinement.belief",
+    "belief_path_for": "tailor.refinement.belief",
+    "ActionSequence": "tailor.refinement.action_sequence",
+    "ExecutableAction": "tailor.refinement.action_sequence",
+    "Parameter": "tailor.refinement.action_sequence",
+    "ActionModel": "tailor.refinement.models.action_models",
+    "load_action_models": "tailor.refinement.models.action_models",
+    "load_collision_model": "tailor.refinement.models.action_models",
+    "ModelTree": "tailor.refinement.models.model_tree",
+    "RefinedSequence": "tailor.refinement.refine",
+    "OPTIMIZERS": "tailor.refinement.optimizers",
+    "optimize": "tailor.refinement.optimizers",
+    "TailorError": "tailor.refinement.errors",
 }
 
 __all__ = sorted([*_EXPORTS, "dispatch", "instantiate", "refine"])

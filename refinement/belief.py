@@ -18,8 +18,8 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from refinement.binding import QUANTITIES, read_toml
-from refinement.errors import BeliefError
+from tailor.refinement.binding import QUANTITIES, read_toml
+from tailor.refinement.errors import BeliefError
 
 SCHEMA = 1
 BELIEF_SUFFIX = ".toml"

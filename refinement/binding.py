@@ -17,8 +17,8 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from refinement.errors import BindingError, TailorError
-from sims import ACTIONS, ActionSpec
+from tailor.refinement.errors import BindingError, TailorError
+from tailor.sims import ACTIONS, ActionSpec
 
 SCHEMA = 1
 BINDING_FILE = "actions.toml"

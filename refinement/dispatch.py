@@ -2,15 +2,15 @@
 
 from __future__ import annotations
 
-from sims import ACTIONS
-from sims.episode import ActionCall, SequenceResult
+from tailor.sims import ACTIONS
+from tailor.sims.episode import ActionCall, SequenceResult
 
-from refinement.action_sequence import ActionSequence
-from refinement.errors import TailorError
+from tailor.refinement.action_sequence import ActionSequence
+from tailor.refinement.errors import TailorError
 
 
 def _soccer(robot, ball, calls, seed, noise):
-    from sims.soccer import simulate_sequence
+    from tailor.sims.soccer import simulate_sequence
 
     return simulate_sequence(robot=robot, ball=ball, calls=calls, seed=seed, noise=noise)
 

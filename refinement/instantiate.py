@@ -13,11 +13,11 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
 
-from planner_bridge.abstract_plan import INITIAL, AbstractPlan
-from refinement.action_sequence import RANGE_TOLERANCE, ActionSequence, ExecutableAction, Parameter
-from refinement.belief import BeliefState
-from refinement.binding import DEFAULT_TYPE, GROUPS, Binding, PredicateBinding
-from refinement.errors import BindingError, EmptyRangeError
+from tailor.planner_bridge.abstract_plan import INITIAL, AbstractPlan
+from tailor.refinement.action_sequence import RANGE_TOLERANCE, ActionSequence, ExecutableAction, Parameter
+from tailor.refinement.belief import BeliefState
+from tailor.refinement.binding import DEFAULT_TYPE, GROUPS, Binding, PredicateBinding
+from tailor.refinement.errors import BindingError, EmptyRangeError
 
 ObjectTypes = Mapping[str, "str | Sequence[str]"]  # object -> its type, or its type and ancestors
 

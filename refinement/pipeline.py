@@ -8,18 +8,18 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from planner_bridge import DEFAULT_PLANNER, AbstractPlan, plan_files, resolve_problem
-from planner_bridge.reading import read_problem
-from sims.episode import SequenceResult
+from tailor.planner_bridge import DEFAULT_PLANNER, AbstractPlan, plan_files, resolve_problem
+from tailor.planner_bridge.reading import read_problem
+from tailor.sims.episode import SequenceResult
 
-from refinement.action_models import ActionModel, load_action_models
-from refinement.action_sequence import ActionSequence
-from refinement.belief import BeliefState, belief_path_for, load_belief
-from refinement.binding import BINDING_FILE, Binding, load_domain_binding
-from refinement.dispatch import dispatch
-from refinement.errors import BindingError, ModelFileError
-from refinement.instantiate import instantiate
-from refinement.refine import RefinedSequence, refine
+from tailor.refinement.models.action_models import ActionModel, load_action_models
+from tailor.refinement.action_sequence import ActionSequence
+from tailor.refinement.belief import BeliefState, belief_path_for, load_belief
+from tailor.refinement.binding import BINDING_FILE, Binding, load_domain_binding
+from tailor.refinement.dispatch import dispatch
+from tailor.refinement.errors import BindingError, ModelFileError
+from tailor.refinement.instantiate import instantiate
+from tailor.refinement.refine import RefinedSequence, refine
 
 MODELS_DIR = "models"
 GREEDY_HORIZON = 1

@@ -13,12 +13,12 @@ from typing import TYPE_CHECKING, Mapping
 
 import numpy as np
 
-from refinement.action_sequence import ActionSequence, ExecutableAction
-from refinement.errors import ModelFileError
-from refinement.optimizers import FreeParameter, Objective, OptimizationResult, Term, optimize
+from tailor.refinement.action_sequence import ActionSequence, ExecutableAction
+from tailor.refinement.errors import ModelFileError
+from tailor.refinement.optimizers import FreeParameter, Objective, OptimizationResult, Term, optimize
 
 if TYPE_CHECKING:  # the models' module imports scikit-learn; refining needs only their methods
-    from refinement.action_models import ActionModel
+    from tailor.refinement.models.action_models import ActionModel
 
 
 @dataclass(frozen=True)

@@ -1,17 +1,3 @@
-"""Errors of the simulators (sims never imports refinement, so it has its own base class)."""
+"""Errors of the simulators (defined with the project's one base in `tailor.errors`)."""
 
-from __future__ import annotations
-
-
-class SimError(Exception):
-    """Invalid simulator input: an unknown action, a state or parameter outside the world."""
-
-    exit_code = 15
-
-    def __init__(self, message: str, file: str | None = None):
-        super().__init__(message)
-        self.message = message
-        self.file = file
-
-    def __str__(self) -> str:
-        return f"{self.file}: {self.message}" if self.file else self.message
+from tailor.errors import SimError  # noqa: F401

@@ -18,10 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
-from sims.episode import ActionCall, Episode
-from sims.errors import SimError
-from sims.soccer.simulator import Noise, SoccerSim
-from sims.soccer.world import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, V_MAX
+from tailor.sims.episode import ActionCall, Episode
+from tailor.sims.errors import SimError
+from tailor.sims.soccer.simulator import Noise, SoccerSim
+from tailor.sims.soccer.world import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, V_MAX
 
 SCHEMA = 1  # version of the .npz episode file
 FIELD_MARGIN = 0.5  # m, start and goal positions keep this distance to the field lines
@@ -111,7 +111,7 @@ def sample_chain(rng: np.random.Generator):
 
 def run_chain(seed: int, noise: Noise | None = None):
     """One random approachBall -> dribbleBall chain (sample_chain), dispatched without stopping."""
-    from sims.soccer.simulator import simulate_sequence
+    from tailor.sims.soccer.simulator import simulate_sequence
 
     robot, ball, calls = sample_chain(np.random.default_rng((seed, _SAMPLING_STREAM)))
     return simulate_sequence(robot, ball, calls, seed, noise)

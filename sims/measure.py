@@ -18,9 +18,9 @@ import math
 
 import numpy as np
 
-from sims.episode import ActionCall
-from sims.experience import SCENARIOS, episode_seeds, run_chain, run_episode
-from sims.soccer.simulator import SoccerSim
+from tailor.sims.episode import ActionCall
+from tailor.sims.experience import SCENARIOS, episode_seeds, run_chain, run_episode
+from tailor.sims.soccer.simulator import SoccerSim
 
 # (robot start, ball, call) per action for `spread`: a parameterization with a turn at the start
 SPREAD_CASES = {

@@ -40,7 +40,7 @@ def golden_path(domain: str, problem: str, suffix: str) -> Path:
 
 def tailor_plan_output(domain: str, problem: str, extra: list[str]) -> str:
     """What `tailor plan DOMAIN PROBLEM [extra]` prints on stdout (run in this process)."""
-    from refinement.cli import main
+    from tailor.refinement.cli.main import main
 
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
@@ -72,7 +72,7 @@ def tailor_refine_output(domain: str, problem: str) -> str:
     """What `tailor refine DOMAIN PROBLEM --simulate --json --seed 0` prints, timings removed."""
     import json
 
-    from refinement.cli import main
+    from tailor.refinement.cli.main import main
 
     out = io.StringIO()
     with contextlib.redirect_stdout(out):

@@ -11,8 +11,8 @@ import math
 
 import numpy as np
 
-from refinement.features import norm
-from sims.episode import Episode
+from tailor.refinement.models.features import norm
+from tailor.sims.episode import Episode
 
 SPEED = 0.8  # m/s
 TURN_RATE = 2.0  # rad/s

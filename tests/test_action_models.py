@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from sklearn.tree import DecisionTreeClassifier
 
-from refinement.action_models import (
+from tailor.refinement.models.action_models import (
     ACTION_MODEL_SCHEMA,
     ActionModel,
     CollisionModel,
@@ -17,10 +17,10 @@ from refinement.action_models import (
     load_collision_model,
     write_json_atomic,
 )
-from refinement.collision import tree_arrays
-from refinement.errors import ModelFileError
-from refinement.features import compute_features, feature_names
-from refinement.model_tree import ModelTree
+from tailor.refinement.learning.classifiers import tree_arrays
+from tailor.refinement.errors import ModelFileError
+from tailor.refinement.models.features import compute_features, feature_names
+from tailor.refinement.models.model_tree import ModelTree
 from synthetic_episodes import random_params, synthetic_duration
 
 
@@ -72,7 +72,7 @@ def test_collision_tree_arrays_predict_like_scikit_learn(collision_model):
 
 
 def test_simplified_tree_merges_leaves_that_agree():
-    from refinement.decision_tree import DecisionTree
+    from tailor.refinement.models.decision_tree import DecisionTree
 
     # 0: dist <= 2 ? 1 : 4;  1: v <= 0.5 ? 2 (Fail) : 3 (Fail);  4: angle_at <= 0 ? 5 (Success) : 6
     # 6: v <= 0.2 ? 7 (Success) : 8 (Success)
@@ -116,7 +116,7 @@ def test_collision_model_json_round_trip(collision_model, tmp_path):
 
 
 def test_rules_text_of_a_hand_built_tree():
-    from refinement.decision_tree import DecisionTree
+    from tailor.refinement.models.decision_tree import DecisionTree
 
     tree = DecisionTree(children_left=np.array([1, -1, 3, -1, -1]), children_right=np.array([2, -1, 4, -1, -1]),
                         feature=np.array([4, -1, 2, -1, -1]), threshold=np.array([-1.0, 0, 2.5, 0, 0]),

@@ -8,11 +8,11 @@ from pathlib import Path
 
 import pytest
 
-from planner_bridge.abstract_plan import AbstractPlan
-from refinement.belief import belief_path_for, load_belief
-from refinement.binding import load_domain_binding
-from refinement.errors import BeliefError
-from refinement.instantiate import instantiate
+from tailor.planner_bridge.abstract_plan import AbstractPlan
+from tailor.refinement.belief import belief_path_for, load_belief
+from tailor.refinement.binding import load_domain_binding
+from tailor.refinement.errors import BeliefError
+from tailor.refinement.instantiate import instantiate
 
 SOCCER = Path(__file__).resolve().parents[1] / "domains" / "soccer"
 FIXTURES = Path(__file__).parent / "fixtures" / "binding"

@@ -8,11 +8,11 @@ from pathlib import Path
 
 import pytest
 
-from planner_bridge.abstract_plan import AbstractPlan, CausalLink, Step
-from refinement.belief import belief_path_for, load_belief
-from refinement.binding import load_binding, load_domain_binding
-from refinement.errors import BindingError
-from refinement.instantiate import instantiate
+from tailor.planner_bridge.abstract_plan import AbstractPlan, CausalLink, Step
+from tailor.refinement.belief import belief_path_for, load_belief
+from tailor.refinement.binding import load_binding, load_domain_binding
+from tailor.refinement.errors import BindingError
+from tailor.refinement.instantiate import instantiate
 
 SOCCER = Path(__file__).resolve().parents[1] / "domains" / "soccer"
 

@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from refinement.cli import main
-from refinement.evaluation import summarize_score, summarize_waypoints
+from tailor.refinement.cli.main import main
+from tailor.refinement.evaluation.experiments import summarize_score, summarize_waypoints
 
 
 def _row(greedy, refined, oracle=None, ok=(True, True)):

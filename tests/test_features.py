@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from refinement.errors import DataError
-from refinement.features import (
+from tailor.refinement.errors import DataError
+from tailor.refinement.models.features import (
     FEATURE_SETS,
     compute_features,
     feature_names,
@@ -16,7 +16,7 @@ from refinement.features import (
     intermediate_examples,
     norm,
 )
-from sims.episode import Episode
+from tailor.sims.episode import Episode
 from synthetic_episodes import random_params
 
 PI = math.pi

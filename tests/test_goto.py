@@ -6,11 +6,11 @@ import math
 import numpy as np
 import pytest
 
-from sims.episode import ActionCall
-from sims.soccer import Noise, SoccerSim, simulate_sequence
-from sims.soccer.control import axle_pose
-from sims.soccer.goto import LURE_GAIN, LURE_MIN, V_CREEP, W_LURE, goToPose, lure_point
-from sims.soccer.world import BALL_POINT_OFFSET
+from tailor.sims.episode import ActionCall
+from tailor.sims.soccer import Noise, SoccerSim, simulate_sequence
+from tailor.sims.soccer.control import axle_pose
+from tailor.sims.soccer.goto import LURE_GAIN, LURE_MIN, V_CREEP, W_LURE, goToPose, lure_point
+from tailor.sims.soccer.world import BALL_POINT_OFFSET
 
 GOAL = (0.0, 0.0, 0.0, 0.0)  # ball point at the origin, heading +x, arriving at rest
 

@@ -9,12 +9,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner_bridge.abstract_plan import AbstractPlan, CausalLink, Step
-from refinement.action_sequence import ActionSequence, ExecutableAction, Parameter
-from refinement.belief import load_belief, parse_belief
-from refinement.binding import load_domain_binding, parse_binding
-from refinement.errors import BeliefError, BindingError, EmptyRangeError, TailorError
-from refinement.instantiate import instantiate
+from tailor.planner_bridge.abstract_plan import AbstractPlan, CausalLink, Step
+from tailor.refinement.action_sequence import ActionSequence, ExecutableAction, Parameter
+from tailor.refinement.belief import load_belief, parse_belief
+from tailor.refinement.binding import load_domain_binding, parse_binding
+from tailor.refinement.errors import BeliefError, BindingError, EmptyRangeError, TailorError
+from tailor.refinement.instantiate import instantiate
 
 ROOT = Path(__file__).resolve().parents[1]
 SOCCER = ROOT / "domains" / "soccer"

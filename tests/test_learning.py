@@ -9,10 +9,10 @@ import pytest
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.linear_model import LinearRegression
 
-from refinement.collision import FAIL, SUCCESS, confusion, labels, train_collision_model
-from refinement.errors import DataError
-from refinement.features import compute_features, feature_names, first_examples, intermediate_examples
-from refinement.learning import held_out_mae, split_episodes, train_duration_model
+from tailor.refinement.learning.classifiers import FAIL, SUCCESS, confusion, labels, train_collision_model
+from tailor.refinement.errors import DataError
+from tailor.refinement.models.features import compute_features, feature_names, first_examples, intermediate_examples
+from tailor.refinement.learning.protocol import held_out_mae, split_episodes, train_duration_model
 from synthetic_episodes import gather
 
 
@@ -226,7 +226,7 @@ def test_n_i_whose_capped_tree_wins_is_chosen_with_its_leaf_size():
 
 
 def test_collision_region_grid_faces_the_goal_and_matches_the_features():
-    from refinement.learning_plots import REGION_SAMPLES, region_params
+    from tailor.refinement.learning.plots import REGION_SAMPLES, region_params
 
     x, y, params = region_params(0.0)
     assert x.shape == (REGION_SAMPLES, REGION_SAMPLES)

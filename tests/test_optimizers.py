@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from refinement.errors import EmptyRangeError, TailorError
-from refinement.optimizers import OPTIMIZERS, FreeParameter, Objective, Term, brute_force, optimize
-from refinement.optimizers.synthetic import random_objective, soccer_like
+from tailor.refinement.errors import EmptyRangeError, TailorError
+from tailor.refinement.optimizers import OPTIMIZERS, FreeParameter, Objective, Term, brute_force, optimize
+from tailor.refinement.optimizers.synthetic import random_objective, soccer_like
 
 
 def test_registry_names():

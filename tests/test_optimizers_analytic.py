@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from refinement.optimizers import FreeParameter, Objective, Term, brute_force, optimize
-from refinement.optimizers.analytic import merge, term_boxes
-from refinement.optimizers.structure import detect
-from refinement.optimizers.synthetic import FeatureMap, feature_function, random_objective, wrap
-from refinement.rules import Rule
+from tailor.refinement.optimizers import FreeParameter, Objective, Term, brute_force, optimize
+from tailor.refinement.optimizers.analytic import merge, term_boxes
+from tailor.refinement.optimizers.structure import detect
+from tailor.refinement.optimizers.synthetic import FeatureMap, feature_function, random_objective, wrap
+from tailor.refinement.models.rules import Rule
 
 INF = np.inf
 GRID = {1: 4001, 2: 401, 3: 61}

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from deap import tools
 
-from refinement.optimizers import Objective, Term, brute_force, optimize
-from refinement.optimizers import genetic
-from refinement.optimizers.synthetic import random_objective, wrap
+from tailor.refinement.optimizers import Objective, Term, brute_force, optimize
+from tailor.refinement.optimizers import genetic
+from tailor.refinement.optimizers.synthetic import random_objective, wrap
 
 
 

@@ -9,11 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from planner_bridge import AbstractPlan, InputFileError, render_text, resolve_problem
-from refinement.cli import main
+from tailor.planner_bridge import AbstractPlan, InputFileError, render_text, resolve_problem
+from tailor.refinement.cli.main import main
 
-sys.path.insert(0, str(Path(__file__).parent))
-from regenerate_golden import ROOT, bundled_pairs, golden_path  # noqa: E402
+from regenerate_golden import ROOT, bundled_pairs, golden_path
 
 # Fig. 5.6 of the dissertation, with our step ids (1..n in sequence; VHPOP numbers steps backwards).
 FIG_5_6_LINKS = [

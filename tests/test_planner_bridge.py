@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner_bridge import GOAL, INITIAL, AbstractPlan, plan_files, plan_here, render_text
+from tailor.planner_bridge import GOAL, INITIAL, AbstractPlan, plan_files, plan_here, render_text
 
 FIXTURES = Path(__file__).parent / "fixtures" / "pddl"
 CLASSIC = [

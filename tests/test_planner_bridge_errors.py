@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from planner_bridge import errors
-from refinement.cli import main
+from tailor.planner_bridge import errors
+from tailor.refinement.cli.main import main
 
 BAD = Path(__file__).parent / "fixtures" / "pddl" / "bad"
 DOMAIN, PROBLEM = BAD / "domain.pddl", BAD / "problem.pddl"

@@ -12,14 +12,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner_bridge import AbstractPlan
-from refinement.action_models import ActionModel
-from refinement.belief import parse_belief
-from refinement.binding import load_domain_binding
-from refinement.features import compute_features, feature_names
-from refinement.instantiate import instantiate
-from refinement.model_tree import ModelTree
-from refinement.refine import refine
+from tailor.planner_bridge import AbstractPlan
+from tailor.refinement.models.action_models import ActionModel
+from tailor.refinement.belief import parse_belief
+from tailor.refinement.binding import load_domain_binding
+from tailor.refinement.models.features import compute_features, feature_names
+from tailor.refinement.instantiate import instantiate
+from tailor.refinement.models.model_tree import ModelTree
+from tailor.refinement.refine import refine
 
 ROOT = Path(__file__).resolve().parent.parent
 FIXTURES = Path(__file__).resolve().parent / "fixtures" / "binding"
@@ -115,7 +115,7 @@ def test_longer_horizons_fix_one_subgoal_per_window(models):
 
 
 def test_a_missing_model_is_a_one_line_error(models):
-    from refinement.errors import ModelFileError
+    from tailor.refinement.errors import ModelFileError
 
     sequence = _sequence("score_plan.json", SCORE)
     with pytest.raises(ModelFileError, match="no action model for executable action 'dribbleBall'"):

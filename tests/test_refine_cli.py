@@ -10,10 +10,9 @@ from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from regenerate_golden import refine_golden_path, refine_pairs, tailor_refine_output  # noqa: E402
+from regenerate_golden import refine_golden_path, refine_pairs, tailor_refine_output
 
-from refinement.cli import main  # noqa: E402
+from tailor.refinement.cli.main import main
 
 PAIRS = refine_pairs()
 
@@ -54,7 +53,7 @@ def test_refine_plot_writes_trajectories_and_polar_plot(tmp_path, capsys):
 
 
 def _tailor(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "refinement.cli", *args], capture_output=True, text=True)
+    return subprocess.run([sys.executable, "-m", "tailor.refinement.cli", *args], capture_output=True, text=True)
 
 
 def test_bad_belief_file_is_one_line_with_its_exit_status(tmp_path):

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from sims.soccer.dubins import (WORDS, all_paths, bounds, distance_to, sample, shortest_path,
+from tailor.sims.soccer.dubins import (WORDS, all_paths, bounds, distance_to, sample, shortest_path,
                                 shortest_path_inside)
 
 R = 0.5

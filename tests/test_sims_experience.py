@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from sims.errors import SimError
-from sims.experience import gather, load_episodes, save_episodes
+from tailor.sims.errors import SimError
+from tailor.sims.experience import gather, load_episodes, save_episodes
 
 
 def _same(a, b):

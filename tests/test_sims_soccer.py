@@ -5,12 +5,12 @@ import math
 import numpy as np
 import pytest
 
-from sims.episode import ActionCall
-from sims.errors import SimError
-from sims.experience import SCENARIOS, episode_seeds, run_chain, run_episode
-from sims.soccer import Noise, SoccerSim, simulate_sequence
-from sims.soccer import world as W
-from sims.soccer.simulator import CONTROL_HZ, DT, LOG_HZ, STEPS_PER_CONTROL
+from tailor.sims.episode import ActionCall
+from tailor.sims.errors import SimError
+from tailor.sims.experience import SCENARIOS, episode_seeds, run_chain, run_episode
+from tailor.sims.soccer import Noise, SoccerSim, simulate_sequence
+from tailor.sims.soccer import world as W
+from tailor.sims.soccer.simulator import CONTROL_HZ, DT, LOG_HZ, STEPS_PER_CONTROL
 
 
 def test_rolling_ball_stops_after_v0_squared_over_two_mu_g():
@@ -123,7 +123,7 @@ def _dribble_duration(phi, seed=0):
 
 def test_dribble_duration_grows_with_the_turn_needed_at_the_start():
     # facing the goal: 3 m straight; facing away: first a U-turn at W_DRIBBLE (pi / W_DRIBBLE = 5.2 s)
-    from sims.soccer.dribble import W_DRIBBLE
+    from tailor.sims.soccer.dribble import W_DRIBBLE
 
     ahead, side, away = (_dribble_duration(phi) for phi in (0.0, math.pi / 2, math.pi))
     assert ahead < side < away
@@ -146,7 +146,7 @@ def _turn_holds_ball(v, w, seconds=6.0):
 
 
 def test_guide_holds_the_dribble_turn_rate_but_not_a_sharper_turn():
-    from sims.soccer.dribble import R_DRIBBLE, W_DRIBBLE, W_HOLD
+    from tailor.sims.soccer.dribble import R_DRIBBLE, W_DRIBBLE, W_HOLD
 
     assert _turn_holds_ball(W_DRIBBLE * R_DRIBBLE, W_DRIBBLE)  # the arcs dribbleBall drives
     assert _turn_holds_ball(0.3, W_HOLD)  # its largest rotational command, at a low speed

@@ -6,10 +6,10 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from planner_bridge.bundled import DOMAINS_DIR
-from refinement import training
-from refinement.action_models import load_action_models
-from refinement.subgoal_experience import gather_subgoal_experience
+from tailor.planner_bridge.bundled import DOMAINS_DIR
+from tailor.refinement.learning import training
+from tailor.refinement.models.action_models import load_action_models
+from tailor.refinement.learning.subgoal_experience import gather_subgoal_experience
 
 
 def test_consecutive_ranges_continue_one_stream_of_situations():
@@ -46,8 +46,8 @@ def test_each_round_chooses_subgoals_with_the_model_the_round_before_retrained(m
         trained.append(model)
         return SimpleNamespace(model=model)
 
-    monkeypatch.setattr("refinement.subgoal_experience.gather_subgoal_experience", gather)
-    monkeypatch.setattr("refinement.subgoal_experience.subgoal_job", lambda domain, problem, seed: "job")
+    monkeypatch.setattr("tailor.refinement.learning.subgoal_experience.gather_subgoal_experience", gather)
+    monkeypatch.setattr("tailor.refinement.learning.subgoal_experience.subgoal_job", lambda domain, problem, seed: "job")
     monkeypatch.setattr(training, "train_duration_model", train)
     chain = training.TRAINING_DOMAINS["soccer"].subgoal_experience[0]
     models = {"dribbleBall": "first model"}

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import synthetic_episodes
-from refinement.action_models import load_action_models, load_collision_model
-from refinement.cli import main
-from refinement.features import compute_features
+from tailor.refinement.models.action_models import load_action_models, load_collision_model
+from tailor.refinement.cli.main import main
+from tailor.refinement.models.features import compute_features
 from synthetic_episodes import random_params
 
 EXPECTED_FILES = {
@@ -68,7 +68,7 @@ def test_train_soccer_end_to_end_in_the_simulator(tmp_path, capsys):
 
 
 def test_train_is_reproducible_and_prints_the_table(tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr("sims.experience.gather", synthetic_episodes.gather)
+    monkeypatch.setattr("tailor.sims.experience.gather", synthetic_episodes.gather)
     args = ["train", "soccer", "--episodes", "24", "--fresh-episodes", "20", "--n-i", "1,3", "--out"]
     assert main([*args, str(tmp_path / "a")]) == 0
     printed = capsys.readouterr().out
@@ -98,14 +98,14 @@ def test_bad_numbers_are_one_line(argv, message, capsys, tmp_path):
 
 
 def test_interrupt_while_writing_leaves_nothing_half_written(tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr("sims.experience.gather", synthetic_episodes.gather)
+    monkeypatch.setattr("tailor.sims.experience.gather", synthetic_episodes.gather)
     (tmp_path / "models").mkdir()
     (tmp_path / "models" / "goToPose.json").write_text("old")
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("refinement.learning_plots.plot_angle_at", interrupted)  # the last file staged
+    monkeypatch.setattr("tailor.refinement.learning.plots.plot_angle_at", interrupted)  # the last file staged
     code = main(["train", "soccer", "--episodes", "24", "--fresh-episodes", "20", "--n-i", "1", "--out", str(tmp_path)])
     assert code == 130
     assert capsys.readouterr().err.strip().endswith("tailor train: interrupted")

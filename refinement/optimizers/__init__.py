@@ -13,16 +13,16 @@ from typing import Callable
 
 import numpy as np
 
-from refinement.errors import EmptyRangeError, TailorError
-from refinement.optimizers import analytic, genetic, sampling
-from refinement.optimizers.objective import (
+from tailor.refinement.errors import EmptyRangeError, TailorError
+from tailor.refinement.optimizers import analytic, genetic, sampling
+from tailor.refinement.optimizers.objective import (
     FreeParameter,
     Objective,
     OptimizationResult,
     Term,
     brute_force,
 )
-from refinement.optimizers.structure import NotApplicable
+from tailor.refinement.optimizers.structure import NotApplicable
 
 __all__ = [
     "OPTIMIZERS",

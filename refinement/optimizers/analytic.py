@@ -15,8 +15,8 @@ import weakref
 
 import numpy as np
 
-from refinement.optimizers.objective import Objective, OptimizationResult
-from refinement.optimizers.structure import LOCATE_TOL, NotApplicable, TermStructure, detect
+from tailor.refinement.optimizers.objective import Objective, OptimizationResult
+from tailor.refinement.optimizers.structure import LOCATE_TOL, NotApplicable, TermStructure, detect
 
 MAX_MERGED_PAIRS = 4_000_000  # box pairs examined when merging two rule sets (C.3.3 worst case r1 * r2)
 CANDIDATES = 32  # best predicted corners checked with the true objective (more if all are invalid)

@@ -26,7 +26,7 @@ from operator import attrgetter
 import numpy as np
 from deap import base, tools
 
-from refinement.optimizers.objective import Objective, OptimizationResult
+from tailor.refinement.optimizers.objective import Objective, OptimizationResult
 
 POPULATION_PER_PARAMETER = 25
 ELITE_FRACTION = 0.02

@@ -6,7 +6,7 @@ import time
 
 import numpy as np
 
-from refinement.optimizers.objective import Objective, OptimizationResult
+from tailor.refinement.optimizers.objective import Objective, OptimizationResult
 
 SAMPLES = 1000
 

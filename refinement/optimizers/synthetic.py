@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from refinement.optimizers.objective import FreeParameter, Objective, Term
-from refinement.rules import Rule
+from tailor.refinement.optimizers.objective import FreeParameter, Objective, Term
+from tailor.refinement.models.rules import Rule
 
 KINDS = ("bound", "affine", "abs", "wrap", "sign")  # piecewise affine in one free parameter
 ANGLE_KINDS = ("abs", "wrap", "sign")  # only for free parameters that are angles

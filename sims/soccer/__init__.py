@@ -1,6 +1,6 @@
 """The soccer simulator (pymunk): field, Pioneer-like robot with a ball guide, ball, and its actions."""
 
-from sims.soccer.actions import ACTION_FUNCTIONS, approachBall, dribbleBall, goToPose
-from sims.soccer.simulator import Noise, SoccerSim, simulate_sequence
+from tailor.sims.soccer.actions import ACTION_FUNCTIONS, approachBall, dribbleBall, goToPose
+from tailor.sims.soccer.simulator import Noise, SoccerSim, simulate_sequence
 
 __all__ = ["ACTION_FUNCTIONS", "Noise", "SoccerSim", "approachBall", "dribbleBall", "goToPose", "simulate_sequence"]

@@ -15,9 +15,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from sims.soccer.approach import approachBall
-from sims.soccer.dribble import dribbleBall
-from sims.soccer.goto import goToPose
+from tailor.sims.soccer.approach import approachBall
+from tailor.sims.soccer.dribble import dribbleBall
+from tailor.sims.soccer.goto import goToPose
 
 Command = tuple[float, float]
 Action = Callable[[float, float, float, float, float, float, float, float], Command]

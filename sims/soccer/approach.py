@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import math
 
-from sims.soccer.control import Pose, axle_pose
-from sims.soccer.dubins import DubinsPath, all_paths, bounds, distance_to, surely_inside
-from sims.soccer.follow import Follower
-from sims.soccer.world import (A_MAX, BALL_RADIUS, FIELD_HALF_LENGTH, FIELD_HALF_WIDTH,
+from tailor.sims.soccer.control import Pose, axle_pose
+from tailor.sims.soccer.dubins import DubinsPath, all_paths, bounds, distance_to, surely_inside
+from tailor.sims.soccer.follow import Follower
+from tailor.sims.soccer.world import (A_MAX, BALL_RADIUS, FIELD_HALF_LENGTH, FIELD_HALF_WIDTH,
                                ROBOT_HALF_LENGTH, V_MAX, W_MAX, WALL_RUNOFF, ALPHA_MAX)
 
 R_APPROACH = 0.4  # m, turning radius of the axle's path without the ball

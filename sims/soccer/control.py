@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from sims.soccer.world import BALL_POINT_OFFSET
+from tailor.sims.soccer.world import BALL_POINT_OFFSET
 
 Pose = tuple[float, float, float]
 ARRIVE_SLACK = 0.05  # m, a braking profile reaches vg this far before the goal (half the position tolerance)

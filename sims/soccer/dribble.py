@@ -22,10 +22,10 @@ from __future__ import annotations
 
 import math
 
-from sims.soccer.control import Pose, axle_pose
-from sims.soccer.dubins import DubinsPath, shortest_path_inside
-from sims.soccer.follow import Follower
-from sims.soccer.world import BALL_POINT_OFFSET, BALL_RADIUS, FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, WALL_RUNOFF
+from tailor.sims.soccer.control import Pose, axle_pose
+from tailor.sims.soccer.dubins import DubinsPath, shortest_path_inside
+from tailor.sims.soccer.follow import Follower
+from tailor.sims.soccer.world import BALL_POINT_OFFSET, BALL_RADIUS, FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, WALL_RUNOFF
 
 R_DRIBBLE = 0.4  # m, turning radius of the axle's path with the ball (the ball point's: 0.51 m)
 W_DRIBBLE = 0.6  # rad/s, turn rate arcs are driven at with the ball

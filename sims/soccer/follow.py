@@ -21,9 +21,9 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from sims.soccer.control import Pose, clip, in_frame, profile_speed
-from sims.soccer.dubins import DubinsPath, bounds
-from sims.soccer.world import wrap
+from tailor.sims.soccer.control import Pose, clip, in_frame, profile_speed
+from tailor.sims.soccer.dubins import DubinsPath, bounds
+from tailor.sims.soccer.world import wrap
 
 CORRECTION_SHARE = 0.5  # a small first arc before a straight is turned within this share of the straight,
 CORRECTION_MIN, CORRECTION_MAX = 0.05, 0.5  # m, ... within these bounds (so sensing noise does not chatter)

@@ -38,10 +38,10 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from sims.soccer.approach import APPROACH, R_APPROACH
-from sims.soccer.control import Pose, axle_pose, clip, in_frame, profile_speed
-from sims.soccer.dubins import DubinsPath, shortest_path_inside
-from sims.soccer.world import wrap
+from tailor.sims.soccer.approach import APPROACH, R_APPROACH
+from tailor.sims.soccer.control import Pose, axle_pose, clip, in_frame, profile_speed
+from tailor.sims.soccer.dubins import DubinsPath, shortest_path_inside
+from tailor.sims.soccer.world import wrap
 
 GOTO_STRAIGHT = 0.1  # m, the Dubins path ends this little behind the goal
 GOTO = replace(APPROACH, final_straight=GOTO_STRAIGHT)

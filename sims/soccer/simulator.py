@@ -24,11 +24,11 @@ from dataclasses import dataclass
 import numpy as np
 import pymunk
 
-from sims import ACTIONS
-from sims.episode import ActionCall, ActionResult, Episode, SequenceResult
-from sims.errors import SimError
-from sims.soccer import world as W
-from sims.soccer.actions import ACTION_FUNCTIONS
+from tailor.sims import ACTIONS
+from tailor.sims.episode import ActionCall, ActionResult, Episode, SequenceResult
+from tailor.sims.errors import SimError
+from tailor.sims.soccer import world as W
+from tailor.sims.soccer.actions import ACTION_FUNCTIONS
 
 PHYSICS_HZ = 100  # Hz, fixed physics step
 CONTROL_HZ = 20  # Hz, controller rate (must divide PHYSICS_HZ)

@@ -11,7 +11,7 @@ import timeit
 import numpy as np
 import pytest
 
-from refinement.model_tree import ModelTree
+from tailor.refinement.models.model_tree import ModelTree
 
 
 def travel_data(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:

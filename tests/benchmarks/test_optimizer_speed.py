@@ -12,8 +12,8 @@ import time
 import numpy as np
 import pytest
 
-from refinement.optimizers import optimize
-from refinement.optimizers.synthetic import soccer_like
+from tailor.refinement.optimizers import optimize
+from tailor.refinement.optimizers.synthetic import soccer_like
 
 PROBLEMS = 40
 REPEATS = 5

@@ -4,7 +4,7 @@ import time
 
 import pytest
 
-from sims.experience import episode_seeds, run_episode
+from tailor.sims.experience import episode_seeds, run_episode
 
 
 @pytest.mark.benchmark

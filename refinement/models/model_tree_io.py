@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from refinement.errors import ModelFileError
-from refinement.model_tree_grow import TreeArrays
+from tailor.refinement.errors import ModelFileError
+from tailor.refinement.models.model_tree_grow import TreeArrays
 
 SCHEMA = "tailor.model_tree/1"
 THRESHOLD_DIGITS = 6  # significant digits of split thresholds in export_text

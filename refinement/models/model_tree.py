@@ -15,10 +15,10 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from refinement.errors import ModelFileError
-from refinement.model_tree_grow import GrowParams, TreeArrays, grow_tree
-from refinement.model_tree_io import export_text, tree_from_json, tree_to_json
-from refinement.rules import Rule, leaf_boxes
+from tailor.refinement.errors import ModelFileError
+from tailor.refinement.models.model_tree_grow import GrowParams, TreeArrays, grow_tree
+from tailor.refinement.models.model_tree_io import export_text, tree_from_json, tree_to_json
+from tailor.refinement.models.rules import Rule, leaf_boxes
 
 HYPERPARAMETERS = (
     "min_samples_leaf",

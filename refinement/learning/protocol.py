@@ -21,11 +21,11 @@ import numpy as np
 from sklearn.base import RegressorMixin
 from sklearn.ensemble import HistGradientBoostingRegressor
 
-from refinement.action_models import ActionModel
-from refinement.errors import DataError
-from refinement.features import compute_features, feature_names, first_examples, intermediate_examples
-from refinement.model_tree import ModelTree
-from sims.episode import Episode
+from tailor.refinement.models.action_models import ActionModel
+from tailor.refinement.errors import DataError
+from tailor.refinement.models.features import compute_features, feature_names, first_examples, intermediate_examples
+from tailor.refinement.models.model_tree import ModelTree
+from tailor.sims.episode import Episode
 
 N_I_CANDIDATES = (1, 2, 3, 5, 10, 20, 30, 50)  # examples per episode tried (Fig. 4.5)
 EPISODE_FRACTIONS = (0.125, 0.25, 0.5, 1.0)  # of the three-quarter training set, for Fig. 4.6

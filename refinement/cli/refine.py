@@ -10,13 +10,13 @@ import json
 import math
 import sys
 
-from refinement.commands.arguments import positive_seconds, whole_number
+from tailor.refinement.cli.arguments import positive_seconds, whole_number
 
 HELP = "refine the free parameters of a plan for the fastest predicted execution, optionally simulate it"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from refinement.optimizers import OPTIMIZERS
+    from tailor.refinement.optimizers import OPTIMIZERS
 
     parser.add_argument("domain", metavar="DOMAIN", help="domain.pddl file, or the name of a bundled domain (soccer)")
     parser.add_argument("problem", metavar="PROBLEM", help="problem .pddl file, or the name of one of its problems")
@@ -84,7 +84,7 @@ def result_json(prepared, method: str, seed: int, outcomes: dict) -> dict:
 
 
 def _print_text(prepared, method: str, outcomes: dict) -> None:
-    from planner_bridge import render_text
+    from tailor.planner_bridge import render_text
 
     out = sys.stdout.write
     plan = prepared.plan
@@ -139,7 +139,7 @@ def _print_text(prepared, method: str, outcomes: dict) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from refinement.pipeline import GREEDY_HORIZON, prepare, refine_and_dispatch, resolve_task
+    from tailor.refinement.pipeline import GREEDY_HORIZON, prepare, refine_and_dispatch, resolve_task
 
     task = resolve_task(args.domain, args.problem, args.belief)
     prepared = prepare(task, args.planner, args.timeout)
@@ -147,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
     outcomes = {"greedy": refine_and_dispatch(prepared, GREEDY_HORIZON, args.optimizer, args.seed, simulate),
                 "refined": refine_and_dispatch(prepared, args.horizon, args.optimizer, args.seed, simulate)}
     if args.plot:
-        from refinement.refine_plots import draw_refinement
+        from tailor.refinement.refine_plots import draw_refinement
 
         draw_refinement(args.plot, prepared, outcomes)
     if args.json:

@@ -17,13 +17,13 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from planner_bridge.bundled import DOMAINS_DIR
-from refinement.action_models import COLLISION_SUFFIX
-from refinement.collision import train_collision_model
-from refinement.errors import DataError, TailorError
-from refinement.learning import EPISODE_FRACTIONS, MIN_SAMPLES_LEAF, N_I_CANDIDATES, train_duration_model
-from refinement.training_report import format_report
-from sims.episode import Episode
+from tailor.planner_bridge.bundled import DOMAINS_DIR
+from tailor.refinement.models.action_models import COLLISION_SUFFIX
+from tailor.refinement.learning.classifiers import train_collision_model
+from tailor.refinement.errors import DataError, TailorError
+from tailor.refinement.learning.protocol import EPISODE_FRACTIONS, MIN_SAMPLES_LEAF, N_I_CANDIDATES, train_duration_model
+from tailor.refinement.learning.report import format_report
+from tailor.sims.episode import Episode
 
 FILE_MODE = 0o644  # permissions of the written files
 FRESH_SEED_OFFSET = 7_919_000  # the fresh test episodes of the classifier use seed + this: no shared episode
@@ -96,7 +96,7 @@ def train_domain(
 ) -> dict:
     """Gather, train and write `out/models/*.json` and `out/training/` (report and plots); return the report."""
     if gather is None:
-        from sims.experience import gather
+        from tailor.sims.experience import gather
     if episodes < 1:
         raise DataError(f"--episodes must be positive, got {episodes}")
     fresh_episodes = recipe.fresh_episodes if fresh_episodes is None else fresh_episodes
@@ -154,7 +154,7 @@ def _learn_at_subgoals(domain: str, chain: SubgoalExperience, models: dict, expe
     retrained model has in turn are visited too (the optimizer's curse moves with the model)."""
     if situations < 1:
         return None
-    from refinement.subgoal_experience import gather_subgoal_experience, subgoal_job
+    from tailor.refinement.learning.subgoal_experience import gather_subgoal_experience, subgoal_job
 
     job = subgoal_job(domain, chain.problem, seed)  # planned once for all rounds
     rounds = max(1, min(chain.rounds, situations))
@@ -182,7 +182,7 @@ def _fits_per_model(n_i_candidates: tuple[int, ...], episode_fractions: tuple[fl
 
 def write_outputs(out: Path, models: dict, collision, report: dict) -> None:
     """Stage every file beside its target, then rename them all into place."""
-    from refinement import learning_plots
+    from tailor.refinement.learning import plots as learning_plots
 
     models_dir, training_dir = Path(out) / "models", Path(out) / "training"
     files: dict[Path, Callable[[Path], None]] = {}

@@ -11,14 +11,14 @@ import argparse
 import importlib
 import sys
 
-from planner_bridge.errors import PlannerError
-from sims.errors import SimError
+from tailor import __version__
+from tailor.errors import TailorError
 
 COMMANDS = {
-    "plan": "refinement.commands.plan",
-    "train": "refinement.commands.train",
-    "refine": "refinement.commands.refine",
-    "evaluate": "refinement.commands.evaluate",
+    "plan": "tailor.refinement.cli.plan",
+    "train": "tailor.refinement.cli.train",
+    "refine": "tailor.refinement.cli.refine",
+    "evaluate": "tailor.refinement.cli.evaluate",
 }
 
 EXIT_INTERRUPTED = 130
@@ -26,6 +26,7 @@ EXIT_INTERRUPTED = 130
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="tailor", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"tailor {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, module_name in COMMANDS.items():
         try:
@@ -44,7 +45,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return int(args.run(args) or 0)
-    except (PlannerError, SimError) as exc:
+    except TailorError as exc:
         print(f"tailor {args.command}: error: {exc}", file=sys.stderr)
         return exc.exit_code
     except KeyboardInterrupt:

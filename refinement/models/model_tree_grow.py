@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from refinement.model_tree_linear import fit_node_model, m5_factor
+from tailor.refinement.models.model_tree_linear import fit_node_model, m5_factor
 
 # Ridge on the unit-diagonal Gram matrix of the residual fit that guides splitting (keeps it solvable).
 SPLIT_RIDGE = 1e-10

@@ -16,13 +16,13 @@ import numpy as np
 from joblib import Parallel, delayed
 from tqdm import tqdm
 
-from sims.episode import ActionCall, Episode
-from sims.experience import SCENARIOS
-from sims.soccer import SoccerSim
+from tailor.sims.episode import ActionCall, Episode
+from tailor.sims.experience import SCENARIOS
+from tailor.sims.soccer import SoccerSim
 
-from refinement.evaluation import BELIEFS, Job, prepared_job, scenario_sequence
-from refinement.pipeline import prepare, resolve_task
-from refinement.refine import refine
+from tailor.refinement.evaluation.experiments import BELIEFS, Job, prepared_job, scenario_sequence
+from tailor.refinement.pipeline import prepare, resolve_task
+from tailor.refinement.refine import refine
 
 SUBGOAL_STREAM = 2  # second seed word: apart from the evaluation's scenarios (SeedSequence([seed, index]))
 CHUNK = 50  # situations a worker refines per task

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from refinement.commands.arguments import positive_seconds
+from tailor.refinement.cli.arguments import positive_seconds
 
 HELP = "plan a PDDL domain/problem pair into a validated partial-order plan with causal links"
 
@@ -37,7 +37,7 @@ def format_json(data: dict) -> str:
 def run(args: argparse.Namespace) -> int:
     import sys
 
-    from planner_bridge import plan_files, render_text, resolve_problem
+    from tailor.planner_bridge import plan_files, render_text, resolve_problem
 
     domain, problem = resolve_problem(args.domain, args.problem)
     plan = plan_files(domain, problem, planner=args.planner, timeout=args.timeout)

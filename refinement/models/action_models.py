@@ -16,10 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
-from refinement.decision_tree import DecisionTree, LeafBox
-from refinement.errors import ModelFileError
-from refinement.features import FEATURE_SETS, compute_features
-from refinement.model_tree import ModelTree
+from tailor.refinement.models.decision_tree import DecisionTree, LeafBox
+from tailor.refinement.errors import ModelFileError
+from tailor.refinement.models.features import FEATURE_SETS, compute_features
+from tailor.refinement.models.model_tree import ModelTree
 
 ACTION_MODEL_SCHEMA = "tailor.action_model/1"
 COLLISION_MODEL_SCHEMA = "tailor.collision_model/1"

@@ -36,9 +36,9 @@ def _positive_ints(text: str) -> tuple[int, ...]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from refinement.errors import DataError
-    from refinement.learning import N_I_CANDIDATES
-    from refinement.training import default_out, recipe_for, train_domain
+    from tailor.refinement.errors import DataError
+    from tailor.refinement.learning.protocol import N_I_CANDIDATES
+    from tailor.refinement.learning.training import default_out, recipe_for, train_domain
 
     recipe = recipe_for(args.domain)
     episodes = recipe.default_episodes if args.episodes is None else args.episodes

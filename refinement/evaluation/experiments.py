@@ -15,11 +15,11 @@ from types import MappingProxyType
 
 import numpy as np
 
-from refinement.belief import BeliefState
-from refinement.dispatch import dispatch
-from refinement.instantiate import instantiate
-from refinement.pipeline import Prepared, Task, load_binding, load_models
-from refinement.refine import refine
+from tailor.refinement.belief import BeliefState
+from tailor.refinement.dispatch import dispatch
+from tailor.refinement.instantiate import instantiate
+from tailor.refinement.pipeline import Prepared, Task, load_binding, load_models
+from tailor.refinement.refine import refine
 
 FIELD_X = (-4.0, 4.0)  # m, the simulated field (sims.soccer)
 FIELD_Y = (-3.0, 3.0)

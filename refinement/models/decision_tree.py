@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from refinement.rules import leaf_boxes
+from tailor.refinement.models.rules import leaf_boxes
 
 LEAF = -1
 

@@ -15,8 +15,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from refinement.errors import DataError
-from sims.episode import PARAMETER_NAMES, Episode
+from tailor.refinement.errors import DataError
+from tailor.sims.episode import PARAMETER_NAMES, Episode
 
 N_PARAMS = len(PARAMETER_NAMES)
 X, Y, PHI, V, XG, YG, PHIG, VG = range(N_PARAMS)

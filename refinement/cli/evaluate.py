@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from refinement.commands.arguments import whole_number
+from tailor.refinement.cli.arguments import whole_number
 
 HELP = "measure refined vs greedy execution in the simulator over random scenarios"
 
@@ -79,18 +79,18 @@ def _print_text(report: dict) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from refinement.evaluation import (
+    from tailor.refinement.evaluation.experiments import (
         prepared_job,
         score_episode,
         summarize_score,
         summarize_waypoints,
         waypoint_episode,
     )
-    from refinement.pipeline import prepare, resolve_task
+    from tailor.refinement.pipeline import prepare, resolve_task
 
-    from planner_bridge import resolve_problem
-    from planner_bridge.errors import InputFileError
-    from refinement.errors import TailorError
+    from tailor.planner_bridge import resolve_problem
+    from tailor.planner_bridge.errors import InputFileError
+    from tailor.refinement.errors import TailorError
 
     for problem in ("score", "waypoints"):
         try:

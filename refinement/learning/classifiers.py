@@ -19,11 +19,11 @@ import numpy as np
 from sklearn.model_selection import StratifiedKFold
 from sklearn.tree import DecisionTreeClassifier
 
-from refinement.action_models import CollisionModel
-from refinement.decision_tree import DecisionTree
-from refinement.errors import DataError
-from refinement.features import compute_features, feature_names, first_examples
-from sims.episode import Episode
+from tailor.refinement.models.action_models import CollisionModel
+from tailor.refinement.models.decision_tree import DecisionTree
+from tailor.refinement.errors import DataError
+from tailor.refinement.models.features import compute_features, feature_names, first_examples
+from tailor.sims.episode import Episode
 
 FAIL, SUCCESS = 0, 1
 COSTS = (1.0, 1.5, 2.0, 3.0, 5.0, 8.0, 13.0)  # cost of a false "success" relative to a false "fail"

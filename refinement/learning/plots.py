@@ -15,7 +15,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from refinement.action_models import ActionModel, CollisionModel  # noqa: E402
+from tailor.refinement.models.action_models import ActionModel, CollisionModel  # noqa: E402
 
 # the situation of Fig. 4.7: goal 1.5 m straight ahead, robot standing, arriving at rest
 SITUATION_DIST = 1.5  # m
@@ -27,7 +27,7 @@ ANGLE_SAMPLES = 361
 def plot_mae_vs_n_i(reports: Mapping[str, dict], path: Path) -> None:
     """Validation MAE of models trained on half the episodes, against examples per episode (Fig. 4.5), at the
     default leaf size; hollow where that tree would be too large to store, a star at the chosen n_i and leaf."""
-    from refinement.learning import MAX_LEAVES
+    from tailor.refinement.learning.protocol import MAX_LEAVES
 
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     for index, (action, report) in enumerate(reports.items()):

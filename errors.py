@@ -1,0 +1,113 @@
+"""The one exception base of tailor and its exit statuses (the README's table).
+
+Every error a user can cause is a `TailorError`: the command line prints it as one line naming the file (and
+line:column where known) and exits with the class's `exit_code`. Planner, refinement and simulator errors are
+subclasses, so an API user catches them all with one `except tailor.TailorError`.
+"""
+
+from __future__ import annotations
+
+
+class TailorError(Exception):
+    """Base of every tailor error; `str()` is one line: `file:line:col: message`."""
+
+    exit_code = 9  # an error with no more specific status: "other refinement error"
+
+    def __init__(self, message: str, file: str | None = None, line: int | None = None, col: int | None = None):
+        super().__init__(message)
+        self.message = message
+        self.file = file
+        self.line = line
+        self.col = col
+
+    def __str__(self) -> str:
+        where = ""
+        if self.file:
+            where = str(self.file)
+            if self.line is not None:
+                where += f":{self.line}"
+                if self.col is not None:
+                    where += f":{self.col}"
+            where += ": "
+        return where + self.message
+
+
+# --- planning (planner_bridge) ---------------------------------------------------------------------------
+class PlannerError(TailorError):
+    """The planner failed or returned a plan the validator rejects."""
+
+    exit_code = 1
+
+
+class InputFileError(PlannerError):
+    """A domain or problem file is missing or unreadable (or an unknown bundled name)."""
+
+    exit_code = 3
+
+
+class PDDLSyntaxError(PlannerError):
+    """The PDDL text does not parse."""
+
+    exit_code = 4
+
+
+class PDDLSemanticError(PlannerError):
+    """The PDDL parses but is inconsistent: undefined predicate or type, wrong arity, another domain's problem."""
+
+    exit_code = 5
+
+
+class NoPlanError(PlannerError):
+    """The planner proved that no plan exists."""
+
+    exit_code = 6
+
+
+class PlannerTimeoutError(PlannerError):
+    """The planner ran out of time before finding a plan."""
+
+    exit_code = 7
+
+
+class PlannerUnavailableError(PlannerError):
+    """The planner name is unknown, or no compilation makes the problem solvable by it."""
+
+    exit_code = 8
+
+
+# --- refinement -----------------------------------------------------------------------------------------
+class BeliefError(TailorError):
+    """A belief-state file is missing or invalid."""
+
+    exit_code = 10
+
+
+class BindingError(TailorError):
+    """An action library binding is missing or invalid, or a plan uses an action it does not bind."""
+
+    exit_code = 11
+
+
+class ModelFileError(TailorError):
+    """An action model file is missing, of the wrong schema, or inconsistent."""
+
+    exit_code = 12
+
+
+class EmptyRangeError(TailorError):
+    """The ranges the predicates imply for a parameter do not intersect (or a bound value lies outside them)."""
+
+    exit_code = 13
+
+
+class DataError(TailorError):
+    """Experience data or training arguments are missing or malformed."""
+
+    exit_code = 14
+
+
+# --- simulators -----------------------------------------------------------------------------------------
+class SimError(TailorError):
+    """Invalid simulator input: an unknown action or simulator, a state or parameter outside the world."""
+
+    exit_code = 15
