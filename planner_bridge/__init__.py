@@ -2,7 +2,7 @@
 
 from tailor.planner_bridge.abstract_plan import GOAL, INITIAL, AbstractPlan, CausalLink, Step
 from tailor.planner_bridge.bridge import DEFAULT_PLANNER, plan_files, plan_here
-from tailor.planner_bridge.bundled import bundled_domains, bundled_problems, resolve_problem
+from tailor.planner_bridge.bundled import bundled_domains, bundled_problems, resolve_domain_dir, resolve_problem
 from tailor.planner_bridge.errors import (
     InputFileError,
     NoPlanError,
@@ -25,6 +25,7 @@ __all__ = [
     "plan_here",
     "render_text",
     "resolve_problem",
+    "resolve_domain_dir",
     "bundled_domains",
     "bundled_problems",
     "PlannerError",

@@ -34,7 +34,9 @@ class CausalLink:
 
 @dataclass(frozen=True)
 class AbstractPlan:
-    """A validated partial-order plan with its causal links."""
+    """A validated partial-order plan with its causal links, and what refinement needs of the problem it
+    solves (so no later stage parses the PDDL again): each object with its type chain (most specific type
+    first), and the facts that hold initially."""
 
     domain: str
     problem: str
@@ -42,6 +44,13 @@ class AbstractPlan:
     steps: tuple[Step, ...]
     links: tuple[CausalLink, ...]
     orderings: tuple[tuple[int, int], ...]
+    objects: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    initial: tuple[tuple[str, ...], ...] = ()
+
+    @property
+    def object_types(self) -> dict[str, tuple[str, ...]]:
+        """Object -> its type and the type's ancestors."""
+        return {name: chain for name, chain in self.objects}
 
     def step(self, step_id: int) -> Step:
         return self.steps[step_id - 1]
@@ -55,8 +64,9 @@ class AbstractPlan:
 
         return render_text(self)
 
-    def to_json(self) -> dict:
-        return {
+    def to_json(self, facts: bool = False) -> dict:
+        """The plan as JSON; with `facts`, also the problem's objects (with type chains) and initial facts."""
+        data = {
             "domain": self.domain,
             "problem": self.problem,
             "planner": self.planner,
@@ -64,6 +74,10 @@ class AbstractPlan:
             "links": [{"from": k.producer, "fact": list(k.fact), "to": k.consumer} for k in self.links],
             "orderings": [list(o) for o in self.orderings],
         }
+        if facts:
+            data["objects"] = [{"name": name, "types": list(chain)} for name, chain in self.objects]
+            data["initial"] = [list(fact) for fact in self.initial]
+        return data
 
     @classmethod
     def from_json(cls, data: dict) -> "AbstractPlan":
@@ -77,4 +91,6 @@ class AbstractPlan:
                 for k in data["links"]
             ),
             orderings=tuple((int(a), int(b)) for a, b in data["orderings"]),
+            objects=tuple((o["name"], tuple(o["types"])) for o in data.get("objects", ())),
+            initial=tuple(tuple(fact) for fact in data.get("initial", ())),
         )

@@ -43,4 +43,18 @@ def plan_here(
     parsed.environment.credits_stream = None  # no engine credits on stdout: `--json` output must be pure JSON
     sequential = solve(parsed, planner, str(problem), on_search)
     steps, links, orderings = partial_order(parsed, sequential)
-    return AbstractPlan(domain_name, parsed.name, planner, steps, links, orderings)
+    return AbstractPlan(domain_name, parsed.name, planner, steps, links, orderings, *problem_facts(parsed))
+
+
+def problem_facts(parsed) -> tuple[tuple[tuple[str, tuple[str, ...]], ...], tuple[tuple[str, ...], ...]]:
+    """(objects with their type chains, initial facts that hold) of a parsed unified-planning problem."""
+    objects = []
+    for o in parsed.all_objects:
+        chain, t = [], o.type
+        while t is not None:
+            chain.append(getattr(t, "name", str(t)))
+            t = getattr(t, "father", None)
+        objects.append((o.name, tuple(chain)))
+    initial = tuple((fact.fluent().name, *(str(a) for a in fact.args))
+                    for fact, value in parsed.explicit_initial_values.items() if value.is_true())
+    return tuple(objects), initial

@@ -23,6 +23,23 @@ def bundled_problems(domain: str) -> list[str]:
     return sorted(p.stem for p in (DOMAINS_DIR / domain / PROBLEMS_DIR).glob("*.pddl"))
 
 
+def resolve_domain_dir(domain_arg: str | Path) -> Path:
+    """The folder of a domain given as a bundled name, a folder holding domain.pddl, or a domain.pddl file."""
+    arg = str(domain_arg)
+    path = Path(arg)
+    if path.is_dir():
+        if not (path / DOMAIN_FILE).is_file():
+            raise InputFileError(f"a domain folder needs a {DOMAIN_FILE}", arg)
+        return path
+    if path.is_file():
+        return path.parent
+    if not _looks_like_path(arg) and arg in bundled_domains():
+        return DOMAINS_DIR / arg
+    raise InputFileError(
+        f"no such domain folder, domain file or bundled domain (bundled: {', '.join(bundled_domains()) or 'none'})",
+        arg)
+
+
 def _looks_like_path(arg: str) -> bool:
     return "/" in arg or "\\" in arg or arg.endswith(".pddl")
 

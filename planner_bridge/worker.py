@@ -65,7 +65,7 @@ def _child_main() -> int:
 
     try:
         plan = plan_here(request["domain"], request["problem"], request["planner"], lambda: send({"event": "searching"}))
-        send({"plan": plan.to_json()})
+        send({"plan": plan.to_json(facts=True)})
     except errors.PlannerError as exc:
         send({"error": _error_json(exc)})
     except Exception as exc:  # a bug or an engine's surprise: still one line for the user
@@ -91,9 +91,7 @@ def _read_message(child: subprocess.Popen, deadline: float | None, planner: str,
 
 def plan_in_worker(domain: Path, problem: Path, planner: str, timeout: float | None) -> AbstractPlan:
     """Plan in a child process with a fixed hash seed; kill it when its search exceeds `timeout` seconds."""
-    package_root = str(Path(__file__).resolve().parent.parent)  # importable even when not installed
-    path = os.pathsep.join(p for p in (package_root, os.environ.get("PYTHONPATH")) if p)
-    env = {**os.environ, "PYTHONHASHSEED": HASH_SEED, "PYTHONPATH": path}
+    env = {**os.environ, "PYTHONHASHSEED": HASH_SEED}  # the child imports the installed tailor, as we do
     request = {"domain": str(domain), "problem": str(problem), "planner": planner}
     with tempfile.TemporaryFile() as stderr:
         child = subprocess.Popen(

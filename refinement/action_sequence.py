@@ -88,6 +88,7 @@ class ActionSequence:
     problem: str
     actions: tuple[ExecutableAction, ...]
     scene: Mapping[str, tuple[float, ...]]  # e.g. {"robot": (x, y, phi, v), "ball": (x, y)}
+    simulator: str = ""  # the registered simulator its actions run in
 
     def free_parameters(self) -> tuple[Parameter, ...]:
         """The free parameters, unique by id, in order of first use."""
@@ -123,7 +124,7 @@ class ActionSequence:
     def to_json(self) -> dict:
         return {"schema": SCHEMA, "domain": self.domain, "problem": self.problem,
                 "actions": [a.to_json() for a in self.actions],
-                "scene": {name: list(values) for name, values in self.scene.items()}}
+                "scene": {name: list(values) for name, values in self.scene.items()}, "simulator": self.simulator}
 
     @classmethod
     def from_json(cls, data: Mapping) -> "ActionSequence":
@@ -132,7 +133,8 @@ class ActionSequence:
         try:
             return cls(str(data["domain"]), str(data["problem"]),
                        tuple(ExecutableAction.from_json(a) for a in data["actions"]),
-                       MappingProxyType({k: tuple(float(v) for v in vs) for k, vs in data["scene"].items()}))
+                       MappingProxyType({k: tuple(float(v) for v in vs) for k, vs in data["scene"].items()}),
+                       str(data.get("simulator", "")))
         except (KeyError, TypeError, ValueError) as exc:
             raise TailorError(f"malformed action sequence JSON: {exc!r}") from None
 

@@ -3,7 +3,7 @@
 `problems/score.pddl` has its belief state in `problems/score.toml`:
 
     [objects.pos1]     # one table per PDDL object
-    x = 0.0            # quantities: x, y (m), phi (rad), v (m/s); numbers only
+    x = 0.0            # quantities of the domain's simulator (soccer: x, y in m, phi in rad, v in m/s)
     y = 1.0
 
 Only the values the binding reads are required (for facts that hold in the initial state).
@@ -18,7 +18,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from tailor.refinement.binding import QUANTITIES, read_toml
+from tailor.refinement.binding import read_toml
 from tailor.refinement.errors import BeliefError
 
 SCHEMA = 1
@@ -48,15 +48,17 @@ def belief_path_for(problem_path: Path | str) -> Path:
     return Path(problem_path).with_suffix(BELIEF_SUFFIX)
 
 
-def load_belief(path: Path | str, objects: Collection[str] | None = None) -> BeliefState:
-    """Read and validate a belief state file; given the problem's `objects`, reject any other object."""
+def load_belief(path: Path | str, objects: Collection[str] | None = None,
+                quantities: Collection[str] | None = None) -> BeliefState:
+    """Read and validate a belief state file; given the problem's `objects` (the simulator's `quantities`),
+    reject any other object (quantity)."""
     file = str(path)
     data = read_toml(Path(path), BeliefError, "belief state")
-    return parse_belief(data, file, objects)
+    return parse_belief(data, file, objects, quantities)
 
 
 def parse_belief(data: Mapping[str, Any], file: str | None = None,
-                 objects: Collection[str] | None = None) -> BeliefState:
+                 objects: Collection[str] | None = None, quantities: Collection[str] | None = None) -> BeliefState:
     """Validate the parsed TOML of a belief state; every problem is a one-line BeliefError naming `file`."""
 
     def fail(message: str) -> BeliefError:
@@ -80,14 +82,14 @@ def parse_belief(data: Mapping[str, Any], file: str | None = None,
             raise fail(f"[objects.{name}] given twice (object names are case-insensitive)")
         if not isinstance(table, dict):
             raise fail(f"[objects.{name}] must be a table of quantities")
-        parsed[name.lower()] = MappingProxyType({q: _number(name, q, v, fail) for q, v in table.items()})
+        parsed[name.lower()] = MappingProxyType({q: _number(name, q, v, quantities, fail) for q, v in table.items()})
     return BeliefState(MappingProxyType(parsed), file)
 
 
-def _number(obj: str, quantity: str, value: Any, fail) -> float:
+def _number(obj: str, quantity: str, value: Any, quantities: Collection[str] | None, fail) -> float:
     where = f"[objects.{obj}] {quantity}"
-    if quantity not in QUANTITIES:
-        raise fail(f"{where}: unknown quantity '{quantity}' (known: {', '.join(QUANTITIES)})")
+    if quantities is not None and quantity not in quantities:
+        raise fail(f"{where}: unknown quantity '{quantity}' (known: {', '.join(quantities)})")
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise fail(f"{where} = {value!r} is not a number")
     if not math.isfinite(value):

@@ -1,9 +1,11 @@
 """The action library binding (Sec. 5.3): a declarative TOML file per domain, `domains/<name>/actions.toml`.
 
-It says which executable action (a `sims.ACTIONS` name) each PDDL action maps to and which PDDL argument
-supplies each of its parameter groups, what each predicate implies about the continuous values of its
-arguments (values read from the belief state, ranges, scene objects), and the ranges of each PDDL type that
-apply where no predicate says anything. Binding a new domain to existing actions needs no Python.
+It names the simulator whose executable actions the domain uses (a name in the simulator registry), says
+which executable action each PDDL action maps to and which PDDL argument supplies each of its parameter
+groups, what each predicate implies about the continuous values of its arguments (values read from the
+belief state, ranges, scene objects), and the ranges of each PDDL type that apply where no predicate says
+anything. Its `[training]` and `[evaluation]` tables (read by the learning and evaluation packages) say what
+`tailor train` learns and which random situations `tailor evaluate` draws. Binding a domain needs no Python.
 """
 
 from __future__ import annotations
@@ -12,19 +14,19 @@ import math
 import re
 import tomllib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
 from tailor.refinement.errors import BindingError, TailorError
-from tailor.sims import ACTIONS, ActionSpec
+from tailor.sims import registry
+from tailor.sims.errors import SimError
+from tailor.sims.protocol import GROUPS, ActionSpec, SimulatorEntry
 
-SCHEMA = 1
+SCHEMA = 2  # 2: the binding names its simulator
 BINDING_FILE = "actions.toml"
-GROUPS = ("observed", "internal")  # parameter groups of an ActionSpec, in parameter order
 DEFAULT_TYPE = "default"  # [types.default]: ranges for objects of a type the binding does not name
-QUANTITIES: tuple[str, ...] = tuple(dict.fromkeys(q for spec in ACTIONS.values() for q in spec.quantities))
 NAMED_BOUNDS = {"pi": math.pi, "-pi": -math.pi}  # strings a range bound may be written as
 
 Range = tuple[float, float]
@@ -57,10 +59,7 @@ class ActionBinding:
     pddl: str
     executable: str
     args: Mapping[str, int]
-
-    @property
-    def spec(self) -> ActionSpec:
-        return ACTIONS[self.executable]
+    spec: ActionSpec
 
 
 @dataclass(frozen=True)
@@ -96,9 +95,18 @@ class Binding:
 
     file: str | None
     domain: str | None
+    simulator: str
     actions: Mapping[str, ActionBinding]
     predicates: Mapping[str, PredicateBinding]
     types: Mapping[str, Mapping[str, Range]]
+    training: Mapping[str, Any] = field(default_factory=dict)  # raw [training] (tailor.refinement.learning.recipe)
+    evaluation: Mapping[str, Any] = field(default_factory=dict)  # raw [evaluation] (tailor.refinement.evaluation)
+    quantities: tuple[str, ...] = ()  # every quantity the simulator's actions take
+
+    @property
+    def entry(self) -> SimulatorEntry:
+        """The simulator the domain's executable actions run in."""
+        return registry.get(self.simulator)
 
     def action(self, name: str, step: str = "") -> ActionBinding:
         """The binding of PDDL action `name`; a BindingError naming it if the binding does not bind it."""
@@ -140,19 +148,34 @@ def parse_binding(data: Mapping[str, Any], file: str | None = None) -> Binding:
     def fail(message: str) -> BindingError:
         return BindingError(message, file=file)
 
-    _check_keys(data, {"schema", "domain", "actions", "predicates", "types"}, "top level", fail)
+    _check_keys(data, {"schema", "domain", "simulator", "actions", "predicates", "types", "training", "evaluation"},
+                "top level", fail)
     if data.get("schema", SCHEMA) != SCHEMA:
-        raise fail(f"unsupported schema {data['schema']!r} (expected {SCHEMA})")
+        raise fail(f"unsupported schema {data['schema']!r} (expected {SCHEMA}: a binding names its simulator)")
     domain = data.get("domain")
     if domain is not None and not isinstance(domain, str):
         raise fail("'domain' must be a string")
-    actions = {name.lower(): _action(name, table, fail) for name, table in _tables(data, "actions", fail)}
-    predicates = {name.lower(): _predicate(name, table, fail)
+    simulator = data.get("simulator")
+    if not isinstance(simulator, str) or not simulator:
+        raise fail("missing 'simulator': the name of the simulator whose actions the domain binds "
+                   "(see `tailor domains`)")
+    try:
+        entry = registry.get(simulator)
+    except SimError as exc:
+        raise fail(f"simulator = {simulator!r}: {exc.message}") from None
+    quantities = entry.quantities
+    actions = {name.lower(): _action(name, table, entry, fail) for name, table in _tables(data, "actions", fail)}
+    predicates = {name.lower(): _predicate(name, table, quantities, fail)
                   for name, table in _tables(data, "predicates", fail)}
-    types = {name: MappingProxyType(_ranges(f"[types.{name}]", table, set(), fail))
+    types = {name: MappingProxyType(_ranges(f"[types.{name}]", table, set(), quantities, fail))
              for name, table in _tables(data, "types", fail)}
-    return Binding(file, domain, MappingProxyType(actions), MappingProxyType(predicates),
-                   MappingProxyType(types))
+    extra = {}
+    for key in ("training", "evaluation"):
+        if not isinstance(data.get(key, {}), dict):
+            raise fail(f"'{key}' must be a table ([{key}])")
+        extra[key] = MappingProxyType(data.get(key, {}))
+    return Binding(file, domain, simulator, MappingProxyType(actions), MappingProxyType(predicates),
+                   MappingProxyType(types), extra["training"], extra["evaluation"], quantities)
 
 
 def _tables(data: Mapping[str, Any], key: str, fail) -> list[tuple[str, Mapping[str, Any]]]:
@@ -177,14 +200,14 @@ def _index(where: str, value: Any, fail) -> int:
     return value
 
 
-def _action(name: str, table: Mapping[str, Any], fail) -> ActionBinding:
+def _action(name: str, table: Mapping[str, Any], entry: SimulatorEntry, fail) -> ActionBinding:
     where = f"[actions.{name}]"
     _check_keys(table, {"executable", *GROUPS}, where, fail)
     executable = table.get("executable")
-    if executable not in ACTIONS:
-        raise fail(f"{where} executable = {executable!r} is not an executable action "
-                   f"(known: {', '.join(ACTIONS)})")
-    spec = ACTIONS[executable]
+    if not isinstance(executable, str) or executable not in entry.actions:
+        raise fail(f"{where} executable = {executable!r} is not an executable action of simulator "
+                   f"{entry.name!r} (known: {', '.join(entry.actions)})")
+    spec = entry.actions[executable]
     args = {}
     for group in GROUPS:
         has_parameters = bool(getattr(spec, group))
@@ -195,18 +218,18 @@ def _action(name: str, table: Mapping[str, Any], fail) -> ActionBinding:
                 raise fail(f"{where} missing '{group}': the PDDL argument index that supplies "
                            f"{executable}'s {group} parameters {', '.join(getattr(spec, group))}")
             args[group] = _index(f"{where} {group}", table[group], fail)
-    return ActionBinding(name.lower(), executable, MappingProxyType(args))
+    return ActionBinding(name.lower(), executable, MappingProxyType(args), spec)
 
 
-def _predicate(name: str, table: Mapping[str, Any], fail) -> PredicateBinding:
+def _predicate(name: str, table: Mapping[str, Any], quantities: tuple[str, ...], fail) -> PredicateBinding:
     where = f"[predicates.{name}]"
     extra = {"read", "scene", "args"}
     read = table.get("read", [])
     if not isinstance(read, list) or not all(isinstance(q, str) for q in read):
         raise fail(f"{where} read must be a list of quantity names")
     for quantity in read:
-        if quantity not in QUANTITIES:
-            raise fail(f"{where} read: unknown quantity '{quantity}' (known: {', '.join(QUANTITIES)})")
+        if quantity not in quantities:
+            raise fail(f"{where} read: unknown quantity '{quantity}' (known: {', '.join(quantities)})")
     if len(set(read)) != len(read):
         raise fail(f"{where} read names a quantity twice")
     scene = table.get("scene")
@@ -219,17 +242,18 @@ def _predicate(name: str, table: Mapping[str, Any], fail) -> PredicateBinding:
         if not isinstance(args, list) or not args:
             raise fail(f"{where} args must be a non-empty list of argument indices")
         args = tuple(_index(f"{where} args", a, fail) for a in args)
-    ranges = _ranges(where, table, extra, fail)
+    ranges = _ranges(where, table, extra, quantities, fail)
     return PredicateBinding(name.lower(), tuple(read), MappingProxyType(ranges), scene, args)
 
 
-def _ranges(where: str, table: Mapping[str, Any], extra: set[str], fail) -> dict[str, Range]:
+def _ranges(where: str, table: Mapping[str, Any], extra: set[str], quantities: tuple[str, ...],
+            fail) -> dict[str, Range]:
     ranges = {}
     for key, value in table.items():
         if key in extra:
             continue
-        if key not in QUANTITIES:
-            allowed = ", ".join([*sorted(extra), *QUANTITIES])
+        if key not in quantities:
+            allowed = ", ".join([*sorted(extra), *quantities])
             raise fail(f"{where}: unknown key '{key}' (expected one of {allowed})")
         ranges[key] = _range(f"{where} {key}", value, fail)
     return ranges

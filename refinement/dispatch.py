@@ -2,38 +2,29 @@
 
 from __future__ import annotations
 
-from tailor.sims import ACTIONS
-from tailor.sims.episode import ActionCall, SequenceResult
-
 from tailor.refinement.action_sequence import ActionSequence
 from tailor.refinement.errors import TailorError
+from tailor.sims import registry
+from tailor.sims.episode import ActionCall, SequenceResult
 
 
-def _soccer(robot, ball, calls, seed, noise):
-    from tailor.sims.soccer import simulate_sequence
-
-    return simulate_sequence(robot=robot, ball=ball, calls=calls, seed=seed, noise=noise)
-
-
-SIMULATORS = {"soccer": _soccer}
+def action_calls(sequence: ActionSequence) -> list[ActionCall]:
+    """Each action with its internal (subgoal) parameters; the observed ones come from the simulated world."""
+    entry = registry.get(sequence.simulator)
+    calls = []
+    for action in sequence.actions:
+        n_observed = len(entry.action(action.action).observed)
+        calls.append(ActionCall(action.action, tuple(float(x) for x in action.values()[n_observed:])))
+    return calls
 
 
 def dispatch(sequence: ActionSequence, seed: int = 0, noise=None) -> SequenceResult:
-    """Execute the sequence in its simulator; observed parameters come from the simulated world."""
+    """Execute the sequence in a fresh simulator reset to its scene; `noise` None is the simulator's default."""
     if not sequence.actions:
         raise TailorError(f"problem {sequence.problem!r}: the plan has no actions to dispatch")
-    simulators = {ACTIONS[a.action].simulator for a in sequence.actions}
-    if len(simulators) != 1:
-        raise TailorError(f"problem {sequence.problem!r}: actions of several simulators: {sorted(simulators)}")
-    (name,) = simulators
-    if name not in SIMULATORS:
-        raise TailorError(f"problem {sequence.problem!r}: no simulator {name!r}")
-    if "robot" not in sequence.scene:
-        raise TailorError(f"problem {sequence.problem!r}: the belief state places no robot")
-    spec = ACTIONS[sequence.actions[0].action]
-    n_observed = len(spec.observed)
-    calls = [ActionCall(a.action, tuple(float(x) for x in a.values()[n_observed:])) for a in sequence.actions]
-    robot = tuple(float(x) for x in sequence.scene["robot"])
-    ball = sequence.scene.get("ball")
-    ball = tuple(float(x) for x in ball) if ball is not None else None
-    return SIMULATORS[name](robot, ball, calls, seed, noise)
+    if not sequence.simulator:
+        raise TailorError(f"problem {sequence.problem!r}: the action sequence names no simulator")
+    calls = action_calls(sequence)
+    simulator = registry.get(sequence.simulator).create(seed, noise)
+    simulator.reset({name: tuple(float(x) for x in values) for name, values in sequence.scene.items()})
+    return simulator.run_sequence(calls)

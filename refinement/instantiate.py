@@ -16,7 +16,8 @@ from types import MappingProxyType
 from tailor.planner_bridge.abstract_plan import INITIAL, AbstractPlan
 from tailor.refinement.action_sequence import RANGE_TOLERANCE, ActionSequence, ExecutableAction, Parameter
 from tailor.refinement.belief import BeliefState
-from tailor.refinement.binding import DEFAULT_TYPE, GROUPS, Binding, PredicateBinding
+from tailor.refinement.binding import DEFAULT_TYPE, Binding, PredicateBinding
+from tailor.sims.protocol import GROUPS
 from tailor.refinement.errors import BindingError, EmptyRangeError
 
 ObjectTypes = Mapping[str, "str | Sequence[str]"]  # object -> its type, or its type and ancestors
@@ -40,9 +41,14 @@ def instantiate(plan: AbstractPlan, binding: Binding, belief: BeliefState,
                 initial_state: Iterable[Sequence[str]] = ()) -> ActionSequence:
     """Algorithm 3: the ActionSequence of `plan`, parameters bound from `belief` or free in composed ranges.
 
-    `object_types` gives PDDL object types for the type defaults (default: the binding's only type);
-    `initial_state` adds initial facts not on any causal link to those that place scene objects.
+    `object_types` gives PDDL object types for the type defaults (default: those the plan carries, else the
+    binding's only type); `initial_state` adds initial facts not on any causal link to those that place scene
+    objects (default: the plan's initial facts).
     """
+    if object_types is None and plan.objects:
+        object_types = plan.object_types
+    if not initial_state:
+        initial_state = plan.initial
     facts = _facts_by_object(plan, binding)
     composed: dict[tuple[str, str], tuple[float | None, float, float]] = {}
     actions = []
@@ -52,7 +58,7 @@ def instantiate(plan: AbstractPlan, binding: Binding, belief: BeliefState,
         spec = bound.spec
         params = []
         for group in GROUPS:
-            names = getattr(spec, group)
+            names, quantities = spec.group(group)
             if not names:
                 continue
             index = bound.args[group]
@@ -60,7 +66,7 @@ def instantiate(plan: AbstractPlan, binding: Binding, belief: BeliefState,
                 raise BindingError(f"[actions.{bound.pddl}] {group} = {index} is out of range for step "
                                    f"{step.id} {pddl} with {len(step.args)} argument(s)", file=binding.file)
             obj = step.args[index]
-            for name, quantity in zip(names, spec.quantities):
+            for name, quantity in zip(names, quantities):
                 key = (obj.lower(), quantity)
                 if key not in composed:
                     types = _type_chain(obj, binding, object_types)
@@ -70,7 +76,7 @@ def instantiate(plan: AbstractPlan, binding: Binding, belief: BeliefState,
                 params.append(Parameter(f"{obj}.{quantity}", name, value, low, high))
         actions.append(ExecutableAction(step.id, pddl, bound.executable, tuple(params)))
     scene = _scene(plan, binding, belief, initial_state)
-    return ActionSequence(plan.domain, plan.problem, tuple(actions), scene)
+    return ActionSequence(plan.domain, plan.problem, tuple(actions), scene, binding.simulator)
 
 
 def _facts_by_object(plan: AbstractPlan, binding: Binding) -> dict[str, list[_Fact]]:

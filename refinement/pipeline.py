@@ -1,6 +1,7 @@
 """The pipeline read top to bottom (Algorithm 4 without assertion): plan -> instantiate -> refine -> dispatch.
 
-One named function per stage; `run` strings them together for a domain/problem pair on disk.
+One named function per stage; `prepare` strings the first ones together for a domain/problem pair on disk
+(the PDDL is parsed once, by the planner: the plan carries the objects, types and initial facts).
 """
 
 from __future__ import annotations
@@ -9,17 +10,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from tailor.planner_bridge import DEFAULT_PLANNER, AbstractPlan, plan_files, resolve_problem
-from tailor.planner_bridge.reading import read_problem
-from tailor.sims.episode import SequenceResult
-
-from tailor.refinement.models.action_models import ActionModel, load_action_models
 from tailor.refinement.action_sequence import ActionSequence
 from tailor.refinement.belief import BeliefState, belief_path_for, load_belief
 from tailor.refinement.binding import BINDING_FILE, Binding, load_domain_binding
 from tailor.refinement.dispatch import dispatch
 from tailor.refinement.errors import BindingError, ModelFileError
 from tailor.refinement.instantiate import instantiate
+from tailor.refinement.models.action_models import ActionModel, load_action_models
 from tailor.refinement.refine import RefinedSequence, refine
+from tailor.sims.episode import SequenceResult
 
 MODELS_DIR = "models"
 GREEDY_HORIZON = 1
@@ -39,15 +38,6 @@ class Task:
 
 
 @dataclass(frozen=True)
-class ProblemFacts:
-    """What instantiation needs from the PDDL problem beyond the plan: objects, their type chains, init."""
-
-    objects: tuple[str, ...]
-    types: dict[str, tuple[str, ...]]
-    initial: tuple[tuple[str, ...], ...]
-
-
-@dataclass(frozen=True)
 class Prepared:
     """Everything before refinement: the plan, its instantiated sequence and the models to refine it with."""
 
@@ -56,7 +46,6 @@ class Prepared:
     sequence: ActionSequence
     models: dict[str, ActionModel]
     binding: Binding
-    facts: ProblemFacts
 
 
 def resolve_task(domain_arg: str, problem_arg: str, belief: str | None = None) -> Task:
@@ -83,37 +72,19 @@ def plan_task(task: Task, planner: str = DEFAULT_PLANNER, timeout: float | None 
     return plan_files(task.domain, task.problem, planner=planner, timeout=timeout)
 
 
-def problem_facts(task: Task) -> ProblemFacts:
-    problem, _ = read_problem(task.domain, task.problem)
-    types = {}
-    for o in problem.all_objects:
-        chain, t = [], o.type
-        while t is not None:
-            chain.append(getattr(t, "name", str(t)))
-            t = getattr(t, "father", None)
-        types[o.name] = tuple(chain)
-    initial = tuple(
-        (fact.fluent().name, *(str(a) for a in fact.args))
-        for fact, value in problem.explicit_initial_values.items()
-        if value.is_true()
-    )
-    return ProblemFacts(tuple(o.name for o in problem.all_objects), types, initial)
-
-
-def instantiate_task(task: Task, plan: AbstractPlan, binding: Binding, facts: ProblemFacts,
-                     belief: BeliefState | None = None) -> ActionSequence:
-    """Algorithm 3 with the problem's objects and their types (and ancestors) read from the PDDL."""
+def instantiate_task(task: Task, plan: AbstractPlan, binding: Binding, belief: BeliefState | None = None
+                     ) -> ActionSequence:
+    """Algorithm 3 with the problem's objects, their types (and ancestors) and initial facts from the plan."""
     if belief is None:
-        belief = load_belief(task.belief, facts.objects)
-    return instantiate(plan, binding, belief, object_types=facts.types, initial_state=facts.initial)
+        belief = load_belief(task.belief, [name for name, _ in plan.objects] or None, binding.quantities)
+    return instantiate(plan, binding, belief)
 
 
 def prepare(task: Task, planner: str = DEFAULT_PLANNER, timeout: float | None = None) -> Prepared:
+    binding = load_binding(task)  # a bad binding fails before the planner runs
     plan = plan_task(task, planner, timeout)
-    facts = problem_facts(task)
-    binding = load_binding(task)
-    sequence = instantiate_task(task, plan, binding, facts)
-    return Prepared(task, plan, sequence, load_models(task, sequence), binding, facts)
+    sequence = instantiate_task(task, plan, binding)
+    return Prepared(task, plan, sequence, load_models(task, sequence), binding)
 
 
 @dataclass(frozen=True)

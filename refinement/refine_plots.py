@@ -1,5 +1,6 @@
-"""Pictures of subgoal refinement: greedy vs refined trajectories (Fig. 5.1) and predicted time over the
-free angle of approach as polar plots (Fig. 5.8)."""
+"""Pictures of subgoal refinement: the executions side by side in each of the simulator's views (Fig. 5.1 for
+the soccer robot, Fig. 5.14 for the arm: Cartesian and joint space), and the predicted time over the first free
+parameter (Fig. 5.8: a polar plot where that parameter is an angle spanning the full circle)."""
 
 from __future__ import annotations
 
@@ -9,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-FIELD_X = (-4.0, 4.0)  # m, the soccer field of sims.soccer
-FIELD_Y = (-3.0, 3.0)
+FULL_CIRCLE = 2 * np.pi - 1e-9
+LAYER_STYLES = (("-", "tab:blue"), ("--", "tab:orange"), (":", "tab:green"))
 
 
 def _save(fig, path: Path) -> None:
@@ -27,105 +28,122 @@ def _save(fig, path: Path) -> None:
             os.unlink(tmp)
 
 
-def _draw_trajectory(ax, trajectory: np.ndarray, title: str, goals: list[tuple[float, float, float]]) -> None:
-    t, x, y, phi = trajectory[:, 0], trajectory[:, 1], trajectory[:, 2], trajectory[:, 3]
-    ax.plot(x, y, "-", color="tab:blue", lw=1.5, label="robot (ball point)")
-    step = max(1, len(t) // 25)
-    ax.quiver(x[::step], y[::step], np.cos(phi[::step]), np.sin(phi[::step]), color="tab:blue",
-              scale=25, width=0.004, alpha=0.6)
-    if trajectory.shape[1] >= 7 and np.isfinite(trajectory[:, 5]).any():
-        ax.plot(trajectory[:, 5], trajectory[:, 6], "--", color="tab:orange", lw=1.2, label="ball")
-        ax.plot(trajectory[0, 5], trajectory[0, 6], "o", color="tab:orange", ms=7)
-    for gx, gy, gphi in goals:
-        ax.plot(gx, gy, "x", color="k", ms=8)
-        if np.isfinite(gphi):
-            ax.arrow(gx, gy, 0.35 * np.cos(gphi), 0.35 * np.sin(gphi), head_width=0.08, color="k")
-    ax.set_xlim(*FIELD_X)
-    ax.set_ylim(*FIELD_Y)
-    ax.set_aspect("equal")
+def view_layers(view) -> tuple[tuple[str, ...], ...]:
+    """A simulator view as layers: ("x", "y") is one layer; (("x", "y", "phi"), ("bx", "by")) two, the third
+    name of a layer a heading drawn as arrows."""
+    return (tuple(view),) if isinstance(view[0], str) else tuple(tuple(layer) for layer in view)
+
+
+def subgoal_rows(result) -> list[int]:
+    """Trajectory rows where each action of a dispatched sequence ended (the subgoals it reached)."""
+    t = result.column("t")
+    ends = [r.start + r.duration for r in result.results]
+    return [int(np.argmin(np.abs(t - end))) for end in ends] if len(t) else []
+
+
+def _draw(ax, result, layers, title: str) -> None:
+    marks = subgoal_rows(result)
+    for k, layer in enumerate(layers):
+        if not all(result.has_column(c) for c in layer[:2]):
+            continue
+        style, color = LAYER_STYLES[k % len(LAYER_STYLES)]
+        x, y = result.column(layer[0]), result.column(layer[1])
+        if not np.isfinite(x).any():
+            continue
+        ax.plot(x, y, style, color=color, lw=1.5, label=f"{layer[0]}, {layer[1]}")
+        ax.plot(x[:1], y[:1], "o", color=color, ms=6)
+        if len(layer) > 2 and result.has_column(layer[2]):
+            heading, step = result.column(layer[2]), max(1, len(x) // 25)
+            ax.quiver(x[::step], y[::step], np.cos(heading[::step]), np.sin(heading[::step]), color=color,
+                      scale=25, width=0.004, alpha=0.6)
+        if k == 0 and marks:
+            ax.plot(x[marks], y[marks], "x", color="k", ms=8, label="subgoals reached")
+    ax.set_aspect("equal", adjustable="datalim")
     ax.grid(alpha=0.3)
     ax.set_title(title, fontsize=10)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
+    ax.set_xlabel(layers[0][0])
+    ax.set_ylabel(layers[0][1])
 
 
-def plot_trajectories(path: Path, panels: list[tuple[str, np.ndarray, list[tuple[float, float, float]]]]) -> None:
-    """Side-by-side trajectories, one panel per (title, trajectory (n, 7), subgoals [(x, y, phi)])."""
+def plot_executions(path: Path, views, panels: list[tuple[str, object]]) -> None:
+    """One row per view, one column per (title, SequenceResult)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(panels), figsize=(6.0 * len(panels), 4.8))
-    for ax, (title, trajectory, goals) in zip(np.atleast_1d(axes), panels):
-        _draw_trajectory(ax, trajectory, title, goals)
-    np.atleast_1d(axes)[0].legend(loc="lower left", fontsize=8)
+    views = list(views) or [("t", "t")]
+    fig, axes = plt.subplots(len(views), len(panels), figsize=(5.5 * len(panels), 4.6 * len(views)), squeeze=False)
+    for row, view in enumerate(views):
+        for col, (title, result) in enumerate(panels):
+            _draw(axes[row, col], result, view_layers(view), title if row == 0 else "")
+        axes[row, 0].legend(loc="best", fontsize=8)
     _save(fig, path)
     plt.close(fig)
 
 
-def plot_polar_costs(path: Path, angles: np.ndarray, curves: list[tuple[str, np.ndarray]],
-                     marks: list[tuple[str, float]]) -> None:
-    """Predicted duration over the free angle of approach, one polar plot per curve (Fig. 5.8)."""
+def plot_costs(path: Path, parameter, values: np.ndarray, curves: list[tuple[str, np.ndarray]],
+               marks: list[tuple[str, float]]) -> None:
+    """Predicted duration over one free parameter, one panel per curve: polar where the parameter is an angle
+    spanning the full circle (Fig. 5.8), Cartesian otherwise."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(curves), subplot_kw={"projection": "polar"}, figsize=(4.2 * len(curves), 4.2))
-    for ax, (title, values) in zip(np.atleast_1d(axes), curves):
-        ax.plot(angles, values, color="tab:blue")
-        ax.set_rlabel_position(202.5)  # radial labels off the 0°/180° axis labels
-        for label, angle in marks:
-            k = int(np.argmin(np.abs(np.angle(np.exp(1j * (angles - angle))))))
-            ax.plot([angle], [values[k]], "o", ms=6, label=f"{label}: {np.degrees(angle):.0f}°, {values[k]:.2f} s")
+    polar = parameter.high - parameter.low >= FULL_CIRCLE
+    fig, axes = plt.subplots(1, len(curves), subplot_kw={"projection": "polar"} if polar else {},
+                             figsize=(4.2 * len(curves), 4.2))
+    for ax, (title, predicted) in zip(np.atleast_1d(axes), curves):
+        ax.plot(values, predicted, color="tab:blue")
+        if polar:
+            ax.set_rlabel_position(202.5)  # radial labels off the 0°/180° axis labels
+        else:
+            ax.set(xlabel=parameter.id, ylabel="predicted duration (s)")
+        for label, value in marks:
+            k = int(np.argmin(np.abs(values - value)))
+            shown = f"{np.degrees(value):.0f}°" if polar else f"{value:.3g}"
+            ax.plot([value], [predicted[k]], "o", ms=6, label=f"{label}: {shown}, {predicted[k]:.2f} s")
         ax.set_title(title, fontsize=10)
         ax.legend(loc="lower center", bbox_to_anchor=(0.5, -0.32), fontsize=8)
     _save(fig, path)
     plt.close(fig)
 
 
-def _subgoals(sequence) -> list[tuple[float, float, float]]:
-    goals = []
-    for action in sequence.actions:
-        values = action.values()
-        goals.append((float(values[4]), float(values[5]), float(values[6])))
-    return goals
-
-
-def draw_refinement(path, prepared, outcomes) -> None:
-    """Fig. 5.1 for this problem (greedy and refined trajectories) and, where the first subgoal has a free
-    heading, Fig. 5.8 (predicted time of the first actions over that angle) as FILE_polar.png."""
+def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
+    """The executions in `outcomes` (greedy, refined, and any other) in each view of the simulator as FILE, and
+    the predicted time of the first actions over the first free parameter as FILE_polar.png (or FILE_costs.png
+    where that parameter is not a full-circle angle). Returns the files written."""
     path = Path(path)
     panels = []
-    for key, label in (("greedy", "greedy (h=1)"), ("refined", f"refined (h={outcomes['refined'].refined.horizon})")):
-        o = outcomes[key]
+    for key, o in outcomes.items():
+        label = {"greedy": "greedy (h=1)", "refined": f"refined (h={o.refined.horizon})",
+                 "zero": "free parameters 0"}.get(key, key)
         title = f"{label}: predicted {o.refined.predicted_total:.2f} s, simulated {o.simulated.duration:.2f} s"
         if not o.simulated.succeeded:
             title += " (failed)"
-        panels.append((title, o.simulated.trajectory, _subgoals(o.refined.sequence)))
-    plot_trajectories(path, panels)
+        panels.append((title, o.simulated))
+    plot_executions(path, views, panels)
+    written = [path]
 
     refined = outcomes["refined"].refined
-    first = prepared.sequence.actions[0]
-    angle = next((p for p in first.free_parameters() if p.name.startswith("phi")), None)
-    if angle is None:
-        return
+    free = prepared.sequence.actions[0].free_parameters()
+    if not free:
+        return written
+    parameter = next((p for p in free if p.high - p.low >= FULL_CIRCLE), free[0])
     window = prepared.sequence.actions[:max(2, refined.horizon)]
     chosen = {p.id: p.value for a in refined.sequence.actions for p in a.params}
     greedy = {p.id: p.value for a in outcomes["greedy"].refined.sequence.actions for p in a.params}
-    angles = np.linspace(angle.low, angle.high, 361)
+    values = np.linspace(parameter.low, parameter.high, 361)
     curves = []
-    total = np.zeros_like(angles)
+    total = np.zeros_like(values)
     for action in window:
-        rows = []
-        for value in angles:
-            assignment = dict(chosen)
-            assignment[angle.id] = float(value)
-            rows.append(action.values(assignment))
+        rows = [action.values({**chosen, parameter.id: float(v)}) for v in values]
         predicted = prepared.models[action.action].predict_duration(np.array(rows))
         total += predicted
         curves.append((f"{action.step} {action.action}", predicted))
     curves.append(("sum over the horizon", total))
-    plot_polar_costs(path.with_name(path.stem + "_polar" + (path.suffix or ".png")), angles, curves,
-                     [("greedy", greedy[angle.id]), ("refined", chosen[angle.id])])
+    polar = parameter.high - parameter.low >= FULL_CIRCLE
+    costs = path.with_name(path.stem + ("_polar" if polar else "_costs") + (path.suffix or ".png"))
+    plot_costs(costs, parameter, values, curves, [("greedy", greedy[parameter.id]), ("refined", chosen[parameter.id])])
+    return written + [costs]

@@ -1,32 +1,13 @@
 """Simulators and the executable actions of the action library (Table 2.1).
 
-`ACTIONS` is the registry the action library binding refers to by name: each executable action declares
-its parameter groups, observed (read from the world at dispatch) and internal (the subgoal), and the
-quantities of a PDDL object each parameter takes (x, y, phi, v).
+`tailor.sims` is robot-agnostic: the protocol a simulator follows (`protocol`), the registry that finds
+simulators, built in or installed by entry point (`registry`), what they report (`episode`) and experience
+gathering (`experience`). Each robot lives in a package of its own (`tailor.sims.soccer`, `tailor.sims.arm`).
 """
 
-from __future__ import annotations
+from tailor.sims.episode import ActionCall, ActionResult, Episode, SequenceResult
+from tailor.sims.protocol import ActionSpec, Scenario, Simulator, SimulatorEntry
+from tailor.sims.registry import get, register, simulators
 
-from dataclasses import dataclass
-
-
-@dataclass(frozen=True)
-class ActionSpec:
-    name: str
-    simulator: str
-    observed: tuple[str, ...]  # parameter names, read from the belief / the world
-    internal: tuple[str, ...]  # parameter names of the subgoal
-    quantities: tuple[str, ...]  # the object quantity each group position stands for
-
-    @property
-    def parameters(self) -> tuple[str, ...]:
-        return self.observed + self.internal
-
-
-_POSE = dict(observed=("x", "y", "phi", "v"), internal=("xg", "yg", "phig", "vg"), quantities=("x", "y", "phi", "v"))
-
-ACTIONS: dict[str, ActionSpec] = {
-    "goToPose": ActionSpec("goToPose", "soccer", **_POSE),
-    "approachBall": ActionSpec("approachBall", "soccer", **_POSE),
-    "dribbleBall": ActionSpec("dribbleBall", "soccer", **_POSE),
-}
+__all__ = ["ActionCall", "ActionResult", "ActionSpec", "Episode", "Scenario", "SequenceResult", "Simulator",
+           "SimulatorEntry", "get", "register", "simulators"]

@@ -1,30 +1,40 @@
-"""What a simulator reports: one executed action (an Episode) or a dispatched sequence of them."""
+"""What a simulator reports: one executed action (an Episode) or a dispatched sequence of them.
+
+Logs carry *named* state columns (the simulator declares them), so code outside a robot's package reads
+`episode.column("x")`, never a robot-specific array.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-PARAMETER_NAMES = ("x", "y", "phi", "v", "xg", "yg", "phig", "vg")
 SUCCESS = "success"
+
+
+def _column_index(columns: tuple[str, ...], name: str, what: str) -> int:
+    try:
+        return columns.index(name)
+    except ValueError:
+        raise KeyError(f"{what} has no state column {name!r} (columns: {', '.join(columns)})") from None
 
 
 @dataclass(frozen=True, eq=False)
 class Episode:
     """One execution of one action from its initial state until success or failure, logged at 10 Hz.
 
-    `params` are the action's parameters at the start (observed x, y, phi, v; internal xg, yg, phig, vg);
-    `robot` is the logged (noisy, as the robot believes it) dynamic pose at times `t`, `ball` the logged
-    ball position (NaN where the scene has no ball).
+    `params` are the action's parameters at the start (observed, then internal: the ActionSpec's order);
+    `state` is the logged (believed, noisy) state at times `t`, one column per name in `columns`.
     """
 
     action: str
-    params: np.ndarray  # (8,)
+    params: np.ndarray  # (p,)
     t: np.ndarray  # (n,)
-    robot: np.ndarray  # (n, 4) x, y, phi, v
-    ball: np.ndarray  # (n, 2)
-    outcome: str  # "success", "collision", "ball_lost", "timeout"
+    state: np.ndarray  # (n, c)
+    columns: tuple[str, ...]  # names of the c state columns
+    outcome: str  # "success" or the simulator's failure name ("collision", "timeout", ...)
     duration: float
     seed: int
 
@@ -32,13 +42,21 @@ class Episode:
     def succeeded(self) -> bool:
         return self.outcome == SUCCESS
 
+    def column(self, name: str) -> np.ndarray:
+        """The logged values of one named state column, (n,)."""
+        return self.state[:, _column_index(self.columns, name, f"episode of {self.action}")]
+
+    def columns_of(self, names: Sequence[str]) -> np.ndarray:
+        """The logged values of several named columns, (n, len(names))."""
+        return self.state[:, [_column_index(self.columns, n, f"episode of {self.action}") for n in names]]
+
 
 @dataclass(frozen=True)
 class ActionCall:
     """An executable action with its internal (goal) parameters; observed ones come from the world."""
 
     action: str
-    goal: tuple[float, float, float, float]  # xg, yg, phig, vg
+    goal: tuple[float, ...]  # the ActionSpec's internal parameters, in order
 
 
 @dataclass(frozen=True)
@@ -51,10 +69,12 @@ class ActionResult:
 
 @dataclass(frozen=True, eq=False)
 class SequenceResult:
-    """A dispatched sequence: per-action results and the true trajectory (t, x, y, phi, v, ball_x, ball_y)."""
+    """A dispatched sequence: per-action results and the true trajectory at 10 Hz, one column per name in
+    `columns` (the first is the time "t")."""
 
     results: tuple[ActionResult, ...]
-    trajectory: np.ndarray  # (n, 7) at 10 Hz
+    trajectory: np.ndarray  # (n, len(columns))
+    columns: tuple[str, ...] = ("t",)
 
     @property
     def succeeded(self) -> bool:
@@ -63,3 +83,9 @@ class SequenceResult:
     @property
     def duration(self) -> float:
         return float(sum(r.duration for r in self.results))
+
+    def column(self, name: str) -> np.ndarray:
+        return self.trajectory[:, _column_index(self.columns, name, "trajectory")]
+
+    def has_column(self, name: str) -> bool:
+        return name in self.columns

@@ -1,4 +1,4 @@
-"""`tailor evaluate soccer`: greedy vs refined execution measured in the simulator (Sec. 5.5, Tables 5.1-5.4)."""
+"""`tailor evaluate DOMAIN`: greedy vs refined execution measured in the simulator (Sec. 5.5, Tables 5.1-5.4)."""
 
 from __future__ import annotations
 
@@ -8,20 +8,20 @@ import sys
 
 from tailor.refinement.cli.arguments import whole_number
 
-HELP = "measure refined vs greedy execution in the simulator over random scenarios"
+HELP = "measure refined vs greedy execution in the simulator over random situations"
 
 HORIZONS = (1, 2, 3, 4)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("domain", metavar="DOMAIN", help="bundled domain (soccer) or its domain.pddl")
+    parser.add_argument("domain", metavar="DOMAIN", help="bundled domain name, a domain folder, or its domain.pddl")
     parser.add_argument("--episodes", type=whole_number(0), default=1000, metavar="N",
-                        help="approachBall -> dribbleBall scenarios (default 1000)")
+                        help="random situations refined greedily and with h=2 (default 1000)")
     parser.add_argument("--oracle-episodes", type=whole_number(0), default=100, metavar="N",
-                        help="of these, how many are also searched exhaustively in the simulator (default 100)")
-    parser.add_argument("--waypoint-episodes", type=whole_number(0), default=100, metavar="N",
-                        help="four-way-point navigations run with horizons 1-4 (default 100)")
-    parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed of scenarios and simulator")
+                        help="of these, how many are also searched in the simulator (default 100)")
+    parser.add_argument("--horizon-episodes", type=whole_number(0), default=100, metavar="N",
+                        help="situations run with horizons 1-4 (Table 5.3; default 100)")
+    parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed of situations and simulator")
     parser.add_argument("--jobs", type=whole_number(1), default=1, metavar="J", help="worker processes (default 1)")
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
 
@@ -48,70 +48,93 @@ def _fmt(value, pattern="{:.2f}") -> str:
     return "-" if value is None else pattern.format(value)
 
 
+def _pct(value) -> str:
+    return _fmt(None if value is None else 100 * value, "{:.1f}")
+
+
 def _print_text(report: dict) -> None:
     out = sys.stdout.write
     s = report
-    out(f"Soccer approachBall -> dribbleBall, {s['scenarios']} scenarios (seed {report['seed']}); "
-        f"{s['episodes']} where greedy and refined both succeeded "
-        f"(failed: greedy {s['failed_greedy']}, refined {s['failed_refined']})\n")
+    out(f"Domain {report['domain']}: greedy vs refined over {s['scenarios']} random '{report['comparison']}' "
+        f"situations (seed {report['seed']}; problems {', '.join(s['problems'])}); {s['episodes']} where greedy "
+        f"and refined both succeeded (failed: greedy {s['failed_greedy']}, refined {s['failed_refined']})\n")
     out(f"  mean duration greedy (h=1)   {_fmt(s['greedy_mean'])} s\n")
     out(f"  mean duration refined (h=2)  {_fmt(s['refined_mean'])} s\n")
-    out(f"  mean improvement (Eq. 5.3)   {_fmt(s['improvement'] and 100 * s['improvement'], '{:.1f}')}%"
-        f"   (predicted {_fmt(s['predicted_improvement'] and 100 * s['predicted_improvement'], '{:.1f}')}%)\n")
+    out(f"  mean improvement (Eq. 5.3)   {_pct(s['improvement'])}%   (predicted {_pct(s['predicted_improvement'])}%)\n")
     out(f"  paired t-test p-value        {_fmt(s['p_value'], '{:.2g}')}\n")
     out(f"  better / equal / worse       {s['better']} / {s['equal']} / {s['worse']}   "
-        f"(mean improvement {_fmt(s['improvement_better'] and 100 * s['improvement_better'], '{:.1f}')}% / "
-        f"{_fmt(s['improvement_equal'] and 100 * s['improvement_equal'], '{:.1f}')}% / "
-        f"{_fmt(s['improvement_worse'] and 100 * s['improvement_worse'], '{:.1f}')}%)\n")
+        f"(mean improvement {_pct(s['improvement_better'])}% / {_pct(s['improvement_equal'])}% / "
+        f"{_pct(s['improvement_worse'])}%)\n")
+    if "zero_mean" in s:
+        out(f"  free parameters all zero     {_fmt(s['zero_mean'])} s over {s['zero_episodes']} (failed "
+            f"{s['failed_zero']}); refined is {_pct(s['improvement_over_zero'])}% faster, "
+            f"p {_fmt(s['p_value_zero'], '{:.2g}')}\n")
     out(f"  refined / simulated optimum  {_fmt(s['oracle_ratio'], '{:.3f}')} over {s['oracle_episodes']} episodes "
-        f"(greedy / optimum {_fmt(s['greedy_oracle_ratio'], '{:.3f}')})\n")
+        f"(greedy / optimum {_fmt(s['greedy_oracle_ratio'], '{:.3f}')}; {', '.join(s['oracle_methods']) or '-'})\n")
     out(f"  optimizer median time        analytic {_fmt(s['analytic_ms_median'])} ms, ga {_fmt(s['ga_ms_median'])} ms; "
-        f"agree within 1% in {_fmt(s['analytic_ga_agree'] and 100 * s['analytic_ga_agree'], '{:.1f}')}% "
+        f"agree within 1% in {_pct(s['analytic_ga_agree'])}% "
         f"(analytic fell back to ga {s['analytic_fallbacks']} times)\n")
-    w = report.get("waypoints")
+    w = report.get("horizons")
     if w:
-        out(f"\nFour way-points with goToPose (Table 5.3), {w['episodes']} episodes where every horizon succeeded:\n")
+        out(f"\nHorizons (Table 5.3) over random '{report['horizon_situations']}' situations, {w['episodes']} "
+            "where every horizon succeeded:\n")
         out("  horizon  mean (s)  improvement vs h=1  vs h-1   p (vs h-1)  optimizer\n")
         for row in w["horizons"]:
-            out(f"  h={row['horizon']:<6} {_fmt(row['mean']):>8}  {_fmt(100 * row['improvement'], '{:.1f}'):>17}%"
-                f"  {_fmt(100 * row['improvement_over_previous'], '{:.1f}'):>6}%  {_fmt(row['p_value_vs_previous'], '{:.2g}'):>10}"
+            out(f"  h={row['horizon']:<6} {_fmt(row['mean']):>8}  {_pct(row['improvement']):>17}%"
+                f"  {_pct(row['improvement_over_previous']):>6}%  {_fmt(row['p_value_vs_previous'], '{:.2g}'):>10}"
                 f"  {','.join(row['methods'])}\n")
 
 
-def run(args: argparse.Namespace) -> int:
-    from tailor.refinement.evaluation.experiments import (
-        prepared_job,
-        score_episode,
-        summarize_score,
-        summarize_waypoints,
-        waypoint_episode,
-    )
+def _situations(domain_dir, generator: str, count: int, seed: int, jobs_by_problem: dict):
+    """Draw `count` situations (in this process: cheap) and plan each problem they need once."""
+    import numpy as np
+
+    from tailor.refinement.evaluation.experiments import situation_seed
     from tailor.refinement.pipeline import prepare, resolve_task
+    from tailor.refinement.situations import prepared_job
 
-    from tailor.planner_bridge import resolve_problem
-    from tailor.planner_bridge.errors import InputFileError
-    from tailor.refinement.errors import TailorError
+    entry_draw = None
+    out = []
+    for index in range(count):
+        if entry_draw is None:
+            from tailor.refinement.binding import load_domain_binding
 
-    for problem in ("score", "waypoints"):
-        try:
-            resolve_problem(args.domain, problem)
-        except InputFileError as exc:
-            if exc.file != problem:  # the domain itself is unknown: that error says so
-                raise
-            raise TailorError(f"the evaluation needs the soccer problems 'score' and 'waypoints' beside the domain, "
-                              f"and {problem!r} is not there", file=args.domain) from None
-    score = prepare(resolve_task(args.domain, "score"))
-    job = prepared_job(score, args.seed)
-    rows = _run_parallel(score_episode, [(job, i, i < args.oracle_episodes) for i in range(args.episodes)],
-                         args.jobs, "greedy vs refined")
-    report = {"domain": score.plan.domain, "seed": args.seed}
-    report.update(summarize_score(rows))
-    if args.waypoint_episodes:
-        waypoints = prepare(resolve_task(args.domain, "waypoints"))
-        wjob = prepared_job(waypoints, args.seed)
-        wrows = _run_parallel(waypoint_episode, [(wjob, i, HORIZONS) for i in range(args.waypoint_episodes)],
-                              args.jobs, "way-points h=1..4")
-        report["waypoints"] = summarize_waypoints(wrows, HORIZONS)
+            entry_draw = load_domain_binding(domain_dir).entry.situations[generator]
+        problem, objects = entry_draw(np.random.default_rng(situation_seed(seed, index)))
+        if problem not in jobs_by_problem:
+            jobs_by_problem[problem] = prepared_job(prepare(resolve_task(str(domain_dir / "domain.pddl"), problem)),
+                                                    seed)
+        out.append((jobs_by_problem[problem], index, objects))
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    from tailor.planner_bridge import resolve_domain_dir
+    from tailor.refinement.binding import load_domain_binding
+    from tailor.refinement.evaluation.experiments import (
+        comparison_episode,
+        evaluation_plan,
+        horizon_episode,
+        summarize_comparison,
+        summarize_horizons,
+    )
+
+    domain_dir = resolve_domain_dir(args.domain)
+    binding = load_domain_binding(domain_dir)
+    plan = evaluation_plan(binding)
+    jobs_by_problem: dict = {}
+    items = _situations(domain_dir, plan.comparison, args.episodes, args.seed, jobs_by_problem)
+    rows = _run_parallel(comparison_episode, [(job, i, objects, i < args.oracle_episodes, plan.zero_baseline)
+                                              for job, i, objects in items], args.jobs, "greedy vs refined")
+    report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
+              "comparison": plan.comparison}
+    report.update(summarize_comparison(rows))
+    if plan.horizons and args.horizon_episodes:
+        items = _situations(domain_dir, plan.horizons, args.horizon_episodes, args.seed, jobs_by_problem)
+        hrows = _run_parallel(horizon_episode, [(job, i, objects, HORIZONS) for job, i, objects in items],
+                              args.jobs, "horizons 1..4")
+        report["horizon_situations"] = plan.horizons
+        report["horizons"] = summarize_horizons(hrows, HORIZONS)
     if args.json:
         sys.stdout.write(json.dumps(report, indent=1) + "\n")
     else:

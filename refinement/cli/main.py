@@ -19,6 +19,7 @@ COMMANDS = {
     "train": "tailor.refinement.cli.train",
     "refine": "tailor.refinement.cli.refine",
     "evaluate": "tailor.refinement.cli.evaluate",
+    "domains": "tailor.refinement.cli.domains",
 }
 
 EXIT_INTERRUPTED = 130

@@ -18,7 +18,7 @@ HELP = "refine the free parameters of a plan for the fastest predicted execution
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from tailor.refinement.optimizers import OPTIMIZERS
 
-    parser.add_argument("domain", metavar="DOMAIN", help="domain.pddl file, or the name of a bundled domain (soccer)")
+    parser.add_argument("domain", metavar="DOMAIN", help="domain.pddl file, or the name of a bundled domain (see `tailor domains`)")
     parser.add_argument("problem", metavar="PROBLEM", help="problem .pddl file, or the name of one of its problems")
     parser.add_argument("--optimizer", choices=sorted(OPTIMIZERS), default="analytic",
                         help="analytic model-tree minimization (falls back to ga where it does not apply), "
@@ -138,6 +138,19 @@ def _print_text(prepared, method: str, outcomes: dict) -> None:
         out(f"Optimizer: {w.method}, {1000 * w.seconds:.1f} ms, {w.evaluations} evaluations{note}\n")
 
 
+def _zero_outcome(prepared, seed: int):
+    """Every free parameter zero (clipped into its range), dispatched: the baseline of Fig. 5.14."""
+    from tailor.refinement.dispatch import dispatch
+    from tailor.refinement.evaluation.experiments import zero_assignment
+    from tailor.refinement.pipeline import Outcome
+    from tailor.refinement.refine import RefinedSequence
+
+    sequence = prepared.sequence.bind(zero_assignment(prepared.sequence))
+    predicted = tuple(float(prepared.models[a.action].predict_duration(a.values()[None, :])[0])
+                      for a in sequence.actions)
+    return Outcome(RefinedSequence(sequence, predicted, (), 0), dispatch(sequence, seed=seed))
+
+
 def run(args: argparse.Namespace) -> int:
     from tailor.refinement.pipeline import GREEDY_HORIZON, prepare, refine_and_dispatch, resolve_task
 
@@ -149,7 +162,10 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from tailor.refinement.refine_plots import draw_refinement
 
-        draw_refinement(args.plot, prepared, outcomes)
+        executions = dict(outcomes)
+        if prepared.binding.evaluation.get("zero_baseline") and prepared.sequence.free_parameters():
+            executions = {"zero": _zero_outcome(prepared, args.seed), **outcomes}
+        draw_refinement(args.plot, prepared, executions, prepared.binding.entry.views)
     if args.json:
         sys.stdout.write(json.dumps(result_json(prepared, args.optimizer, args.seed, outcomes), indent=1) + "\n")
     else:

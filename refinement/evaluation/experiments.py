@@ -1,159 +1,156 @@
 """Measure subgoal refinement in the simulator (Sec. 5.5): greedy (h = 1) vs refined (h = 2) on random
-approachBall -> dribbleBall scenarios, the distance to the simulated optimum, optimizer speed, and the
-four-way-point navigation with horizons 1-4 (Table 5.3).
+situations, the distance to the simulated optimum, optimizer speed, an optional baseline with every free
+parameter zero, and the horizons 1-4 (Table 5.3), for any domain whose binding names its situations:
 
-Every scenario goes through the real pipeline: a random belief state for the bundled problem, Algorithm 3,
-refinement, dispatch. Greedy and refined execution of one scenario use the same simulator seed (common
-random numbers), so their difference is the effect of the chosen subgoal, not of the noise.
+    [evaluation]
+    comparison = "score"     # situation generator of the simulator for greedy vs refined (Tables 5.1, 5.4)
+    horizons = "waypoints"   # situation generator for the horizon experiment (Table 5.3); optional
+    zero_baseline = false    # also dispatch every situation with its free parameters set to 0 (e.g. the arm's
+                             # way-point velocities: stop at every way-point)
+
+Every situation goes through the real pipeline: a random belief state, Algorithm 3 on the problem's plan
+(planned once per problem), refinement, dispatch. All executions of one situation use the same simulator
+seed (common random numbers), so their difference is the effect of the chosen subgoals, not of the noise.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
-from types import MappingProxyType
 
 import numpy as np
 
-from tailor.refinement.belief import BeliefState
+from tailor.refinement.action_sequence import ActionSequence
+from tailor.refinement.binding import Binding
 from tailor.refinement.dispatch import dispatch
-from tailor.refinement.instantiate import instantiate
-from tailor.refinement.pipeline import Prepared, Task, load_binding, load_models
+from tailor.refinement.errors import BindingError
 from tailor.refinement.refine import refine
+from tailor.refinement.situations import Job, job_models, situation_sequence, stream_seed
 
-FIELD_X = (-4.0, 4.0)  # m, the simulated field (sims.soccer)
-FIELD_Y = (-3.0, 3.0)
-MARGIN = 0.8  # m kept free between random positions and the walls
-MIN_GAP = 1.0  # m between consecutive random positions
 EQUAL_BAND = 0.01  # |1 - t_refined / t_greedy| below this counts as "equal" (Table 5.4)
 AGREEMENT = 0.01  # analytic and ga agree when their predicted costs differ by at most 1%
-ORACLE_HEADINGS = 36  # grid of the exhaustive simulated search: headings (10 degree steps) ...
-ORACLE_SPEEDS = 4  # ... times speeds spread over the free range
-
-
-def _point(rng: np.random.Generator, margin: float = MARGIN) -> tuple[float, float]:
-    return (float(rng.uniform(FIELD_X[0] + margin, FIELD_X[1] - margin)),
-            float(rng.uniform(FIELD_Y[0] + margin, FIELD_Y[1] - margin)))
-
-
-def _points(rng: np.random.Generator, n: int) -> list[tuple[float, float]]:
-    """n random positions on the field, each at least MIN_GAP from the one before."""
-    points = [_point(rng)]
-    while len(points) < n:
-        p = _point(rng)
-        if math.dist(p, points[-1]) >= MIN_GAP:
-            points.append(p)
-    return points
-
-
-def score_belief(rng: np.random.Generator) -> dict[str, dict[str, float]]:
-    """A random situation of problem `score`: robot at rest at pos1, the ball at pos2, the target pose pos3."""
-    robot, ball, target = _points(rng, 3)
-    heading = lambda: float(rng.uniform(-math.pi, math.pi))  # noqa: E731
-    return {"pos1": {"x": robot[0], "y": robot[1], "phi": heading(), "v": 0.0},
-            "pos2": {"x": ball[0], "y": ball[1]},
-            "pos3": {"x": target[0], "y": target[1], "phi": heading(), "v": 0.0}}
-
-
-def waypoints_belief(rng: np.random.Generator) -> dict[str, dict[str, float]]:
-    """A random situation of problem `waypoints`: start p0 at rest, way-points w1..w4, stop at w4."""
-    points = _points(rng, 5)
-    objects = {"p0": {"x": points[0][0], "y": points[0][1], "phi": float(rng.uniform(-math.pi, math.pi)), "v": 0.0}}
-    for k in range(1, 5):
-        objects[f"w{k}"] = {"x": points[k][0], "y": points[k][1]}
-    objects["w4"].update(phi=float(rng.uniform(-math.pi, math.pi)), v=0.0)
-    return objects
-
-
-BELIEFS = {"score": score_belief, "waypoints": waypoints_belief}
+ORACLE_ANGLES = 36  # grid of the simulated search: a free parameter spanning a full circle (10 degree steps) ...
+ORACLE_VALUES = 4  # ... any other free parameter: values spread over its range
+ORACLE_GRID_LIMIT = 5000  # larger grids are searched coordinate-wise instead (see _oracle)
+ORACLE_PASSES = 2  # coordinate-search passes over all free parameters
+ORACLE_LINE_VALUES = 9  # values per free parameter in a coordinate-search line
+FULL_CIRCLE = 2 * math.pi - 1e-9
 
 
 @dataclass(frozen=True)
-class Job:
-    """Everything a worker process needs to run scenarios of one problem (plain, picklable values)."""
+class EvaluationPlan:
+    """The [evaluation] table of a domain's binding."""
 
-    task: Task
-    plan: object  # AbstractPlan
-    facts: object  # ProblemFacts
-    seed: int
-
-
-_CACHE: dict = {}
+    comparison: str
+    horizons: str | None
+    zero_baseline: bool
 
 
-def _binding(job: Job):
-    """The action library binding, loaded once per worker process."""
-    key = (str(job.task.domain), str(job.task.problem))
-    if key not in _CACHE:
-        _CACHE[key] = load_binding(job.task)
-    return _CACHE[key]
+def evaluation_plan(binding: Binding) -> EvaluationPlan:
+    """Validate the binding's [evaluation] table against its simulator's situation generators."""
+    table = dict(binding.evaluation)
+
+    def fail(message: str) -> BindingError:
+        return BindingError(f"[evaluation] {message}", file=binding.file)
+
+    if not table:
+        raise fail("missing: the domain's binding names no situations to evaluate on (add an [evaluation] table)")
+    for key in table:
+        if key not in ("comparison", "horizons", "zero_baseline"):
+            raise fail(f"unknown key '{key}' (expected comparison, horizons, zero_baseline)")
+    known = binding.entry.situations
+    for key in ("comparison", "horizons"):
+        value = table.get(key)
+        if value is None and key == "horizons":
+            continue
+        if not isinstance(value, str) or value not in known:
+            raise fail(f"{key} = {value!r} is not a situation generator of simulator {binding.simulator!r} "
+                       f"(known: {', '.join(known) or 'none'})")
+    zero = table.get("zero_baseline", False)
+    if not isinstance(zero, bool):
+        raise fail(f"zero_baseline must be true or false, not {zero!r}")
+    return EvaluationPlan(table["comparison"], table.get("horizons"), zero)
 
 
-def scenario_sequence(job: Job, objects: dict):
-    """The instantiated plan of `job` for one random situation (belief values per object)."""
-    binding = _binding(job)
-    belief = BeliefState(MappingProxyType({k: MappingProxyType(v) for k, v in objects.items()}))
-    return instantiate(job.plan, binding, belief, object_types=job.facts.types, initial_state=job.facts.initial)
+def situation_seed(seed: int, index: int) -> int:
+    return stream_seed(seed, index)
 
 
-def _models(job: Job, sequence):
-    key = ("models", str(job.task.domain), tuple(sorted({a.action for a in sequence.actions})))
-    if key not in _CACHE:
-        _CACHE[key] = load_models(job.task, sequence)
-    return _CACHE[key]
+def zero_assignment(sequence: ActionSequence) -> dict[str, float]:
+    """Every free parameter at 0, clipped into its range (e.g. stop at every way-point)."""
+    return {p.id: min(max(0.0, p.low), p.high) for p in sequence.free_parameters()}
 
 
-def _episode_seed(job: Job, index: int) -> int:
-    return int(np.random.SeedSequence([job.seed, index]).generate_state(1)[0])
-
-
-def score_episode(job: Job, index: int, oracle: bool) -> dict:
-    """One approachBall -> dribbleBall scenario: greedy, refined (analytic and ga), and optionally the oracle."""
-    seed = _episode_seed(job, index)
-    rng = np.random.default_rng(seed)
-    sequence = scenario_sequence(job, score_belief(rng))
-    models = _models(job, sequence)
+def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: bool) -> dict:
+    """One situation: greedy, refined (analytic and ga), optionally the zero baseline and the oracle."""
+    seed = situation_seed(job.seed, index)
+    sequence = situation_sequence(job, objects)
+    models = job_models(job, sequence)
     greedy = refine(sequence, models, horizon=1, method="analytic", seed=seed)
     refined = refine(sequence, models, horizon=2, method="analytic", seed=seed)
     genetic = refine(sequence, models, horizon=2, method="ga", seed=seed)
     g, r = dispatch(greedy.sequence, seed=seed), dispatch(refined.sequence, seed=seed)
-    out = {"index": index, "seed": seed,
+    out = {"index": index, "seed": seed, "problem": job.plan.problem,
            "greedy": g.duration, "refined": r.duration, "greedy_ok": g.succeeded, "refined_ok": r.succeeded,
            "predicted_greedy": greedy.predicted_total, "predicted_refined": refined.predicted_total,
            "analytic_seconds": sum(w.seconds for w in refined.windows),
            "analytic_method": ",".join(w.method for w in refined.windows),
            "ga_seconds": sum(w.seconds for w in genetic.windows),
            "analytic_cost": refined.predicted_total, "ga_cost": genetic.predicted_total}
+    if zero:
+        z = dispatch(sequence.bind(zero_assignment(sequence)), seed=seed)
+        out["zero"], out["zero_ok"] = z.duration, z.succeeded
     if oracle:
-        out["oracle"] = _oracle(sequence, seed)
+        start = {p.id: p.value for a in refined.sequence.actions for p in a.params}
+        out["oracle"], out["oracle_method"] = _oracle(sequence, seed, start)
     return out
 
 
-def _oracle(sequence, seed: int) -> float | None:
-    """The best simulated duration over a dense grid of the free parameters (the true optimum the models aim
-    at); None if no grid point succeeds."""
+def _axis(p) -> np.ndarray:
+    if p.high - p.low >= FULL_CIRCLE:
+        return np.linspace(p.low, p.high, ORACLE_ANGLES, endpoint=False)
+    return np.linspace(p.low, p.high, ORACLE_VALUES)
+
+
+def _simulated(sequence: ActionSequence, assignment: Mapping[str, float], seed: int) -> float | None:
+    result = dispatch(sequence.bind(assignment), seed=seed)
+    return result.duration if result.succeeded else None
+
+
+def _oracle(sequence: ActionSequence, seed: int, start: Mapping[str, float]) -> tuple[float | None, str]:
+    """The best simulated duration over the free parameters (the optimum the models aim at): an exhaustive grid
+    where it has at most ORACLE_GRID_LIMIT points, else a coordinate search in the simulator from the refined
+    values (each free parameter swept over its range in turn, ORACLE_PASSES times): an upper bound of the
+    optimum. None if no point succeeds."""
     free = sequence.free_parameters()
-    axes = []
-    for p in free:
-        if p.name.startswith("phi"):
-            axes.append(np.linspace(p.low, p.high, ORACLE_HEADINGS, endpoint=False))
-        else:
-            axes.append(np.linspace(p.low, p.high, ORACLE_SPEEDS))
-    best = None
-    for point in np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(free)):
-        result = dispatch(sequence.bind({p.id: float(v) for p, v in zip(free, point)}), seed=seed)
-        if result.succeeded and (best is None or result.duration < best):
-            best = result.duration
-    return best
+    axes = [_axis(p) for p in free]
+    if math.prod(len(a) for a in axes) <= ORACLE_GRID_LIMIT:
+        best = None
+        for point in itertools.product(*axes):
+            d = _simulated(sequence, {p.id: float(v) for p, v in zip(free, point)}, seed)
+            if d is not None and (best is None or d < best):
+                best = d
+        return best, "grid"
+    current = {p.id: float(start[p.id]) for p in free}
+    best = _simulated(sequence, current, seed)
+    for _ in range(ORACLE_PASSES):
+        for p in free:
+            for value in np.linspace(p.low, p.high, ORACLE_LINE_VALUES):
+                trial = {**current, p.id: float(value)}
+                d = _simulated(sequence, trial, seed)
+                if d is not None and (best is None or d < best):
+                    best, current = d, trial
+    return best, "coordinate search"
 
 
-def waypoint_episode(job: Job, index: int, horizons: tuple[int, ...]) -> dict:
-    """One four-way-point navigation, executed with each horizon (same simulator seed for all)."""
-    seed = _episode_seed(job, index)
-    rng = np.random.default_rng(seed)
-    sequence = scenario_sequence(job, waypoints_belief(rng))
-    models = _models(job, sequence)
-    out = {"index": index, "seed": seed}
+def horizon_episode(job: Job, index: int, objects: dict, horizons: tuple[int, ...]) -> dict:
+    """One situation, executed with each horizon (same simulator seed for all)."""
+    seed = situation_seed(job.seed, index)
+    sequence = situation_sequence(job, objects)
+    models = job_models(job, sequence)
+    out = {"index": index, "seed": seed, "problem": job.plan.problem}
     for h in horizons:
         refined = refine(sequence, models, horizon=h, method="analytic", seed=seed)
         result = dispatch(refined.sequence, seed=seed)
@@ -164,16 +161,16 @@ def waypoint_episode(job: Job, index: int, horizons: tuple[int, ...]) -> dict:
     return out
 
 
-def prepared_job(prepared: Prepared, seed: int) -> Job:
-    return Job(task=prepared.task, plan=prepared.plan, facts=prepared.facts, seed=seed)
-
-
 def _mean(values) -> float | None:
     return float(np.mean(values)) if len(values) else None
 
 
-def summarize_score(rows: list[dict]) -> dict:
-    """Table 5.1 / 5.4 numbers over the scenarios where greedy and refined execution both succeeded."""
+def _ratio(rows: list[dict], key: str) -> float | None:
+    return float(np.mean([r[key] for r in rows]) / np.mean([r["oracle"] for r in rows])) if rows else None
+
+
+def summarize_comparison(rows: list[dict]) -> dict:
+    """Table 5.1 / 5.4 numbers over the situations where greedy and refined execution both succeeded."""
     from scipy.stats import ttest_rel
 
     both = [r for r in rows if r["greedy_ok"] and r["refined_ok"]]
@@ -187,9 +184,10 @@ def summarize_score(rows: list[dict]) -> dict:
     analytic_ms = 1000 * np.array([r["analytic_seconds"] for r in rows])
     ga_ms = 1000 * np.array([r["ga_seconds"] for r in rows])
     agree = [abs(r["ga_cost"] - r["analytic_cost"]) <= AGREEMENT * r["analytic_cost"] for r in rows]
-    return {
+    out = {
         "episodes": len(both),
         "scenarios": len(rows),
+        "problems": sorted({r["problem"] for r in rows}),
         "failed_greedy": sum(not r["greedy_ok"] for r in rows),
         "failed_refined": sum(not r["refined_ok"] for r in rows),
         "greedy_mean": _mean(g),
@@ -204,29 +202,49 @@ def summarize_score(rows: list[dict]) -> dict:
         "improvement_worse": _mean(gain[worse]),
         "predicted_improvement": _mean([1 - r["predicted_refined"] / r["predicted_greedy"] for r in both]),
         "oracle_episodes": len(oracle_rows),
-        "oracle_ratio": (float(np.mean([r["refined"] for r in oracle_rows]) / np.mean([r["oracle"] for r in oracle_rows]))
-                         if oracle_rows else None),
+        "oracle_methods": sorted({r["oracle_method"] for r in oracle_rows}),
+        "oracle_ratio": _ratio(oracle_rows, "refined"),
         "oracle_ratio_per_episode": _mean([r["refined"] / r["oracle"] for r in oracle_rows]),
-        "greedy_oracle_ratio": (float(np.mean([r["greedy"] for r in oracle_rows]) / np.mean([r["oracle"] for r in oracle_rows]))
-                                if oracle_rows else None),
+        "greedy_oracle_ratio": _ratio(oracle_rows, "greedy"),
         "analytic_ms_median": float(np.median(analytic_ms)) if len(rows) else None,
         "ga_ms_median": float(np.median(ga_ms)) if len(rows) else None,
         "analytic_fallbacks": sum("analytic" not in r["analytic_method"] for r in rows),
         "analytic_ga_agree": float(np.mean(agree)) if rows else None,
     }
+    if rows and "zero" in rows[0]:
+        out.update(_zero_summary(rows))
+    return out
 
 
-def summarize_waypoints(rows: list[dict], horizons: tuple[int, ...]) -> dict:
-    """Table 5.3: mean duration per horizon over the episodes where every horizon succeeded."""
+def _zero_summary(rows: list[dict]) -> dict:
+    """Refined vs the zero baseline, paired over the situations where both succeeded."""
+    from scipy.stats import ttest_rel
+
+    both = [r for r in rows if r["zero_ok"] and r["refined_ok"]]
+    z = np.array([r["zero"] for r in both])
+    t = np.array([r["refined"] for r in both])
+    return {
+        "zero_episodes": len(both),
+        "failed_zero": sum(not r["zero_ok"] for r in rows),
+        "zero_mean": _mean(z),
+        "improvement_over_zero": _mean(1.0 - t / z) if len(both) else None,
+        "p_value_zero": float(ttest_rel(z, t).pvalue) if len(both) > 1 and np.any(z != t) else None,
+    }
+
+
+def summarize_horizons(rows: list[dict], horizons: tuple[int, ...]) -> dict:
+    """Table 5.3: mean duration per horizon over the situations where every horizon succeeded."""
     from scipy.stats import ttest_rel
 
     ok = [r for r in rows if all(r[f"h{h}_ok"] for h in horizons)]
-    out = {"episodes": len(ok), "scenarios": len(rows), "horizons": []}
+    out = {"episodes": len(ok), "scenarios": len(rows), "problems": sorted({r["problem"] for r in rows}),
+           "horizons": []}
     base = np.array([r[f"h{horizons[0]}"] for r in ok])
     previous = base
     for h in horizons:
         times = np.array([r[f"h{h}"] for r in ok])
-        p = float(ttest_rel(previous, times).pvalue) if h != horizons[0] and len(ok) > 1 and np.any(previous != times) else None
+        p = (float(ttest_rel(previous, times).pvalue)
+             if h != horizons[0] and len(ok) > 1 and np.any(previous != times) else None)
         out["horizons"].append({
             "horizon": h, "mean": _mean(times),
             "improvement": _mean(1 - times / base) if len(ok) else None,

@@ -1,6 +1,7 @@
-"""The ball-collision classifier of Sec. 4.2.2: does goToPose reach a pose at the ball without bumping it?
+"""Success classifiers (Sec. 4.2.2): does an action reach its goal without failing (e.g. without bumping a
+ball lying at its goal pose)?
 
-A scikit-learn decision tree on the goToPose features, made pessimistic by a cost matrix: predicting
+A scikit-learn decision tree on the action's features, made pessimistic by a cost matrix: predicting
 success for an episode that collides costs COST_FALSE_SUCCESS times as much as predicting a collision for
 one that succeeds. A tree learner takes a cost matrix by reweighting the examples by the cost of
 misclassifying them (Witten and Frank, 2005): here `class_weight={fail: cost * n_success / n_fail,
@@ -39,7 +40,7 @@ class CollisionTraining:
 
 
 def labels(episodes: list[Episode]) -> np.ndarray:
-    """1 where the episode reached its pose (success), 0 where it failed (bumped the ball, timed out)."""
+    """1 where the episode reached its goal (success), 0 where it failed (any failure outcome)."""
     return np.array([SUCCESS if e.succeeded else FAIL for e in episodes])
 
 
@@ -117,10 +118,10 @@ def train_collision_model(
     episodes: list[Episode],
     fresh: list[Episode],
     seed: int,
-    feature_set: str = "pose",
+    feature_set: str,
     step: Callable[[str], None] = lambda label: None,
 ) -> CollisionTraining:
-    """Learn the pessimistic collision tree from `episodes`; evaluate it on the `fresh` ones."""
+    """Learn the pessimistic success tree from `episodes`; evaluate it on the `fresh` ones."""
     y = labels(episodes)
     if not episodes or not fresh:
         raise DataError(f"{action} collision data: {len(episodes)} training and {len(fresh)} fresh episodes")

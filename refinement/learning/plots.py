@@ -1,12 +1,12 @@
-"""Figures of the training report: MAE over n_i (Fig. 4.5), MAE over episodes (Fig. 4.6), the predicted
-duration over the angle of approach for one situation (Fig. 4.7), and where the collision classifier predicts
-a bump (Fig. 4.8). Drawn headless (Agg), saved atomically."""
+"""Figures of the training report: MAE over n_i (Fig. 4.5), MAE over episodes (Fig. 4.6) for every domain;
+for models in the pose feature space, the predicted duration over the angle of approach for one situation
+(Fig. 4.7) and where a success classifier predicts failure (Fig. 4.8). Drawn headless (Agg), saved atomically."""
 
 from __future__ import annotations
 
 import os
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import matplotlib
@@ -115,20 +115,40 @@ def region_params(start_heading: float) -> tuple[np.ndarray, np.ndarray, np.ndar
 
 
 def plot_collision_region(model: CollisionModel, path: Path) -> None:
-    """Where the classifier predicts that goToPose bumps a ball lying at its goal, over start positions round
-    the goal pose (Fig. 4.8): facing the goal, and turned 135 degrees from it (not 180: there the sign of
-    angle_at flips with the last bit of the heading, which would speckle the picture)."""
+    """Where the classifier predicts that its action fails (e.g. bumps an object lying at its goal), over start
+    positions round the goal pose (Fig. 4.8): facing the goal, and turned 135 degrees from it (not 180: there
+    the sign of angle_at flips with the last bit of the heading, which would speckle the picture)."""
     fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.8))
     for ax, (heading, label) in zip(axes, ((0.0, "facing the goal"), (0.75 * np.pi, "turned 135 deg from the goal"))):
         x, y, params = region_params(heading)
         success = model.predict_success(params).reshape(x.shape)
         ax.contourf(x, y, success.astype(float), levels=[-0.5, 0.5, 1.5], colors=["#d62728", "#2ca02c"], alpha=0.45)
-        ax.add_patch(plt.Circle((0.0, 0.0), 0.11, color="black", fill=False))
+        ax.plot(0.0, 0.0, "ko", ms=4)
         ax.annotate("", xy=(0.6, 0.0), xytext=(0.0, 0.0), arrowprops={"arrowstyle": "->", "lw": 2})
         ax.set(aspect="equal", xlabel="start x (m)", ylabel="start y (m)", title=f"robot standing, {label}")
-    fig.suptitle(f"goToPose to a ball at the goal (heading +x, arriving at {REGION_VG} m/s): predicted collision "
+    fig.suptitle(f"{model.action} to the goal pose (heading +x, arriving at {REGION_VG} m/s): predicted failure "
                  "(red) or success (green) (Fig. 4.8)", fontsize="medium")
     _save(fig, path)
+
+
+POSE_SPACES = ("pose", "pose_delta")  # the feature spaces the Fig. 4.7 / 4.8 pictures are drawn in
+
+
+def training_plots(simulator: str, models: Mapping[str, ActionModel],
+                   classifiers: Mapping[str, CollisionModel]) -> dict[str, Callable[[Path], None]]:
+    """File name -> writer of each figure of a training run (those that apply to its models' feature spaces)."""
+    reports = {action: model.report for action, model in models.items()}
+    plots: dict[str, Callable[[Path], None]] = {
+        "mae_vs_n_i.png": lambda p: plot_mae_vs_n_i(reports, p),
+        "mae_vs_episodes.png": lambda p: plot_mae_vs_episodes(reports, p),
+    }
+    posed = {action: m for action, m in models.items() if m.feature_set in POSE_SPACES}
+    if posed:
+        plots["angle_at_polar.png"] = lambda p: plot_angle_at(posed, p)
+    for action, classifier in classifiers.items():
+        if classifier.feature_set in POSE_SPACES:
+            plots[f"{action}.success_region.png"] = lambda p, c=classifier: plot_collision_region(c, p)
+    return plots
 
 
 def _save(fig: plt.Figure, path: Path) -> None:

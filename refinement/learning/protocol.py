@@ -34,7 +34,6 @@ MAX_LEAVES = 400  # leaves the stored tree may have ("a few hundred")
 DEFAULT_MIN_SAMPLES_LEAF = 10  # the leaf size while n_i is chosen
 LEAF_TOLERANCE = 0.03  # a larger leaf size is taken if its validation MAE is at most 3% above the best
 MIN_EPISODES = 8  # fewer successful episodes cannot be split into train / validation / test
-DEFAULT_FEATURE_SET = "pose"
 
 RegressorFactory = Callable[[int, int], RegressorMixin]  # (seed, min_samples_leaf) -> unfitted regressor
 
@@ -65,9 +64,11 @@ def split_episodes(n: int, seed: int) -> Split:
     return Split(order[:half], order[half:three_quarters], order[three_quarters:])
 
 
-def fit_on_episodes(episodes: list[Episode], feature_set: str, n_i: int, regressor: RegressorMixin) -> RegressorMixin:
-    """Fit `regressor` on the first n_i examples of each episode, in the features of `feature_set`."""
-    params, targets, _ = intermediate_examples(episodes, n_i)
+def fit_on_episodes(episodes: list[Episode], feature_set: str, n_i: int, regressor: RegressorMixin,
+                    observed: tuple[str, ...]) -> RegressorMixin:
+    """Fit `regressor` on the first n_i examples of each episode, in the features of `feature_set`; `observed`
+    names the action's observed parameters (read from each episode's log for the later examples)."""
+    params, targets, _ = intermediate_examples(episodes, n_i, observed)
     return regressor.fit(compute_features(feature_set, params), targets)
 
 
@@ -92,7 +93,8 @@ def train_duration_model(
     action: str,
     episodes: list[Episode],
     seed: int,
-    feature_set: str = DEFAULT_FEATURE_SET,
+    feature_set: str,
+    observed: tuple[str, ...],
     n_i_candidates: tuple[int, ...] = N_I_CANDIDATES,
     leaf_candidates: tuple[int, ...] = MIN_SAMPLES_LEAF,
     episode_fractions: tuple[float, ...] = EPISODE_FRACTIONS,
@@ -111,7 +113,7 @@ def train_duration_model(
 
     def validate(n_i: int, leaf: int) -> dict:
         step(f"{action}: n_i={n_i}, leaf={leaf}")
-        model = fit_on_episodes(train, feature_set, n_i, make_model(seed, leaf))
+        model = fit_on_episodes(train, feature_set, n_i, make_model(seed, leaf), observed)
         return {"n_i": n_i, "min_samples_leaf": leaf, "examples": count_examples(train, n_i),
                 "mae": held_out_mae(model, validation, feature_set), "leaves": _leaves(model)}
 
@@ -149,8 +151,8 @@ def train_duration_model(
     for fraction in episode_fractions:
         subset = learn[: max(MIN_EPISODES // 2, round(fraction * len(learn)))]
         step(f"{action}: {len(subset)} episodes")
-        model = fit_on_episodes(subset, feature_set, n_i, make_model(seed, leaf))
-        reference = fit_on_episodes(subset, feature_set, n_i, make_reference(seed, leaf))
+        model = fit_on_episodes(subset, feature_set, n_i, make_model(seed, leaf), observed)
+        reference = fit_on_episodes(subset, feature_set, n_i, make_reference(seed, leaf), observed)
         episodes_curve.append({
             "episodes": len(subset),
             "mae": held_out_mae(model, test, feature_set),
@@ -160,13 +162,13 @@ def train_duration_model(
     evaluated = episodes_curve[-1] if len(episodes_curve) and episodes_curve[-1]["episodes"] == len(learn) else None
     if evaluated is None:  # the curve did not end with the full three quarters: evaluate them here
         step(f"{action}: {len(learn)} episodes")
-        model = fit_on_episodes(learn, feature_set, n_i, make_model(seed, leaf))
-        reference = fit_on_episodes(learn, feature_set, n_i, make_reference(seed, leaf))
+        model = fit_on_episodes(learn, feature_set, n_i, make_model(seed, leaf), observed)
+        reference = fit_on_episodes(learn, feature_set, n_i, make_reference(seed, leaf), observed)
         evaluated = {"mae": held_out_mae(model, test, feature_set), "mae_hgb": held_out_mae(reference, test, feature_set),
                      "leaves": _leaves(model)}
 
     step(f"{action}: final model")
-    final = fit_on_episodes(used, feature_set, n_i, make_model(seed, leaf))
+    final = fit_on_episodes(used, feature_set, n_i, make_model(seed, leaf), observed)
     durations = np.array([e.duration for e in used])
     report = {
         "action": action,

@@ -54,12 +54,26 @@ def _subgoal_lines(chains: list[dict] | None) -> list[str]:
     return lines
 
 
-def format_report(report: dict, models: dict, collision) -> str:
-    """The whole report as text; `models` and `collision` give the rules."""
-    c = report["collision"]
+def _classifier_lines(c: dict) -> list[str]:
+    return [
+        "",
+        f"Success classifier of {c['action']} (Sec. 4.2.2): decision tree trained on "
+        f"{c['episodes']} episodes ({c['outcomes']}), cost of a false success {c['cost_false_success']:g} "
+        f"relative to the class balance (class weight of failures {c['class_weight_fail']:.3g}), "
+        f"min_samples_leaf {c['min_samples_leaf']}, {c['leaves']} leaves.",
+        f"Confusion matrix on {c['fresh_episodes']} fresh episodes (Table 4.4):",
+        "",
+        *confusion_table(c["confusion"]),
+        "",
+        f"false success: {_percent(c['false_success'])} of the failing episodes were predicted to succeed",
+    ]
+
+
+def format_report(report: dict, models: dict, classifiers: dict) -> str:
+    """The whole report as text; `models` and `classifiers` (by action) give the rules."""
     lines = [
-        f"Action models of domain {report['domain']} (seed {report['seed']}, "
-        f"{report['episodes_per_scenario']} episodes per scenario; "
+        f"Action models of domain {report['domain']} (simulator {report.get('simulator', '?')}, seed "
+        f"{report['seed']}, {report['episodes_per_scenario']} episodes per scenario; "
         f"gathering {report['gather_seconds']:.0f} s, training {report['train_seconds']:.0f} s)",
         "",
         "Duration models (Table 4.3): successful episodes, their mean duration, simulated time of all gathered",
@@ -69,19 +83,12 @@ def format_report(report: dict, models: dict, collision) -> str:
         "",
         *duration_table(report["models"]),
         *_subgoal_lines(report.get("subgoal_experience")),
-        "",
-        f"Collision classifier ({c['action']} to a pose at the ball, Sec. 4.2.2): decision tree trained on "
-        f"{c['episodes']} episodes ({c['outcomes']}), cost of a false success {c['cost_false_success']:g} "
-        f"relative to the class balance (class weight of failures {c['class_weight_fail']:.3g}), "
-        f"min_samples_leaf {c['min_samples_leaf']}, {c['leaves']} leaves.",
-        f"Confusion matrix on {c['fresh_episodes']} fresh episodes (Table 4.4):",
-        "",
-        *confusion_table(c["confusion"]),
-        "",
-        f"false success: {_percent(c['false_success'])} of the failing episodes were predicted to succeed",
-        "",
     ]
+    for c in report.get("classifiers", {}).values():
+        lines += _classifier_lines(c)
+    lines.append("")
     for action, model in models.items():
         lines += [f"Rules of {action} (n_i = {model.n_i}):", model.rules_text(), ""]
-    lines += [f"Rules of the collision classifier of {collision.action}:", collision.rules_text(), ""]
+    for action, classifier in classifiers.items():
+        lines += [f"Rules of the success classifier of {action}:", classifier.rules_text(), ""]
     return "\n".join(lines)

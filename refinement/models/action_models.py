@@ -1,8 +1,9 @@
 """Learned action models (Chapter 4) as frozen values with a JSON form, and their loaders.
 
-An ActionModel predicts how long an action takes from its parameters (x, y, phi, v, xg, yg, phig, vg):
-the parameters are mapped to a feature space (Table 4.1) and a model tree predicts the duration there.
-A CollisionModel predicts whether goToPose reaches a pose at the ball without bumping it first (Sec. 4.2.2).
+An ActionModel predicts how long an action takes from its parameters (observed, then internal): the
+parameters are mapped to a feature space (Table 4.1) and a model tree predicts the duration there.
+A CollisionModel (a success classifier) predicts whether an action reaches its goal without failing, e.g.
+without bumping an object lying there (Sec. 4.2.2).
 Files are JSON with a schema key, never pickle: loading a model must not run code.
 """
 
@@ -18,13 +19,12 @@ import numpy as np
 
 from tailor.refinement.models.decision_tree import DecisionTree, LeafBox
 from tailor.refinement.errors import ModelFileError
-from tailor.refinement.models.features import FEATURE_SETS, compute_features
+from tailor.refinement.models.features import FEATURE_SPACES, compute_features
 from tailor.refinement.models.model_tree import ModelTree
 
 ACTION_MODEL_SCHEMA = "tailor.action_model/1"
 COLLISION_MODEL_SCHEMA = "tailor.collision_model/1"
-COLLISION_SUFFIX = ".collision.json"
-COLLISION_FILE = "goToPose" + COLLISION_SUFFIX
+COLLISION_SUFFIX = ".collision.json"  # <action>.collision.json: the action's success classifier
 
 
 @dataclass(frozen=True, eq=False)
@@ -39,11 +39,11 @@ class ActionModel:
     report: dict = field(default_factory=dict)
 
     def features(self, params: np.ndarray) -> np.ndarray:
-        """(n, 8) action parameters -> (n, f) features."""
+        """(n, p) action parameters -> (n, f) features."""
         return compute_features(self.feature_set, params)
 
     def predict_duration(self, params: np.ndarray) -> np.ndarray:
-        """Predicted duration (s) for each row of (n, 8) action parameters."""
+        """Predicted duration (s) for each row of (n, p) action parameters."""
         return np.asarray(self.duration.predict(self.features(params)), dtype=float)
 
     def rules_text(self) -> str:
@@ -85,7 +85,7 @@ class ActionModel:
 
 @dataclass(frozen=True, eq=False)
 class CollisionModel:
-    """Predicts whether an action reaches its goal pose at the ball without bumping the ball (Sec. 4.2.2).
+    """Predicts whether an action reaches its goal without failing, e.g. without bumping a ball (Sec. 4.2.2).
 
     The decision tree was trained with a cost matrix that makes it pessimistic: where in doubt it predicts
     a collision, since a wrongly predicted success costs more (an asserted subgoal only costs some time).
@@ -106,7 +106,7 @@ class CollisionModel:
         return compute_features(self.feature_set, params)
 
     def predict_success(self, params: np.ndarray) -> np.ndarray:
-        """True where the action is predicted to reach its goal without a collision, per row of (n, 8)."""
+        """True where the action is predicted to reach its goal without failing, per row of (n, p)."""
         return self.tree.predict(self.features(params))
 
     def regions(self) -> list[LeafBox]:
@@ -159,7 +159,7 @@ def load_action_models(models_dir: Path, actions: tuple[str, ...] | None = None)
 
 
 def load_collision_model(path: Path) -> CollisionModel:
-    """The ball-collision classifier, normally `<models_dir>/goToPose.collision.json`."""
+    """A success classifier, `<models_dir>/<action>.collision.json`."""
     return CollisionModel.from_json(read_json(Path(path)), str(path))
 
 
@@ -204,9 +204,9 @@ def _common_fields(data: dict, source: str) -> tuple[str, str, tuple[str, ...]]:
     action, feature_set, names = data.get("action"), data.get("feature_set"), data.get("feature_names")
     if not isinstance(action, str) or not action:
         raise ModelFileError("'action' must be a non-empty string", file=source)
-    if feature_set not in FEATURE_SETS:
-        raise ModelFileError(f"unknown feature set {feature_set!r} (known: {', '.join(FEATURE_SETS)})", file=source)
-    expected = FEATURE_SETS[feature_set][0]
+    if not isinstance(feature_set, str) or feature_set not in FEATURE_SPACES:
+        raise ModelFileError(f"unknown feature set {feature_set!r} (known: {', '.join(FEATURE_SPACES)})", file=source)
+    expected = FEATURE_SPACES[feature_set].names
     if not isinstance(names, list) or tuple(names) != expected:
         raise ModelFileError(f"feature_names {names!r} do not match feature set {feature_set!r} {list(expected)}", file=source)
     return action, feature_set, expected

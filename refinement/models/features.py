@@ -1,25 +1,48 @@
-"""Derived feature spaces of action models (Table 4.1) and intermediate examples (Sec. 4.1.2).
+"""Feature spaces of action models (Table 4.1), a registry chosen per action in the domain's data, and the
+intermediate examples of an episode (Sec. 4.1.2).
 
-Features exploit the invariances of an action: only the goal pose relative to the robot matters, so the
-8 action parameters (x, y, phi, v, xg, yg, phig, vg) map to a few projective features that do not change
-when the whole scene is translated, rotated or mirrored.
+Features exploit the invariances of an action: for goToPose only the goal pose relative to the robot
+matters, so its 8 parameters (x, y, phi, v, xg, yg, phig, vg) map to a few features that do not change when
+the whole scene is translated, rotated or mirrored. Each space declares the action parameters it reads and
+a random transform of them under which its features must not change: its invariance test.
 
-Refinement later minimizes over the headings and speeds at subgoals analytically (App. C.3.4), so with the
-positions fixed every feature must be piecewise affine in each of phi, phig, v and vg: only wraps (norm),
-absolute values and sign flips of headings appear here, never products or trigonometry of them.
+Refinement minimizes over the headings and speeds at subgoals analytically (App. C.3.4) where every feature
+is piecewise affine in each free parameter: only wraps (norm), absolute values and sign flips of headings
+and speeds appear in the pose, joint and line spaces, never products or trigonometry of them. The reach row
+of Table 4.1 (angles between joint-space directions) is not: refinement falls back to the GA there.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
 from tailor.refinement.errors import DataError
-from tailor.sims.episode import PARAMETER_NAMES, Episode
+from tailor.sims.episode import Episode
 
-N_PARAMS = len(PARAMETER_NAMES)
-X, Y, PHI, V, XG, YG, PHIG, VG = range(N_PARAMS)
+Transform = Callable[[np.ndarray, np.random.Generator], np.ndarray]
+
+
+@dataclass(frozen=True)
+class FeatureSpace:
+    """A row of Table 4.1: the action parameters it reads (in order), its feature names, the map between
+    them, and a random change of the parameters its features are invariant to (described in words)."""
+
+    name: str
+    parameters: tuple[str, ...]
+    names: tuple[str, ...]
+    compute: Callable[[np.ndarray], np.ndarray]  # (n, len(parameters)) -> (n, len(names))
+    invariance: str
+    transform: Transform | None = None
+
+    def __call__(self, params: np.ndarray) -> np.ndarray:
+        params = np.atleast_2d(np.asarray(params, dtype=float))
+        if params.ndim != 2 or params.shape[1] != len(self.parameters):
+            raise ValueError(f"feature space {self.name!r} takes parameters of shape (n, {len(self.parameters)}) "
+                             f"({', '.join(self.parameters)}), got {params.shape}")
+        return self.compute(params)
 
 
 def norm(angle: np.ndarray) -> np.ndarray:
@@ -28,27 +51,30 @@ def norm(angle: np.ndarray) -> np.ndarray:
 
 
 def _sgn(a: np.ndarray) -> np.ndarray:
-    """Sign with sgn(0) = +1, so that angle_at keeps its information when the goal lies dead ahead."""
+    """Sign with sgn(0) = +1, so that a feature keeps its information when the goal lies dead ahead."""
     return np.where(a < 0.0, -1.0, 1.0)
 
 
+# --- pose: goToPose-like actions (x, y, phi, v -> xg, yg, phig, vg) ------------------------------------
+POSE_PARAMETERS = ("x", "y", "phi", "v", "xg", "yg", "phig", "vg")
+
+
 def _pose_parts(params: np.ndarray) -> dict[str, np.ndarray]:
-    """The quantities of Table 4.1 for goToPose-like actions, one value per row of params (n, 8)."""
-    dx = params[:, XG] - params[:, X]
-    dy = params[:, YG] - params[:, Y]
+    x, y, phi, v, xg, yg, phig, vg = params.T
+    dx, dy = xg - x, yg - y
     bearing = np.arctan2(dy, dx)  # direction from the robot to the goal position; constant for fixed positions
-    angle_to_signed = norm(bearing - params[:, PHI])
+    angle_to_signed = norm(bearing - phi)
     return {
-        "v": params[:, V],
-        "vg": params[:, VG],
+        "v": v,
+        "vg": vg,
         "dist": np.hypot(dx, dy),
         "angle_to": np.abs(angle_to_signed),
-        "angle_at": _sgn(angle_to_signed) * norm(params[:, PHIG] - bearing),
-        "delta_angle": np.abs(norm(params[:, PHIG] - params[:, PHI])),
+        "angle_at": _sgn(angle_to_signed) * norm(phig - bearing),
+        "delta_angle": np.abs(norm(phig - phi)),
     }
 
 
-def _selection(names: tuple[str, ...]) -> Callable[[np.ndarray], np.ndarray]:
+def _pose_selection(names: tuple[str, ...]) -> Callable[[np.ndarray], np.ndarray]:
     def compute(params: np.ndarray) -> np.ndarray:
         parts = _pose_parts(params)
         return np.column_stack([parts[name] for name in names])
@@ -56,62 +82,168 @@ def _selection(names: tuple[str, ...]) -> Callable[[np.ndarray], np.ndarray]:
     return compute
 
 
+def _rigid_motion(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """The scene rotated, translated and (half the time) mirrored about the x axis."""
+    angle, (sx, sy), mirror = rng.uniform(-np.pi, np.pi), rng.uniform(-5, 5, 2), rng.random() < 0.5
+    out = params.copy()
+    c, s = np.cos(angle), np.sin(angle)
+    for ix, iy, iphi in ((0, 1, 2), (4, 5, 6)):
+        x, y = params[:, ix], params[:, iy]
+        out[:, ix], out[:, iy] = c * x - s * y + sx, s * x + c * y + sy
+        out[:, iphi] = params[:, iphi] + angle
+        if mirror:
+            out[:, iy], out[:, iphi] = -out[:, iy], -out[:, iphi]
+    return out
+
+
 POSE = ("v", "vg", "dist", "angle_to", "angle_at")
 POSE_DELTA = POSE + ("delta_angle",)
 
-# name -> (feature names, function (n, 8) action parameters -> (n, f) features)
-FEATURE_SETS: dict[str, tuple[tuple[str, ...], Callable[[np.ndarray], np.ndarray]]] = {
-    "pose": (POSE, _selection(POSE)),
-    "pose_delta": (POSE_DELTA, _selection(POSE_DELTA)),
-}
+
+# --- joints: a reach in joint space (theta_a, omega_a, theta_b, omega_b -> the same at the goal) ----------
+JOINT_PARAMETERS = ("theta_a", "omega_a", "theta_b", "omega_b", "theta_ga", "omega_ga", "theta_gb", "omega_gb")
 
 
-def feature_names(feature_set: str) -> tuple[str, ...]:
-    return _lookup(feature_set)[0]
+def _joint_vectors(params: np.ndarray):
+    ta, wa, tb, wb, tga, wga, tgb, wgb = params.T
+    return np.column_stack([tga - ta, tgb - tb]), np.column_stack([wa, wb]), np.column_stack([wga, wgb])
 
 
-def compute_features(feature_set: str, params: np.ndarray) -> np.ndarray:
-    """Map action parameters (n, 8) (or one row (8,)) to the features (n, f) of `feature_set`."""
-    params = np.atleast_2d(np.asarray(params, dtype=float))
-    if params.ndim != 2 or params.shape[1] != N_PARAMS:
-        raise ValueError(f"action parameters must have shape (n, {N_PARAMS}), got {params.shape}")
-    return _lookup(feature_set)[1](params)
+def _angle_between(u: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Angle (rad, in [0, pi]) between the rows of u and w; 0 where either is the zero vector."""
+    cross = u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]
+    return np.abs(np.arctan2(cross, np.einsum("ij,ij->i", u, w)))
 
 
-def _lookup(feature_set: str) -> tuple[tuple[str, ...], Callable[[np.ndarray], np.ndarray]]:
+def _reach(params: np.ndarray) -> np.ndarray:
+    """Table 4.1's reach row: joint-space distance, the angle between the direction to the goal and the
+    current joint velocity, the same at the goal, and the two joint speeds."""
+    delta, w, wg = _joint_vectors(params)
+    return np.column_stack([np.hypot(delta[:, 0], delta[:, 1]), _angle_between(delta, w), _angle_between(delta, wg),
+                            np.hypot(w[:, 0], w[:, 1]), np.hypot(wg[:, 0], wg[:, 1])])
+
+
+def _joints(params: np.ndarray) -> np.ndarray:
+    """Per joint: the distance to go and the start and goal velocities along it (signed toward the goal)."""
+    delta, w, wg = _joint_vectors(params)
+    s = _sgn(delta)
+    return np.column_stack([np.abs(delta[:, 0]), w[:, 0] * s[:, 0], wg[:, 0] * s[:, 0],
+                            np.abs(delta[:, 1]), w[:, 1] * s[:, 1], wg[:, 1] * s[:, 1]])
+
+
+def _joint_shift_mirror(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Each joint's start and goal shifted by one offset, and (half the time) each joint mirrored."""
+    out = params.copy()
+    for angle, velocity in ((0, 1), (2, 3)):
+        shift, flip = rng.uniform(-1, 1), -1.0 if rng.random() < 0.5 else 1.0
+        for k in (angle, angle + 4):
+            out[:, k] = flip * (params[:, k] + shift)
+        for k in (velocity, velocity + 4):
+            out[:, k] = flip * params[:, k]
+    return out
+
+
+def _joint_rotation(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Joint space rotated about any point (what the reach row's features assume away)."""
+    angle, shift = rng.uniform(-np.pi, np.pi), rng.uniform(-1, 1, 2)
+    c, s = np.cos(angle), np.sin(angle)
+    out = params.copy()
+    for a, b in ((0, 2), (1, 3), (4, 6), (5, 7)):
+        out[:, a], out[:, b] = c * params[:, a] - s * params[:, b], s * params[:, a] + c * params[:, b]
+    for a, b in ((0, 2), (4, 6)):
+        out[:, a] += shift[0]
+        out[:, b] += shift[1]
+    return out
+
+
+# --- line: a move along one axis (x, v -> xg, vg) --------------------------------------------------------
+def _line(params: np.ndarray) -> np.ndarray:
+    """Distance to go and the start and goal velocities signed toward the goal."""
+    x, v, xg, vg = params.T
+    s = _sgn(xg - x)
+    return np.column_stack([np.abs(xg - x), v * s, vg * s])
+
+
+def _line_shift_mirror(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    shift, flip = rng.uniform(-5, 5), -1.0 if rng.random() < 0.5 else 1.0
+    out = flip * params
+    out[:, [0, 2]] = flip * (params[:, [0, 2]] + shift)
+    return out
+
+
+FEATURE_SPACES: dict[str, FeatureSpace] = {}
+
+
+def register_feature_space(space: FeatureSpace, replace: bool = False) -> FeatureSpace:
+    """Add a feature space to the registry (a robot package may bring its own)."""
+    if space.name in FEATURE_SPACES and FEATURE_SPACES[space.name] is not space and not replace:
+        raise ValueError(f"a feature space named {space.name!r} is already registered")
+    FEATURE_SPACES[space.name] = space
+    return space
+
+
+for _space in (
+    FeatureSpace("pose", POSE_PARAMETERS, POSE, _pose_selection(POSE),
+                 "translation, rotation and mirroring of the scene", _rigid_motion),
+    FeatureSpace("pose_delta", POSE_PARAMETERS, POSE_DELTA, _pose_selection(POSE_DELTA),
+                 "translation, rotation and mirroring of the scene", _rigid_motion),
+    FeatureSpace("reach", JOINT_PARAMETERS, ("dist", "angle_to", "angle_at", "speed", "speed_g"), _reach,
+                 "translation and rotation of joint space (Table 4.1)", _joint_rotation),
+    FeatureSpace("joints", JOINT_PARAMETERS, ("dist_a", "v_a", "vg_a", "dist_b", "v_b", "vg_b"), _joints,
+                 "translation and mirroring of each joint", _joint_shift_mirror),
+    FeatureSpace("line", ("x", "v", "xg", "vg"), ("dist", "v", "vg"), _line,
+                 "translation and mirroring of the axis", _line_shift_mirror),
+):
+    register_feature_space(_space)
+
+
+def feature_space(name: str) -> FeatureSpace:
     try:
-        return FEATURE_SETS[feature_set]
+        return FEATURE_SPACES[name]
     except KeyError:
-        known = ", ".join(sorted(FEATURE_SETS))
-        raise DataError(f"unknown feature set {feature_set!r} (known: {known})") from None
+        known = ", ".join(sorted(FEATURE_SPACES))
+        raise DataError(f"unknown feature space {name!r} (known: {known})") from None
 
 
-def intermediate_examples(episodes: list[Episode], n_i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def feature_names(name: str) -> tuple[str, ...]:
+    return feature_space(name).names
+
+
+def compute_features(name: str, params: np.ndarray) -> np.ndarray:
+    """Map action parameters (n, p) (or one row (p,)) to the features (n, f) of feature space `name`."""
+    return feature_space(name)(params)
+
+
+def intermediate_examples(episodes: list[Episode], n_i: int, observed: Sequence[str]
+                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The first n_i logged rows of each episode as examples (Sec. 4.1.2).
 
-    Row k of an episode gives the action parameters (logged robot pose at t_k, the episode's goal) and the
-    remaining time duration - t_k. Returns params (m, 8), targets (m,), and the episode index of each row.
-    n_i = 1 yields the first example of each episode only (what test sets use).
+    Row k of an episode gives the action parameters (the `observed` parameters read from the state logged at
+    t_k, the episode's goal) and the remaining time duration - t_k. Returns params (m, p), targets (m,), and
+    the episode index of each row. n_i = 1 yields the first example of each episode only (what tests use).
     """
     if n_i < 1:
         raise ValueError(f"n_i must be at least 1, got {n_i}")
+    observed = tuple(observed)
+    k = len(observed)
     params, targets, owner = [], [], []
     for index, episode in enumerate(episodes):
         rows = min(n_i, len(episode.t))
         if rows == 0:
             raise DataError(f"episode {index} (seed {episode.seed}) has no logged state")
-        block = np.empty((rows, N_PARAMS))
-        block[:, :4] = episode.robot[:rows]
-        block[:, 4:] = episode.params[4:]
+        block = np.empty((rows, len(episode.params)))
+        block[:, :k] = episode.columns_of(observed)[:rows]
+        block[:, k:] = episode.params[k:]
         params.append(block)
         targets.append(episode.duration - episode.t[:rows])
         owner.append(np.full(rows, index))
     if not params:
-        return np.empty((0, N_PARAMS)), np.empty(0), np.empty(0, dtype=int)
+        return np.empty((0, 0)), np.empty(0), np.empty(0, dtype=int)
     return np.concatenate(params), np.concatenate(targets), np.concatenate(owner)
 
 
 def first_examples(episodes: list[Episode]) -> tuple[np.ndarray, np.ndarray]:
-    """Test examples: the first example of each episode, (params (n, 8), durations (n,))."""
-    params, targets, _ = intermediate_examples(episodes, 1)
-    return params, targets
+    """Test examples: the parameters each episode started with and its duration, (params (n, p), (n,))."""
+    if not episodes:
+        return np.empty((0, 0)), np.empty(0)
+    return np.array([e.params for e in episodes], dtype=float), np.array([e.duration for e in episodes], dtype=float)

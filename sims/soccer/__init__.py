@@ -1,6 +1,31 @@
-"""The soccer simulator (pymunk): field, Pioneer-like robot with a ball guide, ball, and its actions."""
+"""The soccer simulator (pymunk): field, Pioneer-like robot with a ball guide, ball, and its actions.
 
+`SIMULATOR` is what the package registers (entry point `tailor.simulators: soccer`): the three actions with
+their pose parameters (Table 2.1), the simulator factory, the experience scenarios and the random situations.
+"""
+
+from tailor.sims.protocol import ActionSpec, Scenario, SimulatorEntry
 from tailor.sims.soccer.actions import ACTION_FUNCTIONS, approachBall, dribbleBall, goToPose
+from tailor.sims.soccer.scenarios import RANGES, SITUATIONS, subgoal_episode
 from tailor.sims.soccer.simulator import Noise, SoccerSim, simulate_sequence
 
-__all__ = ["ACTION_FUNCTIONS", "Noise", "SoccerSim", "approachBall", "dribbleBall", "goToPose", "simulate_sequence"]
+_POSE = dict(observed=("x", "y", "phi", "v"), internal=("xg", "yg", "phig", "vg"),
+             observed_quantities=("x", "y", "phi", "v"), internal_quantities=("x", "y", "phi", "v"))
+
+
+def _create(seed: int, noise: Noise | None = None) -> SoccerSim:
+    return SoccerSim(seed, Noise() if noise is None else noise)
+
+
+SIMULATOR = SimulatorEntry(
+    name="soccer",
+    actions={name: ActionSpec(name, "soccer", **_POSE) for name in ACTION_FUNCTIONS},
+    create=_create,
+    scenarios={name: Scenario(name, r.action, r.run, r.__doc__ or "") for name, r in RANGES.items()},
+    situations=SITUATIONS,
+    subgoal_episode=subgoal_episode,
+    description="RoboCup mid-size field, Pioneer-like robot with a ball guide, a ball (pymunk)",
+)
+
+__all__ = ["ACTION_FUNCTIONS", "Noise", "SIMULATOR", "SoccerSim", "approachBall", "dribbleBall", "goToPose",
+           "simulate_sequence"]

@@ -24,7 +24,6 @@ from dataclasses import dataclass
 import numpy as np
 import pymunk
 
-from tailor.sims import ACTIONS
 from tailor.sims.episode import ActionCall, ActionResult, Episode, SequenceResult
 from tailor.sims.errors import SimError
 from tailor.sims.soccer import world as W
@@ -79,8 +78,14 @@ def _ball_velocity(body: pymunk.Body, gravity: tuple[float, float], damping: flo
         body.velocity = (vx * k, vy * k)
 
 
+STATE_COLUMNS = ("x", "y", "phi", "v", "ball_x", "ball_y")  # the logged believed state (ball NaN without one)
+TRAJECTORY_COLUMNS = ("t", *STATE_COLUMNS)  # the true state of a dispatched sequence
+
+
 class SoccerSim:
     """The soccer field with one robot and (optionally) a ball; `run` executes one action as an Episode."""
+
+    state_columns = STATE_COLUMNS
 
     def __init__(self, seed: int, noise: Noise = Noise()):
         self.noise = noise
@@ -115,7 +120,19 @@ class SoccerSim:
             self.space.add(wall)
 
     # --- state ------------------------------------------------------------------------------------------
-    def reset(self, robot: tuple[float, float, float, float], ball: tuple[float, float] | None = None) -> None:
+    def reset(self, scene) -> None:
+        """The protocol's reset: scene {"robot": (x, y, phi, v), "ball": (x, y)} (the ball is optional)."""
+        if "robot" not in scene:
+            raise SimError(f"the soccer scene needs a robot (x, y, phi, v); it has {', '.join(scene) or 'nothing'}")
+        unknown = set(scene) - {"robot", "ball"}
+        if unknown:
+            raise SimError(f"the soccer scene has robot and ball, not {', '.join(sorted(unknown))}")
+        robot, ball = scene["robot"], scene.get("ball")
+        if len(robot) != 4 or (ball is not None and len(ball) != 2):
+            raise SimError("the soccer scene's robot is (x, y, phi, v) and its ball (x, y)")
+        self.place(tuple(robot), None if ball is None else tuple(ball))
+
+    def place(self, robot: tuple[float, float, float, float], ball: tuple[float, float] | None = None) -> None:
         """Place the robot (ball point x, y, heading phi, speed v) and the ball (at rest) or no ball."""
         x, y, phi, v = (float(q) for q in robot)
         if not all(math.isfinite(q) for q in (x, y, phi, v)) or abs(v) > W.V_MAX + 1e-9:
@@ -189,10 +206,10 @@ class SoccerSim:
             results.append(ActionResult(call.action, episode.outcome, episode.duration, start))
             if not episode.succeeded:
                 break
-        return SequenceResult(tuple(results), np.array(trajectory, dtype=float).reshape(-1, 7))
+        return SequenceResult(tuple(results), np.array(trajectory, dtype=float).reshape(-1, 7), TRAJECTORY_COLUMNS)
 
     def _execute(self, call: ActionCall, trajectory: list | None) -> Episode:
-        if call.action not in ACTION_FUNCTIONS or ACTIONS.get(call.action) is None:
+        if call.action not in ACTION_FUNCTIONS:
             raise SimError(f"unknown soccer action {call.action!r}; known: {', '.join(ACTION_FUNCTIONS)}")
         if len(call.goal) != 4 or not all(math.isfinite(float(g)) for g in call.goal):
             raise SimError(f"{call.action}: goal must be 4 finite numbers (xg, yg, phig, vg), got {call.goal}")
@@ -203,7 +220,7 @@ class SoccerSim:
             raise SimError("dribbleBall needs a ball in the scene")
         ball_start = tuple(self.ball.position) if self.has_ball else None
         ticks = 0
-        log_t, log_robot, log_ball = [], [], []
+        log_t, log_state = [], []
         params = None
         max_ticks = int(round(TIMEOUT * CONTROL_HZ))
         outcome = "timeout"
@@ -216,8 +233,7 @@ class SoccerSim:
                 params = np.array([*belief[:4], xg, yg, phig, vg], dtype=float)
             if ticks % CONTROLS_PER_LOG == 0:
                 log_t.append(ticks / CONTROL_HZ)
-                log_robot.append(belief[:4])
-                log_ball.append(belief[4:])
+                log_state.append(belief)
             ended = self._judge(call.action, dribbling, ball_start, xg, yg, phig, vg)
             if ended is not None:
                 outcome = ended
@@ -229,8 +245,8 @@ class SoccerSim:
                 self.step()
             self._keep_inside()
             ticks += 1
-        episode = Episode(call.action, params, np.array(log_t), np.array(log_robot, dtype=float).reshape(-1, 4),
-                          np.array(log_ball, dtype=float).reshape(-1, 2), outcome, ticks / CONTROL_HZ, self.seed)
+        episode = Episode(call.action, params, np.array(log_t), np.array(log_state, dtype=float).reshape(-1, 6),
+                          STATE_COLUMNS, outcome, ticks / CONTROL_HZ, self.seed)
         return episode
 
     def _judge(self, action: str, dribbling: bool, ball_start, xg: float, yg: float, phig: float,
@@ -268,5 +284,5 @@ def simulate_sequence(robot: tuple[float, float, float, float], ball: tuple[floa
                       calls: list[ActionCall], seed: int, noise: Noise | None = None) -> SequenceResult:
     """Execute a sequence of actions in a fresh simulator: reset to (robot, ball), then run_sequence."""
     sim = SoccerSim(seed, Noise() if noise is None else noise)
-    sim.reset(robot, ball)
+    sim.place(robot, ball)
     return sim.run_sequence(list(calls))

@@ -1,0 +1,80 @@
+"""`tailor domains`: the installed simulators and the bundled domains, and what each can do."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+HELP = "list installed simulators and bundled domains, and what each can do (plan, train, refine, evaluate)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("paths", nargs="*", metavar="DIR", help="also describe these domain folders")
+    parser.add_argument("--json", action="store_true", help="print the listing as JSON")
+
+
+def describe(domain_dir) -> dict:
+    """What the domain in `domain_dir` provides: problems, binding, simulator, models, recipe, evaluation."""
+    from tailor.errors import TailorError
+    from tailor.refinement.binding import BINDING_FILE, load_domain_binding
+    from tailor.refinement.evaluation.experiments import evaluation_plan
+    from tailor.refinement.learning.recipe import recipe_from_binding
+
+    problems = sorted(p.stem for p in (domain_dir / "problems").glob("*.pddl"))
+    info = {"name": domain_dir.name, "path": str(domain_dir), "problems": problems, "simulator": None,
+            "can": ["plan"], "models": [], "notes": []}
+    if not (domain_dir / BINDING_FILE).is_file():
+        info["notes"].append(f"no {BINDING_FILE}: planning only")
+        return info
+    try:
+        binding = load_domain_binding(domain_dir)
+    except TailorError as exc:
+        info["notes"].append(str(exc))
+        return info
+    info["simulator"] = binding.simulator
+    info["models"] = sorted(p.name for p in (domain_dir / "models").glob("*.json"))
+    for capability, check in (("train", lambda: recipe_from_binding(binding, domain_dir)),
+                              ("evaluate", lambda: evaluation_plan(binding))):
+        try:
+            check()
+            info["can"].append(capability)
+        except TailorError as exc:
+            info["notes"].append(exc.message)
+    if info["models"]:
+        info["can"].insert(1, "refine")
+    else:
+        info["notes"].append("no models yet: run `tailor train` first")
+    return info
+
+
+def run(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from tailor.planner_bridge import resolve_domain_dir
+    from tailor.planner_bridge.bundled import DOMAINS_DIR, bundled_domains
+    from tailor.sims import registry
+
+    sims = [{"name": e.name, "actions": list(e.actions), "scenarios": list(e.scenarios),
+             "situations": list(e.situations), "description": e.description}
+            for e in registry.simulators().values()]
+    domains = [describe(DOMAINS_DIR / name) for name in bundled_domains()]
+    domains += [describe(Path(resolve_domain_dir(p))) for p in args.paths]
+    if args.json:
+        sys.stdout.write(json.dumps({"simulators": sims, "failed_simulators": registry.failed(),
+                                     "domains": domains}, indent=1) + "\n")
+        return 0
+    out = sys.stdout.write
+    out("Simulators (entry point group tailor.simulators):\n")
+    for s in sims:
+        out(f"  {s['name']:<10} actions {', '.join(s['actions'])}; scenarios {', '.join(s['scenarios']) or '-'}; "
+            f"situations {', '.join(s['situations']) or '-'}\n             {s['description']}\n")
+    for name, why in registry.failed().items():
+        out(f"  {name:<10} could not be loaded: {why}\n")
+    out("\nDomains:\n")
+    for d in domains:
+        out(f"  {d['name']:<10} {' '.join(d['can']):<30} simulator {d['simulator'] or '-'}; "
+            f"problems {', '.join(d['problems'])}\n")
+        for note in d["notes"]:
+            out(f"             note: {note}\n")
+    return 0

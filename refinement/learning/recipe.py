@@ -1,0 +1,162 @@
+"""The training recipe of a domain: data in its binding's `[training]` table, read here.
+
+    [training]
+    episodes = 6000            # per scenario, the default of `tailor train`
+    fresh_episodes = 1000      # fresh episodes each classifier is evaluated on (Table 4.4)
+
+    [training.models.goToPose]         # a duration model per executable action ...
+    scenario = "goToPose"              # ... learned from this experience scenario of the simulator
+    feature_space = "pose"             # ... in this feature space (Table 4.1)
+
+    [training.classifiers.goToPose]    # a success classifier (Sec. 4.2.2), optional
+    scenario = "goToPoseAtBall"
+    feature_space = "pose"
+
+    [[training.subgoal_experience]]    # optional: experience at refined subgoals (Sec. 8.1)
+    problem = "score"                  # a problem beside the domain whose plan is the chain
+    action = "dribbleBall"             # the action that learns from it
+    share = 0.5                        # situations per episode of a scenario
+    rounds = 3                         # gathered in rounds, each with the model the round before retrained
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tailor.refinement.binding import Binding, load_domain_binding
+from tailor.refinement.errors import BindingError
+from tailor.refinement.models.features import FEATURE_SPACES
+from tailor.sims.protocol import ActionSpec
+
+
+@dataclass(frozen=True)
+class ModelRecipe:
+    """A learned model of `action` (a duration model tree or a success classifier)."""
+
+    action: str
+    scenario: str
+    feature_space: str
+
+
+@dataclass(frozen=True)
+class SubgoalExperience:
+    """`action` also learns from episodes that start at the subgoals refinement chooses in random situations
+    of the chain `problem` (Sec. 8.1, tailor.refinement.learning.subgoal_experience)."""
+
+    problem: str
+    action: str
+    share: float
+    rounds: int
+
+
+@dataclass(frozen=True)
+class TrainingRecipe:
+    """What `tailor train DOMAIN` learns, and where the domain's data lies."""
+
+    domain: str
+    domain_dir: Path
+    simulator: str
+    models: tuple[ModelRecipe, ...]
+    classifiers: tuple[ModelRecipe, ...]
+    episodes: int
+    fresh_episodes: int
+    subgoal_experience: tuple[SubgoalExperience, ...]
+    specs: Mapping[str, ActionSpec]  # the simulator's actions
+
+    @property
+    def duration_actions(self) -> tuple[str, ...]:
+        return tuple(m.action for m in self.models)
+
+
+def recipe_from_binding(binding: Binding, domain_dir: Path) -> TrainingRecipe:
+    """Validate the binding's [training] table; every problem is a one-line BindingError naming the file."""
+
+    def fail(message: str) -> BindingError:
+        return BindingError(f"[training] {message}", file=binding.file)
+
+    table = binding.training
+    if not table:
+        raise fail("missing: the domain's binding says nothing about what to learn (add a [training] table)")
+    _keys(table, {"episodes", "fresh_episodes", "models", "classifiers", "subgoal_experience"}, "", fail)
+    entry = binding.entry
+    episodes = _positive_int(table.get("episodes", 1000), "episodes", fail)
+    fresh = _positive_int(table.get("fresh_episodes", 1000), "fresh_episodes", fail)
+    models = _models(table.get("models"), "models", entry, fail)
+    if not models:
+        raise fail("models: no [training.models.ACTION] table: nothing to learn")
+    classifiers = _models(table.get("classifiers", {}), "classifiers", entry, fail)
+    chains = []
+    raw_chains = table.get("subgoal_experience", [])
+    if not isinstance(raw_chains, list):
+        raise fail("subgoal_experience must be an array of tables ([[training.subgoal_experience]])")
+    for k, chain in enumerate(raw_chains):
+        where = f"subgoal_experience[{k}]"
+        if not isinstance(chain, dict):
+            raise fail(f"{where} must be a table")
+        _keys(chain, {"problem", "action", "share", "rounds"}, where, fail)
+        action = chain.get("action")
+        if action not in {m.action for m in models}:
+            raise fail(f"{where} action = {action!r} has no duration model to retrain")
+        problem = chain.get("problem")
+        if not isinstance(problem, str) or not (Path(domain_dir) / "problems" / f"{problem}.pddl").is_file():
+            raise fail(f"{where} problem = {problem!r} is not a problem beside the domain")
+        share = chain.get("share", 0.5)
+        if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0 <= share <= 10:
+            raise fail(f"{where} share must be a number in [0, 10], not {share!r}")
+        if entry.subgoal_episode is None:
+            raise fail(f"{where}: simulator {entry.name!r} cannot start episodes at subgoals")
+        chains.append(SubgoalExperience(problem, action, float(share),
+                                        _positive_int(chain.get("rounds", 1), f"{where} rounds", fail)))
+    return TrainingRecipe(binding.domain or Path(domain_dir).name, Path(domain_dir), entry.name, models, classifiers,
+                          episodes, fresh, tuple(chains), entry.actions)
+
+
+def load_recipe(domain_dir: Path) -> TrainingRecipe:
+    """The recipe in the binding of the domain in `domain_dir`."""
+    return recipe_from_binding(load_domain_binding(domain_dir), Path(domain_dir))
+
+
+def _keys(table: Mapping[str, Any], allowed: set[str], where: str, fail) -> None:
+    for key in table:
+        if key not in allowed:
+            raise fail(f"{where + ': ' if where else ''}unknown key '{key}' (expected one of {', '.join(sorted(allowed))})")
+
+
+def _positive_int(value: Any, where: str, fail) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise fail(f"{where} must be a positive integer, not {value!r}")
+    return value
+
+
+def _models(section: Any, key: str, entry, fail) -> tuple[ModelRecipe, ...]:
+    if section is None:
+        return ()
+    if not isinstance(section, dict):
+        raise fail(f"'{key}' must be a table of tables ([training.{key}.ACTION])")
+    out = []
+    for action, table in section.items():
+        where = f"{key}.{action}"
+        if not isinstance(table, dict):
+            raise fail(f"[training.{where}] must be a table")
+        _keys(table, {"scenario", "feature_space"}, where, fail)
+        if action not in entry.actions:
+            raise fail(f"{where}: {action!r} is not an action of simulator {entry.name!r} "
+                       f"(known: {', '.join(entry.actions)})")
+        scenario = table.get("scenario", action)
+        if scenario not in entry.scenarios:
+            raise fail(f"{where} scenario = {scenario!r} is not an experience scenario of simulator {entry.name!r} "
+                       f"(known: {', '.join(entry.scenarios)})")
+        if entry.scenarios[scenario].action != action:
+            raise fail(f"{where} scenario = {scenario!r} runs {entry.scenarios[scenario].action}, not {action}")
+        space = table.get("feature_space")
+        if space not in FEATURE_SPACES:
+            raise fail(f"{where} feature_space = {space!r} is not a feature space "
+                       f"(known: {', '.join(sorted(FEATURE_SPACES))})")
+        if len(FEATURE_SPACES[space].parameters) != len(entry.actions[action].parameters):
+            raise fail(f"{where} feature_space = {space!r} reads {len(FEATURE_SPACES[space].parameters)} parameters, "
+                       f"{action} has {len(entry.actions[action].parameters)}")
+        out.append(ModelRecipe(action, scenario, space))
+    return tuple(out)

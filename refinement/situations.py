@@ -1,0 +1,69 @@
+"""Random situations of a planned problem: a belief state drawn by the simulator's situation generator,
+instantiated with the plan already made (the experiments and the subgoal experience refine many of them).
+
+A `Job` holds plain, picklable values, so worker processes can instantiate situations without planning again.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+
+from tailor.planner_bridge import AbstractPlan
+from tailor.refinement.action_sequence import ActionSequence
+from tailor.refinement.belief import BeliefState
+from tailor.refinement.errors import TailorError
+from tailor.refinement.instantiate import instantiate
+from tailor.refinement.pipeline import Prepared, Task, load_binding, load_models
+
+
+@dataclass(frozen=True)
+class Job:
+    """A planned problem whose random situations workers instantiate, and the seed of their stream."""
+
+    task: Task
+    plan: AbstractPlan
+    seed: int
+
+
+def prepared_job(prepared: Prepared, seed: int) -> Job:
+    return Job(task=prepared.task, plan=prepared.plan, seed=seed)
+
+
+_CACHE: dict = {}  # per worker process: bindings and models, loaded once
+
+
+def job_binding(job: Job):
+    key = ("binding", str(job.task.domain))
+    if key not in _CACHE:
+        _CACHE[key] = load_binding(job.task)
+    return _CACHE[key]
+
+
+def job_models(job: Job, sequence: ActionSequence):
+    key = ("models", str(job.task.domain), tuple(sorted({a.action for a in sequence.actions})))
+    if key not in _CACHE:
+        _CACHE[key] = load_models(job.task, sequence)
+    return _CACHE[key]
+
+
+def situation_sequence(job: Job, objects: dict) -> ActionSequence:
+    """The instantiated plan of `job` for one random situation (belief values per object)."""
+    belief = BeliefState(MappingProxyType({k.lower(): MappingProxyType(v) for k, v in objects.items()}))
+    return instantiate(job.plan, job_binding(job), belief)
+
+
+def draw_situation(job: Job, generator: str, rng: np.random.Generator) -> tuple[str, dict]:
+    """(problem, belief values) from the simulator's situation generator `generator`."""
+    entry = job_binding(job).entry
+    if generator not in entry.situations:
+        raise TailorError(f"simulator {entry.name!r} has no situation generator {generator!r} "
+                          f"(known: {', '.join(entry.situations) or 'none'})")
+    return entry.situations[generator](rng)
+
+
+def stream_seed(*words: int) -> int:
+    """One seed from a tuple of seed words (SeedSequence): the streams of different uses never overlap."""
+    return int(np.random.SeedSequence(list(words)).generate_state(1)[0])

@@ -1,0 +1,167 @@
+"""The soccer robot's experience scenarios (Sec. 4.1) and the random situations of its problems (Sec. 5.5).
+
+Each scenario draws the initial state (robot, ball) and the goal from documented ranges (all positions keep
+FIELD_MARGIN to the field lines; the goal lies DIST_RANGE from the start) and executes one action in a fresh
+SoccerSim. The situations are random belief states of the bundled problems `score` and `waypoints`, which
+`tailor evaluate soccer` refines and dispatches.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from tailor.sims.episode import ActionCall, Episode
+from tailor.sims.soccer.simulator import Noise, SoccerSim, simulate_sequence
+from tailor.sims.soccer.world import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, V_MAX
+
+FIELD_MARGIN = 0.5  # m, start and goal positions keep this distance to the field lines
+BALL_CLEARANCE = 0.8  # m, minimum start distance of the ball point to a ball lying at the goal
+# m, the longest distance between two field points: experience covers every distance a task on the field has
+# (an upper bound of 5-6 m left a tenth of the soccer evaluation's dribbles outside the learned range)
+FIELD_DIAGONAL = math.hypot(2 * (FIELD_HALF_LENGTH - FIELD_MARGIN), 2 * (FIELD_HALF_WIDTH - FIELD_MARGIN))
+SAMPLING_STREAM = 1  # second seed word: the scenario's draws are independent of the simulator's noise
+
+
+@dataclass(frozen=True)
+class Ranges:
+    """Random ranges of an experience scenario; the action runs from (start, v) to (goal, phig, vg).
+
+    ball: "none" (no ball in the scene), "goal" (at rest at the goal position), "guide" (at rest in the
+    robot's guide at the start). Speeds in m/s, distances in m; headings are uniform in [-pi, pi).
+    """
+
+    name: str
+    action: str
+    ball: str
+    v_range: tuple[float, float]
+    vg_range: tuple[float, float]
+    dist_range: tuple[float, float]
+
+    def ball_at(self, start: tuple[float, float], goal: tuple[float, float]) -> tuple[float, float] | None:
+        """Where the ball lies at the start of an episode from position `start` to `goal` (None: no ball)."""
+        return {"none": None, "goal": goal, "guide": start}[self.ball]
+
+    def run(self, seed: int, noise: Noise | None = None) -> Episode:
+        """One episode; the task and the simulator's noise both follow from `seed`."""
+        robot, ball, call = sample_task(self, np.random.default_rng((seed, SAMPLING_STREAM)))
+        sim = SoccerSim(seed, Noise() if noise is None else noise)
+        sim.place(robot, ball)
+        return sim.run(call)
+
+
+RANGES: dict[str, Ranges] = {
+    # navigation without a ball: random start and goal poses anywhere on the field
+    "goToPose": Ranges("goToPose", "goToPose", "none", (0.0, 0.8 * V_MAX), (0.0, 0.6), (0.5, FIELD_DIAGONAL)),
+    # ball-aware approach to a ball lying at the goal position, arriving slowly
+    "approachBall": Ranges("approachBall", "approachBall", "goal", (0.0, 0.6), (0.0, 0.3),
+                           (BALL_CLEARANCE, FIELD_DIAGONAL)),
+    # dribbling from standstill or the speed after an approach, ending slowly
+    "dribbleBall": Ranges("dribbleBall", "dribbleBall", "guide", (0.0, 0.3), (0.0, 0.2), (0.5, FIELD_DIAGONAL)),
+    # plain (ball-unaware) goToPose to a ball at the goal: the data of the collision classifier (Sec. 4.2.2)
+    "goToPoseAtBall": Ranges("goToPoseAtBall", "goToPose", "goal", (0.0, 0.6), (0.0, 0.3),
+                             (BALL_CLEARANCE, FIELD_DIAGONAL)),
+}
+
+
+def _field_point(rng: np.random.Generator) -> tuple[float, float]:
+    hx, hy = FIELD_HALF_LENGTH - FIELD_MARGIN, FIELD_HALF_WIDTH - FIELD_MARGIN
+    return float(rng.uniform(-hx, hx)), float(rng.uniform(-hy, hy))
+
+
+def sample_task(ranges: Ranges, rng: np.random.Generator):
+    """Draw (robot, ball, call): the start (x, y, phi, v), the ball position or None, the ActionCall."""
+    lo, hi = ranges.dist_range
+    while True:  # rejection sampling: both points on the field, their distance in range
+        start, goal = _field_point(rng), _field_point(rng)
+        if lo <= math.hypot(goal[0] - start[0], goal[1] - start[1]) <= hi:
+            break
+    phi, phig = (float(a) for a in rng.uniform(-math.pi, math.pi, 2))
+    v, vg = float(rng.uniform(*ranges.v_range)), float(rng.uniform(*ranges.vg_range))
+    ball = ranges.ball_at(start, goal)
+    return (start[0], start[1], phi, v), ball, ActionCall(ranges.action, (goal[0], goal[1], phig, vg))
+
+
+def subgoal_episode(action: str, params: np.ndarray, seed: int) -> Episode:
+    """An episode of `action` from a refined subgoal (start and goal in `params`), the ball placed as in the
+    action's experience scenario (in the guide for dribbleBall): the on-line experience of Sec. 8.1."""
+    p = [float(v) for v in params]
+    ball = RANGES[action].ball_at((p[0], p[1]), (p[4], p[5]))
+    sim = SoccerSim(seed)
+    sim.place((p[0], p[1], p[2], p[3]), ball=ball)
+    return sim.run(ActionCall(action, tuple(p[4:])))
+
+
+CHAIN_SEPARATION = 1.0  # m, least distance between robot, ball and target in a random chain
+CHAIN_VG_RANGE = (0.0, 0.3)  # m/s, speed at which the robot arrives at the ball
+
+
+def sample_chain(rng: np.random.Generator):
+    """Draw a subgoal chain approachBall -> dribbleBall: (robot, ball, [approach call, dribble call]).
+
+    Robot, ball and target anywhere on the field (FIELD_MARGIN to the lines), pairwise CHAIN_SEPARATION
+    apart; the robot starts at rest with a random heading, arrives at the ball with a random heading phig and
+    speed vg in CHAIN_VG_RANGE, and dribbles to the target with a random heading, stopping there (vg = 0).
+    """
+    while True:
+        points = [_field_point(rng) for _ in range(3)]
+        if all(math.dist(a, b) >= CHAIN_SEPARATION for i, a in enumerate(points) for b in points[i + 1:]):
+            break
+    (x, y), ball, target = points
+    phi, phig, phit = (float(a) for a in rng.uniform(-math.pi, math.pi, 3))
+    vg = float(rng.uniform(*CHAIN_VG_RANGE))
+    calls = [ActionCall("approachBall", (ball[0], ball[1], phig, vg)),
+             ActionCall("dribbleBall", (target[0], target[1], phit, 0.0))]
+    return (x, y, phi, 0.0), ball, calls
+
+
+def run_chain(seed: int, noise: Noise | None = None):
+    """One random approachBall -> dribbleBall chain (sample_chain), dispatched without stopping."""
+    robot, ball, calls = sample_chain(np.random.default_rng((seed, SAMPLING_STREAM)))
+    return simulate_sequence(robot, ball, calls, seed, noise)
+
+
+# --- random situations of the bundled problems (tailor evaluate soccer) -----------------------------------
+FIELD_X = (-FIELD_HALF_LENGTH, FIELD_HALF_LENGTH)  # m
+FIELD_Y = (-FIELD_HALF_WIDTH, FIELD_HALF_WIDTH)
+MARGIN = 0.8  # m kept free between random positions and the walls
+MIN_GAP = 1.0  # m between consecutive random positions
+
+
+def _point(rng: np.random.Generator, margin: float = MARGIN) -> tuple[float, float]:
+    return (float(rng.uniform(FIELD_X[0] + margin, FIELD_X[1] - margin)),
+            float(rng.uniform(FIELD_Y[0] + margin, FIELD_Y[1] - margin)))
+
+
+def _points(rng: np.random.Generator, n: int) -> list[tuple[float, float]]:
+    """n random positions on the field, each at least MIN_GAP from the one before."""
+    points = [_point(rng)]
+    while len(points) < n:
+        p = _point(rng)
+        if math.dist(p, points[-1]) >= MIN_GAP:
+            points.append(p)
+    return points
+
+
+def score_belief(rng: np.random.Generator) -> tuple[str, dict[str, dict[str, float]]]:
+    """A random situation of problem `score`: robot at rest at pos1, the ball at pos2, the target pose pos3."""
+    robot, ball, target = _points(rng, 3)
+    heading = lambda: float(rng.uniform(-math.pi, math.pi))  # noqa: E731
+    return "score", {"pos1": {"x": robot[0], "y": robot[1], "phi": heading(), "v": 0.0},
+                     "pos2": {"x": ball[0], "y": ball[1]},
+                     "pos3": {"x": target[0], "y": target[1], "phi": heading(), "v": 0.0}}
+
+
+def waypoints_belief(rng: np.random.Generator) -> tuple[str, dict[str, dict[str, float]]]:
+    """A random situation of problem `waypoints`: start p0 at rest, way-points w1..w4, stop at w4."""
+    points = _points(rng, 5)
+    objects = {"p0": {"x": points[0][0], "y": points[0][1], "phi": float(rng.uniform(-math.pi, math.pi)), "v": 0.0}}
+    for k in range(1, 5):
+        objects[f"w{k}"] = {"x": points[k][0], "y": points[k][1]}
+    objects["w4"].update(phi=float(rng.uniform(-math.pi, math.pi)), v=0.0)
+    return "waypoints", objects
+
+
+SITUATIONS = {"score": score_belief, "waypoints": waypoints_belief}
