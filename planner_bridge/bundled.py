@@ -45,7 +45,7 @@ def _looks_like_path(arg: str) -> bool:
 
 
 def resolve_problem(domain_arg: str | Path, problem_arg: str | Path) -> tuple[Path, Path]:
-    """(domain file, problem file) for `soccer score`, for two file paths, or for a domain file and the name of
+    """(domain file, problem file) for a bundled domain and problem name, for two file paths, or for a domain file and the name of
     a problem in the `problems/` folder beside it. An existing file wins over a bundled name; InputFileError
     names the argument that matches neither."""
     domain_arg, problem_arg = str(domain_arg), str(problem_arg)

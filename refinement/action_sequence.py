@@ -47,7 +47,7 @@ class Parameter:
 
 @dataclass(frozen=True)
 class ExecutableAction:
-    """Plan step `step` (`pddl`, e.g. "(approachball pos1 pos2)") as executable `action` with its params."""
+    """Plan step `step` (`pddl`, e.g. "(reach f1 f2)") as executable `action` with its params."""
 
     step: int
     pddl: str
@@ -87,7 +87,7 @@ class ActionSequence:
     domain: str
     problem: str
     actions: tuple[ExecutableAction, ...]
-    scene: Mapping[str, tuple[float, ...]]  # e.g. {"robot": (x, y, phi, v), "ball": (x, y)}
+    scene: Mapping[str, tuple[float, ...]]  # e.g. {"robot": (x, y, phi, v), "cup": (x, y)}
     simulator: str = ""  # the registered simulator its actions run in
 
     def free_parameters(self) -> tuple[Parameter, ...]:

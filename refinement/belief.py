@@ -3,7 +3,7 @@
 `problems/score.pddl` has its belief state in `problems/score.toml`:
 
     [objects.pos1]     # one table per PDDL object
-    x = 0.0            # quantities of the domain's simulator (soccer: x, y in m, phi in rad, v in m/s)
+    x = 0.0            # quantities of the domain's simulator (e.g. x, y in m, phi in rad, v in m/s)
     y = 1.0
 
 Only the values the binding reads are required (for facts that hold in the initial state).

@@ -142,7 +142,7 @@ def _compose(obj: str, quantity: str, facts: Sequence[_Fact], types: Sequence[st
 
 def _scene(plan: AbstractPlan, binding: Binding, belief: BeliefState,
            initial_state: Iterable[Sequence[str]]) -> Mapping[str, tuple[float, ...]]:
-    """The scene objects placed by initial facts (robot pose, ball position), read from the belief state."""
+    """The scene objects placed by initial facts (robot pose, object positions), read from the belief state."""
     initial = [tuple(link.fact) for link in plan.links if link.producer == INITIAL]
     initial += [tuple(fact) for fact in initial_state]
     scene: dict[str, tuple[float, ...]] = {}

@@ -1,5 +1,5 @@
 """Pictures of subgoal refinement: the executions side by side in each of the simulator's views (Fig. 5.1 for
-the soccer robot, Fig. 5.14 for the arm: Cartesian and joint space), and the predicted time over the first free
+a mobile robot, Fig. 5.14 for the arm: Cartesian and joint space), and the predicted time over the first free
 parameter (Fig. 5.8: a polar plot where that parameter is an angle spanning the full circle)."""
 
 from __future__ import annotations

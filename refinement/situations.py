@@ -16,7 +16,7 @@ from tailor.refinement.action_sequence import ActionSequence
 from tailor.refinement.belief import BeliefState
 from tailor.refinement.errors import TailorError
 from tailor.refinement.instantiate import instantiate
-from tailor.refinement.pipeline import Prepared, Task, load_binding, load_models
+from tailor.refinement.pipeline import Prepared, Task, load_binding, load_models, plan_task
 
 
 @dataclass(frozen=True)
@@ -30,6 +30,12 @@ class Job:
 
 def prepared_job(prepared: Prepared, seed: int) -> Job:
     return Job(task=prepared.task, plan=prepared.plan, seed=seed)
+
+
+def planned_job(task: Task, seed: int) -> Job:
+    """A job for `task` without its learned models (training plans before any exist): binding, then plan."""
+    load_binding(task)  # a bad binding fails before the planner runs
+    return Job(task=task, plan=plan_task(task), seed=seed)
 
 
 _CACHE: dict = {}  # per worker process: bindings and models, loaded once

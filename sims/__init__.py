@@ -2,7 +2,7 @@
 
 `tailor.sims` is robot-agnostic: the protocol a simulator follows (`protocol`), the registry that finds
 simulators, built in or installed by entry point (`registry`), what they report (`episode`) and experience
-gathering (`experience`). Each robot lives in a package of its own (`tailor.sims.soccer`, `tailor.sims.arm`).
+gathering (`experience`). Each robot lives in a package of its own under `tailor.sims`, or in an installed package.
 """
 
 from tailor.sims.episode import ActionCall, ActionResult, Episode, SequenceResult

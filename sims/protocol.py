@@ -27,8 +27,8 @@ Scene = Mapping[str, Sequence[float]]  # scene object -> its values, e.g. {"robo
 class ActionSpec:
     """An executable action: its parameter names per group and the object quantity each one takes.
 
-    soccer goToPose: observed (x, y, phi, v) of quantities (x, y, phi, v), internal (xg, yg, phig, vg) of the
-    same quantities of the goal object; a kitchen grip: observed base pose, internal gripper target.
+    a navigation to a pose: observed (x, y, phi, v) of quantities (x, y, phi, v), internal (xg, yg, phig, vg) of
+    the same quantities of the goal object; a kitchen grip: observed base pose, internal gripper target.
     """
 
     name: str
@@ -91,6 +91,28 @@ class Scenario:
     description: str = ""
 
 
+@dataclass(frozen=True)
+class FeatureSpace:
+    """A row of Table 4.1: the action parameters it reads (in order), its feature names, the map between
+    them, and a random change of the parameters its features are invariant to (described in words): its
+    invariance test. The generic spaces live in tailor.refinement.models.features; a robot may bring its own
+    in its SimulatorEntry."""
+
+    name: str
+    parameters: tuple[str, ...]
+    names: tuple[str, ...]
+    compute: Callable[[np.ndarray], np.ndarray]  # (n, len(parameters)) -> (n, len(names))
+    invariance: str
+    transform: Callable[[np.ndarray, np.random.Generator], np.ndarray] | None = None
+
+    def __call__(self, params: np.ndarray) -> np.ndarray:
+        params = np.atleast_2d(np.asarray(params, dtype=float))
+        if params.ndim != 2 or params.shape[1] != len(self.parameters):
+            raise ValueError(f"feature space {self.name!r} takes parameters of shape (n, {len(self.parameters)}) "
+                             f"({', '.join(self.parameters)}), got {params.shape}")
+        return self.compute(params)
+
+
 Situation = Callable[[np.random.Generator], tuple[str, dict[str, dict[str, float]]]]
 """A random situation for an evaluation: rng -> (problem name, belief values per object)."""
 
@@ -108,7 +130,8 @@ class SimulatorEntry:
     scenarios: Mapping[str, Scenario] = field(default_factory=dict)
     situations: Mapping[str, Situation] = field(default_factory=dict)
     subgoal_episode: SubgoalEpisode | None = None
-    views: tuple[tuple[str, str], ...] = ()  # trajectory column pairs worth drawing, e.g. (("x", "y"),)
+    views: tuple = ()  # trajectory columns worth drawing: pairs ("x", "y") or layers (("x", "y", "phi"), ...)
+    feature_spaces: tuple[FeatureSpace, ...] = ()  # feature spaces of its own (Table 4.1 rows)
     description: str = ""
     extras: Mapping[str, Any] = field(default_factory=dict)
 

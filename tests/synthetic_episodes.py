@@ -2,7 +2,7 @@
 
 Durations follow a known formula (turn at TURN_RATE, then drive at SPEED, then turn to the goal heading), so
 the learning pipeline can be tested without the simulator; `gather` has the signature of
-`sims.experience.gather`.
+`sims.experience.gather`. The episodes log the soccer simulator's named state columns (COLUMNS, no ball).
 """
 
 from __future__ import annotations
@@ -13,6 +13,9 @@ import numpy as np
 
 from tailor.refinement.models.features import norm
 from tailor.sims.episode import Episode
+from tailor.sims.experience import scenario as find_scenario
+
+COLUMNS = ("x", "y", "phi", "v", "ball_x", "ball_y")  # the soccer simulator's logged state
 
 SPEED = 0.8  # m/s
 TURN_RATE = 2.0  # rad/s
@@ -51,15 +54,19 @@ def synthetic_episode(action: str, seed: int, collide_beyond: float | None = Non
     robot[:, :2] = params[:2] + share * (params[4:6] - params[:2])
     robot[:, 2] = params[2] + share[:, 0] * norm(params[6] - params[2])
     robot[:, 3] = params[3] + share[:, 0] * (params[7] - params[3])
+    state = np.column_stack([robot, np.full((len(t), 2), np.nan)])  # no ball
     outcome = "success"
     if collide_beyond is not None:
         bearing = np.arctan2(params[5] - params[1], params[4] - params[0])
         if abs(norm(params[6] - bearing)) > collide_beyond:
             outcome = "collision"
-    return Episode(action, params, t, robot, np.full((len(t), 2), np.nan), outcome, duration, seed)
+    return Episode(action, params, t, state, COLUMNS, outcome, duration, seed)
 
 
-def gather(scenario: str, episodes: int, seed: int, jobs: int = 1, progress: bool = True) -> list[Episode]:
-    """Stand-in for sims.experience.gather: one seed per episode, derived from `seed`."""
+def gather(simulator: str, scenario: str, episodes: int, seed: int, jobs: int = 1,
+           progress: bool = True) -> list[Episode]:
+    """Stand-in for sims.experience.gather: episodes of the scenario's action (looked up in the simulator's
+    registry entry), one seed per episode, derived from `seed`."""
+    action = find_scenario(simulator, scenario).action
     collide = 2.0 if scenario == "goToPoseAtBall" else None
-    return [synthetic_episode(scenario, seed * 100_003 + i, collide) for i in range(episodes)]
+    return [synthetic_episode(action, seed * 100_003 + i, collide) for i in range(episodes)]

@@ -82,8 +82,16 @@ def test_belief_errors_name_the_file_and_the_problem(tmp_path, text, message):
     path = tmp_path / "p.toml"
     path.write_text(text)
     with pytest.raises(BeliefError, match=f"^{re.escape(str(path))}: {message}") as info:
-        load_belief(path, objects=["pos1", "pos2"])
+        load_belief(path, objects=["pos1", "pos2"], quantities=load_domain_binding(SOCCER).quantities)
     assert "\n" not in str(info.value) and info.value.exit_code == 10
+
+
+def test_quantities_are_not_checked_without_the_simulator(tmp_path):
+    path = tmp_path / "p.toml"
+    path.write_text("[objects.pos1]\nz = 1.5\n")
+    assert load_belief(path, objects=["pos1"]).value("pos1", "z") == 1.5
+    with pytest.raises(BeliefError, match=r"z: unknown quantity 'z' \(known: x, y\)$"):
+        load_belief(path, objects=["pos1"], quantities=("x", "y"))
 
 
 def test_objects_are_not_checked_without_the_problem(tmp_path):

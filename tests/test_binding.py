@@ -19,7 +19,9 @@ SOCCER = Path(__file__).resolve().parents[1] / "domains" / "soccer"
 
 def test_soccer_binding():
     b = load_domain_binding(SOCCER)
-    assert b.file == str(SOCCER / "actions.toml") and b.domain == "soccer"
+    assert b.file == str(SOCCER / "actions.toml") and b.domain == "soccer" and b.simulator == "soccer"
+    assert b.quantities == ("x", "y", "phi", "v") and b.entry.name == "soccer"
+    assert b.action("gotopose").spec.internal == ("xg", "yg", "phig", "vg")
     assert {n: (a.executable, dict(a.args)) for n, a in b.actions.items()} == {
         "approachball": ("approachBall", {"observed": 0, "internal": 1}),
         "dribbleball": ("dribbleBall", {"observed": 0, "internal": 1}),
@@ -50,8 +52,9 @@ DELIVERY_PROBLEM = """(define (problem deliver) (:domain delivery)
   (:init (parked home) (road home mid) (road mid bay) (loading bay))
   (:goal (parked bay)))"""
 DELIVERY_BINDING = """
-schema = 1
+schema = 2
 domain = "delivery"
+simulator = "soccer"
 [actions.drive]
 executable = "goToPose"
 observed = 1   # ?from
@@ -127,10 +130,11 @@ def test_a_new_domain_is_bound_to_gotopose_without_python(tmp_path):
 
 
 VALID_ACTION = '[actions.go]\nexecutable = "goToPose"\nobserved = 0\ninternal = 1\n'
+SOCCER_SIM = 'simulator = "soccer"\n'  # top-level key every binding needs; prepended to each BAD_BINDINGS text
 
 BAD_BINDINGS = [
     ('[actions.go]\nexecutable = "fly"\nobserved = 0\ninternal = 1\n',
-     r"\[actions.go\] executable = 'fly' is not an executable action "
+     r"\[actions.go\] executable = 'fly' is not an executable action of simulator 'soccer' "
      r"\(known: goToPose, approachBall, dribbleBall\)"),
     (VALID_ACTION + "observd = 0\n",
      r"\[actions.go\]: unknown key 'observd' \(expected one of executable, internal, observed\)"),
@@ -144,8 +148,12 @@ BAD_BINDINGS = [
     ("actions = 3\n", r"'actions' must be a table of tables \(\[actions.NAME\]\)"),
     ("[actions]\ngo = 3\n", r"\[actions.go\] must be a table"),
     ("foo = 1\n",
-     r"top level: unknown key 'foo' \(expected one of actions, domain, predicates, schema, types\)"),
-    ("schema = 2\n", r"unsupported schema 2 \(expected 1\)"),
+     r"top level: unknown key 'foo' \(expected one of actions, domain, evaluation, predicates, schema, "
+     r"simulator, training, types\)"),
+    ("schema = 1\n", r"unsupported schema 1 \(expected 2: a binding names its simulator\)"),
+    ("schema = 3\n", r"unsupported schema 3 \(expected 2: a binding names its simulator\)"),
+    ("training = 3\n", r"'training' must be a table \(\[training\]\)"),
+    ("evaluation = \"score\"\n", r"'evaluation' must be a table \(\[evaluation\]\)"),
     ("domain = 3\n", r"'domain' must be a string"),
     ("[predicates.at]\nspeed = [0, 1]\n",
      r"\[predicates.at\]: unknown key 'speed' \(expected one of args, read, scene, x, y, phi, v\)"),
@@ -169,7 +177,18 @@ BAD_BINDINGS = [
 ]
 
 
-@pytest.mark.parametrize("text, message", BAD_BINDINGS)
+# Top-level errors about the simulator itself: these texts are written as they are.
+BAD_SIMULATORS = [
+    (VALID_ACTION, r"missing 'simulator': the name of the simulator whose actions the domain binds "
+                   r"\(see `tailor domains`\)$"),
+    ("simulator = 3\n", r"missing 'simulator'"),
+    ('simulator = ""\n', r"missing 'simulator'"),
+    ('simulator = "hovercraft"\n' + VALID_ACTION,
+     r"simulator = 'hovercraft': no simulator 'hovercraft' is installed \(known: .*soccer.*\)$"),
+]
+
+
+@pytest.mark.parametrize("text, message", [(SOCCER_SIM + t, m) for t, m in BAD_BINDINGS] + BAD_SIMULATORS)
 def test_binding_errors_name_the_file_and_the_problem(tmp_path, text, message):
     path = tmp_path / "actions.toml"
     path.write_text(text)
@@ -196,5 +215,5 @@ def test_missing_binding_file(tmp_path):
 
 def test_pi_strings_and_integers_are_accepted(tmp_path):
     path = tmp_path / "actions.toml"
-    path.write_text('[types.t]\nphi = [" -PI", "pi"]\nx = [-1, 2]\n')
+    path.write_text(SOCCER_SIM + '[types.t]\nphi = [" -PI", "pi"]\nx = [-1, 2]\n')
     assert dict(load_binding(path).types["t"]) == {"phi": (-math.pi, math.pi), "x": (-1.0, 2.0)}

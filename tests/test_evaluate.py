@@ -3,52 +3,97 @@
 from __future__ import annotations
 
 import json
+import tomllib
 
 import numpy as np
 import pytest
 
+from tailor.planner_bridge.bundled import DOMAINS_DIR
+from tailor.refinement.binding import load_domain_binding, parse_binding
 from tailor.refinement.cli.main import main
-from tailor.refinement.evaluation.experiments import summarize_score, summarize_waypoints
+from tailor.refinement.errors import BindingError
+from tailor.refinement.evaluation.experiments import (
+    EvaluationPlan,
+    evaluation_plan,
+    summarize_comparison,
+    summarize_horizons,
+)
 
 
-def _row(greedy, refined, oracle=None, ok=(True, True)):
-    return {"greedy": greedy, "refined": refined, "greedy_ok": ok[0], "refined_ok": ok[1],
-            "predicted_greedy": greedy, "predicted_refined": refined, "analytic_seconds": 0.002,
-            "analytic_method": "analytic", "ga_seconds": 0.05, "analytic_cost": refined, "ga_cost": refined * 1.02,
-            "oracle": oracle}
+def _row(greedy, refined, oracle=None, ok=(True, True), zero=None):
+    row = {"problem": "score", "greedy": greedy, "refined": refined, "greedy_ok": ok[0], "refined_ok": ok[1],
+           "predicted_greedy": greedy, "predicted_refined": refined, "analytic_seconds": 0.002,
+           "analytic_method": "analytic", "ga_seconds": 0.05, "analytic_cost": refined, "ga_cost": refined * 1.02}
+    if oracle is not None:
+        row["oracle"], row["oracle_method"] = oracle, "grid"
+    if zero is not None:
+        row["zero"], row["zero_ok"] = zero
+    return row
 
 
 def test_score_statistics_follow_eq_5_3_and_table_5_4():
     rows = [_row(10.0, 8.0, oracle=7.5), _row(10.0, 10.05), _row(10.0, 11.0, oracle=10.0), _row(12.0, 9.0),
             _row(10.0, 9.0, ok=(False, True))]
-    s = summarize_score(rows)
+    s = summarize_comparison(rows)
     assert (s["scenarios"], s["episodes"], s["failed_greedy"], s["failed_refined"]) == (5, 4, 1, 0)
+    assert s["problems"] == ["score"] and s["oracle_methods"] == ["grid"] and s["oracle_episodes"] == 2
     assert s["improvement"] == pytest.approx(np.mean([0.2, -0.005, -0.1, 0.25]))  # mean of 1 - t_h2 / t_h1
     assert (s["better"], s["equal"], s["worse"]) == (2, 1, 1)  # within 1% counts as equal
     assert s["oracle_ratio"] == pytest.approx((8.0 + 11.0) / (7.5 + 10.0))
     assert s["greedy_oracle_ratio"] == pytest.approx(20.0 / 17.5)
     assert s["analytic_ga_agree"] == 0.0  # 2% apart in every row
     assert s["p_value"] == pytest.approx(__import__("scipy").stats.ttest_rel([10, 10, 10, 12], [8, 10.05, 11, 9]).pvalue)
+    assert "zero_mean" not in s  # no zero baseline in these rows
 
 
-def test_waypoint_statistics_compare_each_horizon_with_greedy_and_the_previous():
+def test_zero_baseline_is_paired_with_refined_where_both_succeeded():
+    rows = [_row(10.0, 8.0, zero=(16.0, True)), _row(10.0, 9.0, zero=(12.0, True)), _row(10.0, 9.0, zero=(5.0, False))]
+    s = summarize_comparison(rows)
+    assert (s["zero_episodes"], s["failed_zero"], s["zero_mean"]) == (2, 1, 14.0)
+    assert s["improvement_over_zero"] == pytest.approx(np.mean([0.5, 0.25]))
+    assert s["p_value_zero"] == pytest.approx(__import__("scipy").stats.ttest_rel([16, 12], [8, 9]).pvalue)
+
+
+def test_the_evaluation_plan_is_data_in_the_binding():
+    assert evaluation_plan(load_domain_binding(DOMAINS_DIR / "soccer")) == EvaluationPlan("score", "waypoints", False)
+    head = 'schema = 2\nsimulator = "soccer"\n'
+    for table, message in (("", r"\[evaluation\] missing"),
+                           ('[evaluation]\ncomparison = "tour"\n',
+                            r"\[evaluation\] comparison = 'tour' is not a situation generator of simulator 'soccer' "
+                            r"\(known: score, waypoints\)"),
+                           ('[evaluation]\ncomparison = "score"\nhorizon = "waypoints"\n',
+                            r"\[evaluation\] unknown key 'horizon'"),
+                           ('[evaluation]\ncomparison = "score"\nzero_baseline = 1\n',
+                            r"\[evaluation\] zero_baseline must be true or false, not 1")):
+        with pytest.raises(BindingError, match=r"^e.toml: " + message):
+            evaluation_plan(parse_binding(tomllib.loads(head + table), "e.toml"))
+    only = parse_binding(tomllib.loads(head + '[evaluation]\ncomparison = "waypoints"\nzero_baseline = true\n'))
+    assert evaluation_plan(only) == EvaluationPlan("waypoints", None, True)
+
+
+def test_horizon_statistics_compare_each_horizon_with_greedy_and_the_previous():
     rows = [{f"h{h}": t, f"h{h}_ok": True, f"h{h}_methods": ["analytic"]} for h, t in ((1, 20.0), (2, 18.0))]
-    rows = [{**rows[0], **rows[1]}, {"h1": 10.0, "h1_ok": True, "h1_methods": ["analytic"], "h2": 9.0,
-                                      "h2_ok": True, "h2_methods": ["ga"]}]
-    w = summarize_waypoints(rows, (1, 2))
+    rows = [{"problem": "waypoints", **rows[0], **rows[1]},
+            {"problem": "waypoints", "h1": 10.0, "h1_ok": True, "h1_methods": ["analytic"], "h2": 9.0,
+             "h2_ok": True, "h2_methods": ["ga"]}]
+    w = summarize_horizons(rows, (1, 2))
+    assert (w["episodes"], w["scenarios"], w["problems"]) == (2, 2, ["waypoints"])
     assert [h["mean"] for h in w["horizons"]] == [15.0, 13.5]
     assert w["horizons"][1]["improvement"] == pytest.approx(0.1)
     assert w["horizons"][1]["methods"] == ["analytic", "ga"]
 
 
 def test_tiny_evaluation_end_to_end(capsys):
-    assert main(["evaluate", "soccer", "--episodes", "3", "--oracle-episodes", "1", "--waypoint-episodes", "1",
+    assert main(["evaluate", "soccer", "--episodes", "3", "--oracle-episodes", "1", "--horizon-episodes", "1",
                  "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     for key in ("episodes", "greedy_mean", "refined_mean", "improvement", "p_value", "better", "equal", "worse",
-                "oracle_ratio", "waypoints"):
+                "oracle_ratio", "horizons"):
         assert key in report
+    assert (report["domain"], report["simulator"], report["comparison"]) == ("soccer", "soccer", "score")
+    assert report["scenarios"] == 3 and report["problems"] == ["score"]
+    assert report["horizon_situations"] == "waypoints" and report["horizons"]["problems"] == ["waypoints"]
     assert report["better"] + report["equal"] + report["worse"] == report["episodes"] <= 3
-    assert report["oracle_episodes"] <= 1 and [h["horizon"] for h in report["waypoints"]["horizons"]] == [1, 2, 3, 4]
+    assert report["oracle_episodes"] <= 1 and [h["horizon"] for h in report["horizons"]["horizons"]] == [1, 2, 3, 4]
     if report["oracle_episodes"]:
         assert report["oracle_ratio"] > 0.9  # the grid optimum is a real simulated time, near the refined one

@@ -9,7 +9,8 @@ import pytest
 
 from tailor.refinement.errors import DataError
 from tailor.refinement.models.features import (
-    FEATURE_SETS,
+    FEATURE_SPACES,
+    POSE_PARAMETERS,
     compute_features,
     feature_names,
     first_examples,
@@ -17,9 +18,11 @@ from tailor.refinement.models.features import (
     norm,
 )
 from tailor.sims.episode import Episode
-from synthetic_episodes import random_params
+from synthetic_episodes import COLUMNS, random_params
 
 PI = math.pi
+# the feature spaces of a navigation to a pose (x, y, phi, v, xg, yg, phig, vg)
+POSE_SPACES = sorted(name for name, space in FEATURE_SPACES.items() if space.parameters == POSE_PARAMETERS)
 
 
 def transform(params: np.ndarray, angle: float, shift: tuple[float, float], mirror: bool) -> np.ndarray:
@@ -64,7 +67,12 @@ def test_pose_features_by_hand():
     np.testing.assert_allclose(delta, [PI / 2, PI / 2, 0.0], atol=1e-12)
 
 
-@pytest.mark.parametrize("feature_set", sorted(FEATURE_SETS))
+def test_the_pose_spaces_are_registered():
+    assert POSE_SPACES == ["pose", "pose_delta"]
+    assert FEATURE_SPACES["pose_delta"].names == feature_names("pose") + ("delta_angle",)
+
+
+@pytest.mark.parametrize("feature_set", POSE_SPACES)
 @pytest.mark.parametrize("mirror", [False, True])
 def test_features_invariant_to_translation_rotation_and_mirroring(feature_set, mirror):
     params = random_params(500, seed=1)
@@ -83,7 +91,21 @@ def test_features_see_a_change_of_the_goal_relative_to_the_robot():
     assert np.all(np.abs(b[:, 4] - a[:, 4]) > 0.29)
 
 
-@pytest.mark.parametrize("feature_set", sorted(FEATURE_SETS))
+@pytest.mark.parametrize("name", sorted(FEATURE_SPACES))
+def test_every_feature_space_passes_its_own_invariance_test(name):
+    space = FEATURE_SPACES[name]
+    rng = np.random.default_rng(4)
+    params = rng.uniform(-3.0, 3.0, (300, len(space.parameters)))
+    before = space(params)
+    assert before.shape == (300, len(space.names)) and np.all(np.isfinite(before))
+    assert space.transform is not None, f"{name} declares no invariance test ({space.invariance})"
+    for _ in range(5):
+        moved = space.transform(params, rng)
+        assert not np.allclose(moved, params)  # the transform changes the parameters ...
+        np.testing.assert_allclose(space(moved), before, atol=1e-9)  # ... but not the features
+
+
+@pytest.mark.parametrize("feature_set", POSE_SPACES)
 @pytest.mark.parametrize("column", [2, 3, 6, 7])  # phi, v, phig, vg
 def test_features_piecewise_affine_in_headings_and_speeds(feature_set, column):
     """With positions fixed, each feature is affine in phi, v, phig, vg between a few kinks (App. C.3.4)."""
@@ -100,7 +122,7 @@ def test_features_piecewise_affine_in_headings_and_speeds(feature_set, column):
 def test_compute_features_rejects_bad_input():
     with pytest.raises(ValueError, match=r"shape \(n, 8\)"):
         compute_features("pose", np.zeros((3, 7)))
-    with pytest.raises(DataError, match="unknown feature set 'speed'"):
+    with pytest.raises(DataError, match=r"unknown feature space 'speed' \(known: .*pose.*\)"):
         compute_features("speed", np.zeros((1, 8)))
     assert compute_features("pose", np.zeros(8)).shape == (1, 5)
 
@@ -108,13 +130,14 @@ def test_compute_features_rejects_bad_input():
 def make_episode(rows: int, duration: float, seed: int = 0) -> Episode:
     t = np.arange(rows) * 0.1
     robot = np.column_stack([np.arange(rows) + 100.0 * seed, np.zeros(rows), np.zeros(rows), np.full(rows, 0.5)])
+    state = np.column_stack([robot, np.full((rows, 2), np.nan)])  # no ball
     params = np.array([100.0 * seed, 0.0, 0.0, 0.5, 9.0, 1.0, 0.5, 0.2])
-    return Episode("goToPose", params, t, robot, np.full((rows, 2), np.nan), "success", duration, seed)
+    return Episode("goToPose", params, t, state, COLUMNS, "success", duration, seed)
 
 
 def test_intermediate_examples_take_the_first_n_i_rows_of_each_episode():
     episodes = [make_episode(5, 0.45, seed=0), make_episode(2, 0.15, seed=1)]
-    params, targets, owner = intermediate_examples(episodes, 3)
+    params, targets, owner = intermediate_examples(episodes, 3, observed=("x", "y", "phi", "v"))
     np.testing.assert_array_equal(owner, [0, 0, 0, 1, 1])  # the short episode gives all it has
     np.testing.assert_allclose(targets, [0.45, 0.35, 0.25, 0.15, 0.05])
     np.testing.assert_array_equal(params[:, 0], [0.0, 1.0, 2.0, 100.0, 101.0])  # logged x at t_k
@@ -125,4 +148,22 @@ def test_intermediate_examples_take_the_first_n_i_rows_of_each_episode():
     np.testing.assert_array_equal(first, params[[0, 3]])
     np.testing.assert_array_equal(durations, [0.45, 0.15])
     with pytest.raises(ValueError, match="n_i must be at least 1"):
-        intermediate_examples(episodes, 0)
+        intermediate_examples(episodes, 0, observed=("x", "y", "phi", "v"))
+
+
+def test_intermediate_examples_read_the_observed_parameters_by_column_name():
+    episode = make_episode(4, 0.35)
+    # the state columns in another order: the observed parameters are still read by name
+    order = [3, 5, 0, 4, 2, 1]
+    shuffled = Episode(episode.action, episode.params, episode.t, episode.state[:, order],
+                       tuple(COLUMNS[i] for i in order), episode.outcome, episode.duration, episode.seed)
+    expected = intermediate_examples([episode], 4, ("x", "y", "phi", "v"))
+    got = intermediate_examples([shuffled], 4, ("x", "y", "phi", "v"))
+    for a, b in zip(expected, got):
+        np.testing.assert_array_equal(a, b)
+    # a line move observes (x, v): the logged x and v, then the episode's remaining parameters
+    params, _, _ = intermediate_examples([episode], 2, ("x", "v"))
+    np.testing.assert_array_equal(params[:, :2], [[0.0, 0.5], [1.0, 0.5]])
+    np.testing.assert_array_equal(params[:, 2:], np.tile(episode.params[2:], (2, 1)))
+    with pytest.raises(KeyError, match="no state column 'z'"):
+        intermediate_examples([episode], 2, ("x", "z"))

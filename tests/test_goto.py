@@ -62,7 +62,7 @@ def test_the_cone_does_not_depend_on_the_noise():
         outcomes = set()
         for seed in range(4):
             sim = SoccerSim(seed, Noise(motor=0.06, position=0.02))  # twice the default noise
-            sim.reset(start, (0.0, 0.0))
+            sim.reset({"robot": start, "ball": (0.0, 0.0)})
             outcomes.add(sim.run(ActionCall("goToPose", GOAL)).outcome)
         assert len(outcomes) == 1, (start, outcomes)
 

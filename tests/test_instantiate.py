@@ -49,7 +49,7 @@ def test_score_matches_the_comment_under_algorithm_3():
     assert table(seq.actions[1]) == {"x": 3.0, "y": 1.0, "phi": (-PI, PI), "v": (0.0, 0.3),
                                      "xg": 1.0, "yg": 3.0, "phig": 2.6, "vg": 0.0}
     assert dict(seq.scene) == {"robot": (0.0, 1.0, 0.0, 0.0), "ball": (3.0, 1.0)}
-    assert (seq.domain, seq.problem) == ("soccer", "score")
+    assert (seq.domain, seq.problem, seq.simulator) == ("soccer", "score", "soccer")
 
 
 def test_score_golden_json():
@@ -148,6 +148,9 @@ def test_bind_partial_and_errors():
 # ---- the general case -------------------------------------------------------------------------------
 
 TOY = """
+schema = 2
+simulator = "soccer"
+
 [actions.move]
 executable = "goToPose"
 observed = 0

@@ -15,6 +15,8 @@ from tailor.refinement.models.features import compute_features, feature_names, f
 from tailor.refinement.learning.protocol import held_out_mae, split_episodes, train_duration_model
 from synthetic_episodes import gather
 
+OBSERVED = ("x", "y", "phi", "v")  # the observed parameters of the soccer actions (read from the log)
+
 
 @pytest.mark.parametrize("n", [8, 9, 10, 11, 101])
 def test_split_is_a_seeded_partition_into_half_quarter_quarter(n):
@@ -43,11 +45,11 @@ class Recorder(RegressorMixin, BaseEstimator):
 
 
 def rows_of(episodes, n_i):
-    return compute_features("pose", intermediate_examples(episodes, n_i)[0])
+    return compute_features("pose", intermediate_examples(episodes, n_i, OBSERVED)[0])
 
 
 def test_duration_protocol_uses_each_part_for_its_purpose():
-    episodes = gather("goToPose", 48, seed=5)
+    episodes = gather("soccer", "goToPose", 48, seed=5)
     episodes[7] = dataclasses.replace(episodes[7], outcome="timeout")  # failures train no duration model
     episodes[20] = dataclasses.replace(episodes[20], outcome="collision")
     used = [e for e in episodes if e.succeeded]
@@ -57,7 +59,8 @@ def test_duration_protocol_uses_each_part_for_its_purpose():
     test = [used[i] for i in split.test]
 
     Recorder.fitted = []
-    result = train_duration_model("goToPose", episodes, seed=9, n_i_candidates=(1, 4, 9), leaf_candidates=(10,),
+    result = train_duration_model("goToPose", episodes, seed=9, feature_set="pose", observed=OBSERVED,
+                                  n_i_candidates=(1, 4, 9), leaf_candidates=(10,),
                                   episode_fractions=(0.5, 1.0), make_model=lambda seed, leaf: Recorder(),
                                   make_reference=lambda seed, leaf: LinearRegression())
     report, fits = result.report, list(Recorder.fitted)
@@ -70,7 +73,7 @@ def test_duration_protocol_uses_each_part_for_its_purpose():
         np.testing.assert_array_equal(fitted, rows_of(train, n_i))
     scores = [row["mae"] for row in report["n_i_curve"]]
     for row, n_i in zip(report["n_i_curve"], (1, 4, 9)):
-        model = Recorder().fit(rows_of(train, n_i), intermediate_examples(train, n_i)[1])
+        model = Recorder().fit(rows_of(train, n_i), intermediate_examples(train, n_i, OBSERVED)[1])
         assert row["mae"] == pytest.approx(held_out_mae(model, validation, "pose"), rel=1e-12)
         assert row["examples"] == len(rows_of(train, n_i))
     n_i = (1, 4, 9)[int(np.argmin(scores))]
@@ -83,7 +86,7 @@ def test_duration_protocol_uses_each_part_for_its_purpose():
     test_rows = rows_of(test, 1)
     for fitted in fits[:5]:  # no test episode ever trains a model that is scored
         assert not any((fitted == row).all(axis=1).any() for row in test_rows)
-    params, targets, _ = intermediate_examples(learn, n_i)
+    params, targets, _ = intermediate_examples(learn, n_i, OBSERVED)
     X_test, durations = compute_features("pose", first_examples(test)[0]), first_examples(test)[1]
     expected = np.mean(np.abs(LinearRegression().fit(compute_features("pose", params), targets).predict(X_test)
                               - durations))
@@ -99,8 +102,9 @@ def test_duration_protocol_uses_each_part_for_its_purpose():
 
 
 def test_model_tree_learns_the_synthetic_durations():
-    episodes = gather("goToPose", 400, seed=6)
-    report = train_duration_model("goToPose", episodes, seed=0, n_i_candidates=(1, 5), episode_fractions=(1.0,),
+    episodes = gather("soccer", "goToPose", 400, seed=6)
+    report = train_duration_model("goToPose", episodes, seed=0, feature_set="pose", observed=OBSERVED,
+                                  n_i_candidates=(1, 5), episode_fractions=(1.0,),
                                   leaf_candidates=(10, 40)).report
     # the synthetic noise is 0.05 s and durations average ~5.5 s
     assert report["mae"] < 0.1 * report["mean_duration"]
@@ -108,9 +112,9 @@ def test_model_tree_learns_the_synthetic_durations():
 
 
 def test_too_few_successes_is_a_data_error():
-    episodes = [dataclasses.replace(e, outcome="ball_lost") for e in gather("dribbleBall", 20, seed=1)]
+    episodes = [dataclasses.replace(e, outcome="ball_lost") for e in gather("soccer", "dribbleBall", 20, seed=1)]
     with pytest.raises(DataError, match="dribbleBall: 0 successful episodes of 20; need at least 8"):
-        train_duration_model("dribbleBall", episodes, seed=0)
+        train_duration_model("dribbleBall", episodes, seed=0, feature_set="pose", observed=OBSERVED)
 
 
 def test_confusion_matrix_by_hand():
@@ -124,8 +128,8 @@ def test_confusion_matrix_by_hand():
 
 
 def test_collision_classifier_is_pessimistic_and_evaluated_on_fresh_episodes():
-    train, fresh = gather("goToPoseAtBall", 400, seed=2), gather("goToPoseAtBall", 300, seed=3)
-    result = train_collision_model("goToPose", train, fresh, seed=0)
+    train, fresh = gather("soccer", "goToPoseAtBall", 400, seed=2), gather("soccer", "goToPoseAtBall", 300, seed=3)
+    result = train_collision_model("goToPose", train, fresh, seed=0, feature_set="pose")
     report = result.report
     X_fresh = compute_features("pose", first_examples(fresh)[0])
     expected = confusion(result.model.tree.predict(X_fresh).astype(int), labels(fresh))
@@ -164,8 +168,9 @@ class Shrunk(RegressorMixin, BaseEstimator):
     ({5: 800, 10: 700, 20: 600, 40: 500}, {5: 0.0, 10: 0.0, 20: 0.3, 40: 0.5}, 40),
 ])
 def test_leaf_size_choice(leaves, pulls, chosen):
-    episodes = gather("goToPose", 80, seed=8)
-    report = train_duration_model("goToPose", episodes, seed=1, n_i_candidates=(2,), leaf_candidates=(5, 10, 20, 40),
+    episodes = gather("soccer", "goToPose", 80, seed=8)
+    report = train_duration_model("goToPose", episodes, seed=1, feature_set="pose", observed=OBSERVED,
+                                  n_i_candidates=(2,), leaf_candidates=(5, 10, 20, 40),
                                   episode_fractions=(1.0,),
                                   make_model=lambda seed, leaf: Shrunk(pulls[leaf], leaves[leaf])).report
     curve = {row["min_samples_leaf"]: row for row in report["leaf_curve"]}
@@ -197,13 +202,14 @@ class Sized(RegressorMixin, BaseEstimator):
 def test_n_i_is_chosen_among_trees_small_enough_to_store():
     """The best n_i at the default leaf size would need 600 leaves; made small enough (leaf 20) it loses to a
     smaller n_i whose tree fits at the default leaf size, and that is chosen."""
-    episodes = gather("goToPose", 80, seed=8)
+    episodes = gather("soccer", "goToPose", 80, seed=8)
     used = [e for e in episodes if e.succeeded]
     train = [used[i] for i in split_episodes(len(used), seed=1).train]
     few = len(rows_of(train, 2))
     assert len(rows_of(train, 5)) > few
     pulls = {(True, 10): 0.0, (True, 20): 0.3, (False, 10): 0.1, (False, 20): 0.5}
-    report = train_duration_model("goToPose", episodes, seed=1, n_i_candidates=(2, 5), leaf_candidates=(10, 20),
+    report = train_duration_model("goToPose", episodes, seed=1, feature_set="pose", observed=OBSERVED,
+                                  n_i_candidates=(2, 5), leaf_candidates=(10, 20),
                                   episode_fractions=(1.0,),
                                   make_model=lambda seed, leaf: Sized(leaf, few, pulls)).report
     n_i_curve = {row["n_i"]: row for row in report["n_i_curve"]}
@@ -215,11 +221,12 @@ def test_n_i_is_chosen_among_trees_small_enough_to_store():
 
 
 def test_n_i_whose_capped_tree_wins_is_chosen_with_its_leaf_size():
-    episodes = gather("goToPose", 80, seed=8)
+    episodes = gather("soccer", "goToPose", 80, seed=8)
     used = [e for e in episodes if e.succeeded]
     few = len(rows_of([used[i] for i in split_episodes(len(used), seed=1).train], 2))
     pulls = {(True, 10): 0.0, (True, 20): 0.05, (False, 10): 0.3, (False, 20): 0.5}
-    report = train_duration_model("goToPose", episodes, seed=1, n_i_candidates=(2, 5), leaf_candidates=(10, 20),
+    report = train_duration_model("goToPose", episodes, seed=1, feature_set="pose", observed=OBSERVED,
+                                  n_i_candidates=(2, 5), leaf_candidates=(10, 20),
                                   episode_fractions=(1.0,),
                                   make_model=lambda seed, leaf: Sized(leaf, few, pulls)).report
     assert (report["n_i"], report["min_samples_leaf"]) == (5, 20)

@@ -5,7 +5,7 @@ import pytest
 
 from tailor.refinement.errors import EmptyRangeError, TailorError
 from tailor.refinement.optimizers import OPTIMIZERS, FreeParameter, Objective, Term, brute_force, optimize
-from tailor.refinement.optimizers.synthetic import random_objective, soccer_like
+from tailor.refinement.optimizers.synthetic import random_objective, pose_chain
 
 
 def test_registry_names():
@@ -32,7 +32,7 @@ def test_no_free_parameters():
 
 @pytest.mark.parametrize("seed", range(4))
 def test_no_optimizer_beats_the_analytic_minimum(seed):
-    objective = soccer_like(np.random.default_rng(seed), n_leaves=60)
+    objective = pose_chain(np.random.default_rng(seed), n_leaves=60)
     best = optimize(objective, "analytic")
     assert best.method == "analytic"
     for method in ("ga", "sample"):

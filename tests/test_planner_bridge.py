@@ -4,6 +4,8 @@ makes it true, no threatened link, and random linearizations of the partial orde
 
 from __future__ import annotations
 
+import dataclasses
+import json
 from pathlib import Path
 
 import numpy as np
@@ -175,7 +177,10 @@ def test_conditional_effects_keep_the_sequence():
 
 def test_json_round_trip_is_exact():
     plan = plan_here(*files("blocks", "p01"))
-    assert AbstractPlan.from_json(plan.to_json()) == plan
+    assert plan.objects and plan.initial  # the plan carries the problem's objects and initial facts
+    assert AbstractPlan.from_json(json.loads(json.dumps(plan.to_json(facts=True)))) == plan
+    without_facts = AbstractPlan.from_json(plan.to_json())  # the default JSON leaves them out
+    assert "objects" not in plan.to_json() and without_facts == dataclasses.replace(plan, objects=(), initial=())
 
 
 def test_text_rendering_lists_each_steps_links_like_vhpop():

@@ -4,26 +4,35 @@ import numpy as np
 import pytest
 
 from tailor.sims.errors import SimError
-from tailor.sims.experience import gather, load_episodes, save_episodes
+from tailor.sims.experience import SCHEMA, gather, load_episodes, save_episodes
 
 
 def _same(a, b):
     assert len(a) == len(b)
     for x, y in zip(a, b):
         assert (x.action, x.outcome, x.duration, x.seed) == (y.action, y.outcome, y.duration, y.seed)
-        for f in ("params", "t", "robot", "ball"):
+        assert x.columns == y.columns == ("x", "y", "phi", "v", "ball_x", "ball_y")
+        for f in ("params", "t", "state"):
             np.testing.assert_array_equal(getattr(x, f), getattr(y, f))
 
 
 def test_gather_is_the_same_whatever_the_number_of_jobs():
-    one = gather("goToPoseAtBall", 12, seed=5, jobs=1, progress=False)
-    two = gather("goToPoseAtBall", 12, seed=5, jobs=2, progress=False)
+    one = gather("soccer", "goToPoseAtBall", 12, seed=5, jobs=1, progress=False)
+    two = gather("soccer", "goToPoseAtBall", 12, seed=5, jobs=2, progress=False)
     _same(one, two)
     assert len({e.seed for e in one}) == 12
+    assert {e.action for e in one} == {"goToPose"}  # the scenario's action
+
+
+def test_gather_names_an_unknown_simulator_or_scenario():
+    with pytest.raises(SimError, match=r"no simulator 'hovercraft' is installed"):
+        gather("hovercraft", "goToPose", 1, seed=0, progress=False)
+    with pytest.raises(SimError, match=r"simulator 'soccer' has no experience scenario 'kick'; known: goToPose, "):
+        gather("soccer", "kick", 1, seed=0, progress=False)
 
 
 def test_save_load_round_trip(tmp_path):
-    eps = gather("approachBall", 3, seed=1, progress=False)
+    eps = gather("soccer", "approachBall", 3, seed=1, progress=False)
     path = tmp_path / "exp.npz"
     save_episodes(path, eps)
     _same(load_episodes(path), eps)
@@ -37,3 +46,10 @@ def test_malformed_file_names_the_file(tmp_path):
     np.savez(tmp_path / "other.npz", x=np.zeros(3))
     with pytest.raises(SimError, match="other.npz: not an episode file"):
         load_episodes(tmp_path / "other.npz")
+    eps = gather("soccer", "goToPose", 2, seed=1, progress=False)
+    save_episodes(tmp_path / "old.npz", eps)
+    with np.load(tmp_path / "old.npz") as data:
+        arrays = {k: data[k] for k in data.files}
+    np.savez(tmp_path / "old.npz", **{**arrays, "schema": np.array(SCHEMA - 1)})
+    with pytest.raises(SimError, match=f"old.npz: episode schema {SCHEMA - 1}, expected {SCHEMA}"):
+        load_episodes(tmp_path / "old.npz")

@@ -7,15 +7,17 @@ import pytest
 
 from tailor.sims.episode import ActionCall
 from tailor.sims.errors import SimError
-from tailor.sims.experience import SCENARIOS, episode_seeds, run_chain, run_episode
-from tailor.sims.soccer import Noise, SoccerSim, simulate_sequence
+from tailor.sims.experience import episode_seeds, run_episode
+from tailor.sims.soccer import SIMULATOR, Noise, SoccerSim, simulate_sequence
 from tailor.sims.soccer import world as W
-from tailor.sims.soccer.simulator import CONTROL_HZ, DT, LOG_HZ, STEPS_PER_CONTROL
+from tailor.sims.soccer.scenarios import run_chain
+from tailor.sims.soccer.simulator import (CONTROL_HZ, DT, LOG_HZ, STATE_COLUMNS, STEPS_PER_CONTROL,
+                                         TRAJECTORY_COLUMNS)
 
 
 def test_rolling_ball_stops_after_v0_squared_over_two_mu_g():
     sim = SoccerSim(0, Noise.off())
-    sim.reset((-3.0, -2.0, 0.0, 0.0), (0.0, 0.0))
+    sim.place((-3.0, -2.0, 0.0, 0.0), (0.0, 0.0))
     v0 = 1.2
     sim.ball.velocity = (v0, 0.0)
     for _ in range(2000):
@@ -28,7 +30,7 @@ def test_rolling_ball_stops_after_v0_squared_over_two_mu_g():
 def test_robot_never_exceeds_its_limits_under_random_commands():
     rng = np.random.default_rng(3)
     sim = SoccerSim(1, Noise(motor=0.5))  # large motor noise pushes commands beyond the limits
-    sim.reset((0.0, 0.0, 0.0, 0.0))
+    sim.place((0.0, 0.0, 0.0, 0.0))
     for _ in range(300):
         sim.command(rng.uniform(-3, 3), rng.uniform(-10, 10))
         for _ in range(STEPS_PER_CONTROL):
@@ -40,13 +42,13 @@ def test_robot_never_exceeds_its_limits_under_random_commands():
 
 
 def test_go_to_pose_reaches_random_reachable_poses():
-    outcomes = [run_episode("goToPose", s).outcome for s in episode_seeds(11, 20)]
+    outcomes = [run_episode("soccer", "goToPose", s).outcome for s in episode_seeds(11, 20)]
     assert outcomes == ["success"] * 20
 
 
 def test_episode_ends_within_tolerance_and_logs_at_10_hz():
     sim = SoccerSim(4)
-    sim.reset((0.0, 0.0, 0.0, 0.0))
+    sim.place((0.0, 0.0, 0.0, 0.0))
     ep = sim.run(ActionCall("goToPose", (2.0, 1.0, math.pi / 2, 0.3)))
     assert ep.outcome == "success"
     np.testing.assert_allclose(ep.t, np.arange(len(ep.t)) / LOG_HZ)
@@ -61,10 +63,10 @@ def test_same_seed_same_episode_other_seed_slightly_different_duration():
     durations = []
     for seed in range(12):
         sim = SoccerSim(seed)
-        sim.reset((-1.0, -1.0, 0.0, 0.0))
+        sim.place((-1.0, -1.0, 0.0, 0.0))
         durations.append(sim.run(call).duration)
     again = SoccerSim(0)
-    again.reset((-1.0, -1.0, 0.0, 0.0))
+    again.reset({"robot": (-1.0, -1.0, 0.0, 0.0)})  # the protocol's reset gives the same episode
     ep0 = again.run(call)
     assert ep0.duration == durations[0]
     d = np.array(durations)
@@ -73,7 +75,7 @@ def test_same_seed_same_episode_other_seed_slightly_different_duration():
 
 def test_dribbling_straight_keeps_the_ball():
     sim = SoccerSim(5)
-    sim.reset((0.0, 0.0, 0.0, 0.0), (0.0, 0.0))
+    sim.place((0.0, 0.0, 0.0, 0.0), (0.0, 0.0))
     ep = sim.run(ActionCall("dribbleBall", (2.0, 0.0, 0.0, 0.1)))
     assert ep.outcome == "success"
 
@@ -93,17 +95,17 @@ def _dribble_then(sim, v_cmd, w_cmd, seconds):
 
 def test_ball_kept_at_speed_lost_on_hard_brake_and_sharp_turn():
     sim = SoccerSim(6, Noise.off())
-    sim.reset((-3.0, 0.0, 0.0, 0.0), (-3.0, 0.0))
+    sim.place((-3.0, 0.0, 0.0, 0.0), (-3.0, 0.0))
     assert _dribble_then(sim, 0.8, 0.0, 0.5) < 0.02  # held while pushed
     # braking at A_MAX = 1 m/s^2 > mu_r g = 0.49: the ball runs on (v^2/2)(1/0.49 - 1/1) = 0.33 m ahead
-    sim.reset((-3.0, 0.0, 0.0, 0.0), (-3.0, 0.0))
+    sim.place((-3.0, 0.0, 0.0, 0.0), (-3.0, 0.0))
     assert _dribble_then(sim, 0.0, 0.0, 1.5) > 0.25
-    sim.reset((-3.0, 0.0, 0.0, 0.0), (-3.0, 0.0))
+    sim.place((-3.0, 0.0, 0.0, 0.0), (-3.0, 0.0))
     assert _dribble_then(sim, 0.8, W.W_MAX, 0.7) > 0.15
 
 
 def test_dribble_ball_succeeds_on_random_scenarios():
-    outcomes = [run_episode("dribbleBall", s).outcome for s in episode_seeds(31, 20)]
+    outcomes = [run_episode("soccer", "dribbleBall", s).outcome for s in episode_seeds(31, 20)]
     assert outcomes.count("success") >= 19, outcomes
 
 
@@ -115,7 +117,7 @@ def test_approach_then_dribble_chain_succeeds_on_random_scenarios():
 
 def _dribble_duration(phi, seed=0):
     sim = SoccerSim(seed)
-    sim.reset((-2.0, 0.0, phi, 0.0), (-2.0, 0.0))
+    sim.place((-2.0, 0.0, phi, 0.0), (-2.0, 0.0))
     ep = sim.run(ActionCall("dribbleBall", (1.0, 0.0, 0.0, 0.0)))
     assert ep.outcome == "success"
     return ep.duration
@@ -133,7 +135,7 @@ def test_dribble_duration_grows_with_the_turn_needed_at_the_start():
 def _turn_holds_ball(v, w, seconds=6.0):
     """Dribble straight up to speed v, then turn at rate w: whether the ball stays in the guide."""
     sim = SoccerSim(7, Noise.off())
-    sim.reset((-2.0, 0.0, 0.0, 0.0), (-2.0, 0.0))
+    sim.place((-2.0, 0.0, 0.0, 0.0), (-2.0, 0.0))
     for v_cmd, w_cmd, duration in ((v, 0.0, 2.0), (v, w, seconds)):
         for _ in range(int(duration * CONTROL_HZ)):
             sim.command(v_cmd, w_cmd)
@@ -155,10 +157,10 @@ def test_guide_holds_the_dribble_turn_rate_but_not_a_sharper_turn():
 
 def test_approach_ball_rarely_collides_and_plain_go_to_pose_runs_over_a_ball_in_its_way():
     seeds = episode_seeds(21, 20)
-    approach = [run_episode("approachBall", s).outcome for s in seeds]
+    approach = [run_episode("soccer", "approachBall", s).outcome for s in seeds]
     assert approach.count("collision") == 0 and approach.count("success") >= 19
     sim = SoccerSim(0)
-    sim.reset((-2.0, 0.0, 0.0, 0.0), ball=(0.0, 0.0))  # goToPose does not see the ball on its straight path
+    sim.place((-2.0, 0.0, 0.0, 0.0), ball=(0.0, 0.0))  # goToPose does not see the ball on its straight path
     assert sim.run(ActionCall("goToPose", (2.0, 0.0, 0.0, 0.0))).outcome == "collision"
 
 
@@ -169,13 +171,53 @@ def test_run_sequence_continues_without_stopping_and_logs_true_state():
     assert res.results[1].start == pytest.approx(res.results[0].duration)
     np.testing.assert_allclose(np.diff(res.trajectory[:, 0]), 1.0 / LOG_HZ, atol=1e-9)
     assert res.trajectory.shape[1] == 7 and res.trajectory[0, 1] == pytest.approx(-1.0)
+    assert res.columns == TRAJECTORY_COLUMNS == ("t", *STATE_COLUMNS)
+    np.testing.assert_array_equal(res.column("ball_x"), res.trajectory[:, 5])
 
 
 def test_bad_input_raises_sim_error():
     sim = SoccerSim(0)
-    sim.reset((0.0, 0.0, 0.0, 0.0))
+    sim.place((0.0, 0.0, 0.0, 0.0))
     with pytest.raises(SimError, match="unknown soccer action 'kick'"):
         sim.run(ActionCall("kick", (0.0, 0.0, 0.0, 0.0)))
     with pytest.raises(SimError, match="dribbleBall needs a ball"):
         sim.run(ActionCall("dribbleBall", (1.0, 0.0, 0.0, 0.0)))
-    assert set(SCENARIOS) == {"goToPose", "approachBall", "dribbleBall", "goToPoseAtBall"}
+    assert set(SIMULATOR.scenarios) == {"goToPose", "approachBall", "dribbleBall", "goToPoseAtBall"}
+    assert {n: s.action for n, s in SIMULATOR.scenarios.items()} == {
+        "goToPose": "goToPose", "approachBall": "approachBall", "dribbleBall": "dribbleBall",
+        "goToPoseAtBall": "goToPose"}
+
+
+def test_reset_to_a_scene_is_place():
+    """The protocol's reset(scene) places the robot and the (optional) ball as place(robot, ball) does."""
+    call = ActionCall("approachBall", (1.0, 0.5, 0.0, 0.2))
+    by_scene, by_place = SoccerSim(3), SoccerSim(3)
+    by_scene.reset({"robot": (-1.0, 0.0, 0.3, 0.1), "ball": (1.0, 0.5)})
+    by_place.place((-1.0, 0.0, 0.3, 0.1), (1.0, 0.5))
+    assert by_scene.true_state() == by_place.true_state()
+    a, b = by_scene.run(call), by_place.run(call)
+    assert (a.outcome, a.duration) == (b.outcome, b.duration)
+    np.testing.assert_array_equal(a.state, b.state)
+    no_ball = SoccerSim(3)
+    no_ball.reset({"robot": (0.0, 0.0, 0.0, 0.0)})
+    assert not no_ball.has_ball
+    for scene, message in (({"ball": (0.0, 0.0)}, "needs a robot"),
+                           ({"robot": (0, 0, 0, 0), "cup": (1, 1)}, "not cup"),
+                           ({"robot": (0.0, 0.0, 0.0)}, r"robot is \(x, y, phi, v\)"),
+                           ({"robot": (0, 0, 0, 0), "ball": (1.0,)}, r"its ball \(x, y\)")):
+        with pytest.raises(SimError, match=message):
+            SoccerSim(0).reset(scene)
+
+
+def test_episodes_log_named_state_columns():
+    assert SoccerSim.state_columns == STATE_COLUMNS == ("x", "y", "phi", "v", "ball_x", "ball_y")
+    ep = run_episode("soccer", "approachBall", 9)
+    assert ep.action == "approachBall" and ep.columns == STATE_COLUMNS and ep.state.shape == (len(ep.t), 6)
+    np.testing.assert_array_equal(ep.column("phi"), ep.state[:, 2])
+    np.testing.assert_array_equal(ep.columns_of(("ball_x", "x")), ep.state[:, [4, 0]])
+    assert np.all(np.isfinite(ep.state))  # approachBall has a ball at its goal
+    np.testing.assert_allclose(ep.params[:2], ep.state[0, :2])  # params start with the first logged pose
+    without_ball = run_episode("soccer", "goToPose", 9)
+    assert np.all(np.isnan(without_ball.columns_of(("ball_x", "ball_y"))))
+    with pytest.raises(KeyError, match="no state column 'z'"):
+        ep.column("z")

@@ -5,18 +5,27 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from tailor.planner_bridge.bundled import DOMAINS_DIR
+from tailor.refinement.errors import TailorError
 from tailor.refinement.learning import training
+from tailor.refinement.learning.recipe import load_recipe
 from tailor.refinement.models.action_models import load_action_models
 from tailor.refinement.learning.subgoal_experience import gather_subgoal_experience
 
+SOCCER = DOMAINS_DIR / "soccer"
+
 
 def test_consecutive_ranges_continue_one_stream_of_situations():
-    models = load_action_models(DOMAINS_DIR / "soccer" / "models")
-    whole = gather_subgoal_experience("soccer", "score", "dribbleBall", models, 4, seed=3, progress=False)
-    parts = (gather_subgoal_experience("soccer", "score", "dribbleBall", models, 2, seed=3, progress=False)
-             + gather_subgoal_experience("soccer", "score", "dribbleBall", models, 2, seed=3, progress=False, first=2))
+    models = load_action_models(SOCCER / "models")
+    whole = gather_subgoal_experience(SOCCER, "score", "dribbleBall", models, 4, seed=3, progress=False)
+    planned = {}
+    parts = (gather_subgoal_experience(SOCCER, "score", "dribbleBall", models, 2, seed=3, progress=False,
+                                       planned=planned)
+             + gather_subgoal_experience(SOCCER, "score", "dribbleBall", models, 2, seed=3, progress=False, first=2,
+                                         planned=planned))
+    assert list(planned) == ["score"]  # the problem is planned once for both calls
     assert [e.action for e in whole] == ["dribbleBall"] * 4
     assert len({tuple(e.params) for e in whole}) == 4  # four different situations
     for a, b in zip(whole, parts):
@@ -25,37 +34,48 @@ def test_consecutive_ranges_continue_one_stream_of_situations():
 
 
 def test_every_way_point_after_the_first_is_a_subgoal_goto_pose_starts_from():
-    models = load_action_models(DOMAINS_DIR / "soccer" / "models")
-    episodes = gather_subgoal_experience("soccer", "waypoints", "goToPose", models, 2, seed=3, progress=False)
+    models = load_action_models(SOCCER / "models")
+    episodes = gather_subgoal_experience(SOCCER, "waypoints", "goToPose", models, 2, seed=3, progress=False)
     assert [e.action for e in episodes] == ["goToPose"] * 6  # p0 -> w1 -> w2 -> w3 -> w4: three start at a subgoal
     for a, b in zip(episodes, episodes[1:]):
         if a is not episodes[2]:  # within one situation the next starts where the last was to end (as believed)
             np.testing.assert_allclose(b.params[:4], a.params[4:], atol=0.06)
-    assert all(np.isnan(e.ball[0]).all() for e in episodes)  # no ball in a goToPose episode
+    assert all(np.isnan(e.columns_of(("ball_x", "ball_y"))[0]).all() for e in episodes)  # no ball in goToPose's
+
+
+def test_an_unknown_situation_generator_is_named():
+    with pytest.raises(TailorError, match=r"simulator 'soccer' has no situation generator 'tour' "
+                                          r"\(known: score, waypoints\)"):
+        gather_subgoal_experience(SOCCER, "tour", "goToPose", {}, 1, seed=0, progress=False)
 
 
 def test_each_round_chooses_subgoals_with_the_model_the_round_before_retrained(monkeypatch):
-    seen, trained = [], []
+    seen, trained, caches = [], [], []
 
-    def gather(domain, problem, action, models, situations, seed, jobs=1, progress=True, first=0, job=None):
+    def gather(domain_dir, generator, action, models, situations, seed, jobs=1, progress=True, first=0,
+               planned=None):
+        assert (domain_dir, generator) == (SOCCER, "score")
         seen.append((models[action], first, situations))
+        caches.append(planned)
         return [SimpleNamespace(action=action, succeeded=True, index=first + i) for i in range(situations)]
 
-    def train(action, episodes, seed, **kwargs):
+    def train(action, episodes, seed, feature_set, observed, **kwargs):
+        assert (feature_set, observed) == ("pose", ("x", "y", "phi", "v"))
         model = f"model {len(trained)} on {len(episodes)}"
         trained.append(model)
         return SimpleNamespace(model=model)
 
     monkeypatch.setattr("tailor.refinement.learning.subgoal_experience.gather_subgoal_experience", gather)
-    monkeypatch.setattr("tailor.refinement.learning.subgoal_experience.subgoal_job", lambda domain, problem, seed: "job")
     monkeypatch.setattr(training, "train_duration_model", train)
-    chain = training.TRAINING_DOMAINS["soccer"].subgoal_experience[0]
+    recipe = load_recipe(SOCCER)
+    chain = recipe.subgoal_experience[0]
     models = {"dribbleBall": "first model"}
-    report = training._learn_at_subgoals("soccer", chain, models, {"dribbleBall": ["own"] * 10}, 7, 0, 1, False,
+    report = training._learn_at_subgoals(recipe, chain, models, {"dribbleBall": ["own"] * 10}, 7, 0, 1, False,
                                          (1,), (1.0,))
 
-    assert (chain.problem, chain.action, chain.rounds) == ("score", "dribbleBall", 3)
+    assert (chain.situations, chain.action, chain.rounds) == ("score", "dribbleBall", 3)
     assert seen == [("first model", 0, 2), ("model 0 on 12", 2, 3), ("model 1 on 15", 5, 2)]
+    assert caches[0] is caches[1] is caches[2] is not None  # the rounds share the problems planned
     assert models["dribbleBall"] == "model 2 on 17"  # the last retraining used all 7 subgoal episodes
-    assert report == {"problem": "score", "action": "dribbleBall", "situations": 7, "episodes": 7, "rounds": 3,
+    assert report == {"generator": "score", "action": "dribbleBall", "situations": 7, "episodes": 7, "rounds": 3,
                       "succeeded": 7}

@@ -16,7 +16,7 @@ from synthetic_episodes import random_params
 EXPECTED_FILES = {
     "models/goToPose.json", "models/approachBall.json", "models/dribbleBall.json", "models/goToPose.collision.json",
     "training/report.json", "training/report.txt", "training/mae_vs_n_i.png", "training/mae_vs_episodes.png",
-    "training/angle_at_polar.png", "training/collision_region.png",
+    "training/angle_at_polar.png", "training/goToPose.success_region.png",
 }
 
 
@@ -40,20 +40,23 @@ def check_outputs(out, report: dict, episodes: int, fresh: int) -> None:
     # dribbleBall also learned from the subgoals refinement chose in random `score` situations, goToPose from
     # those in random `waypoints` situations (three way-points after the first in each) (Sec. 8.1)
     score, waypoints = report["subgoal_experience"]
-    assert (score["problem"], score["action"], waypoints["problem"], waypoints["action"]) == (
+    assert (score["generator"], score["action"], waypoints["generator"], waypoints["action"]) == (
         "score", "dribbleBall", "waypoints", "goToPose")
     assert score["situations"] == score["episodes"] == round(0.5 * episodes)
     assert waypoints["situations"] == round(episodes / 6) and waypoints["episodes"] == 3 * waypoints["situations"]
     assert score["rounds"] == min(3, score["situations"]) and waypoints["rounds"] == min(3, waypoints["situations"])
     collision = load_collision_model(out / "models" / "goToPose.collision.json")
-    c = report["collision"]
+    assert (report["schema"], report["domain"], report["simulator"]) == ("tailor.training_report/3", "soccer", "soccer")
+    assert list(report["classifiers"]) == ["goToPose"]
+    c = report["classifiers"]["goToPose"]
+    assert c["action"] == "goToPose"
     assert 0.0 <= c["accuracy"] <= 1.0 and 0.0 <= c["false_success"] <= 1.0 and c["fresh_episodes"] == fresh
     assert collision.predict_success(params).dtype == bool
     text = (out / "training" / "report.txt").read_text()
     for action in models:
         assert f"Rules of {action}" in text
     assert "predicted Success" in text and "observed Fail" in text
-    for png in ("mae_vs_n_i", "mae_vs_episodes", "angle_at_polar", "collision_region"):
+    for png in ("mae_vs_n_i", "mae_vs_episodes", "angle_at_polar", "goToPose.success_region"):
         assert (out / "training" / f"{png}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
@@ -72,7 +75,7 @@ def test_train_is_reproducible_and_prints_the_table(tmp_path, monkeypatch, capsy
     args = ["train", "soccer", "--episodes", "24", "--fresh-episodes", "20", "--n-i", "1,3", "--out"]
     assert main([*args, str(tmp_path / "a")]) == 0
     printed = capsys.readouterr().out
-    assert printed.startswith("Action models of domain soccer (seed 0, 24 episodes per scenario;")
+    assert printed.startswith("Action models of domain soccer (simulator soccer, seed 0, 24 episodes per scenario;")
     assert f"wrote {tmp_path / 'a' / 'models'}" in printed
     assert main([*args, str(tmp_path / "b")]) == 0
     for name in ("goToPose.json", "approachBall.json", "dribbleBall.json", "goToPose.collision.json"):
@@ -82,10 +85,26 @@ def test_train_is_reproducible_and_prints_the_table(tmp_path, monkeypatch, capsy
 
 
 def test_unknown_domain_is_one_line(capsys, tmp_path):
-    assert main(["train", "hockey", "--out", str(tmp_path)]) == 9
+    assert main(["train", "hockey", "--out", str(tmp_path)]) == 3
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == ["tailor train: error: no training recipe for domain 'hockey' (known: soccer)"]
+    assert len(err) == 1 and err[0].startswith(
+        "tailor train: error: hockey: no such domain folder, domain file or bundled domain (bundled: ")
+    assert "soccer" in err[0]
     assert not any(tmp_path.iterdir())
+
+
+def test_domain_without_a_training_recipe_is_one_line(capsys, tmp_path):
+    domain = tmp_path / "delivery"
+    domain.mkdir()
+    (domain / "domain.pddl").write_text("(define (domain delivery))")
+    (domain / "actions.toml").write_text('schema = 2\nsimulator = "soccer"\n'
+                                         '[actions.drive]\nexecutable = "goToPose"\nobserved = 0\ninternal = 1\n')
+    out = tmp_path / "out"
+    assert main(["train", str(domain), "--out", str(out)]) == 11
+    assert capsys.readouterr().err.strip() == (
+        f"tailor train: error: {domain / 'actions.toml'}: [training] missing: the domain's binding says nothing "
+        "about what to learn (add a [training] table)")
+    assert not out.exists()
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -5,7 +5,8 @@
   (:predicates
     (at ?p - waypoint)               ; the arm's tip is at way-point p
     (next ?p ?q - waypoint)          ; the letter's stroke runs from p to q
-    (reached ?p - waypoint))         ; the tip has passed through p
+    (reached ?p - waypoint)          ; the tip has passed through p
+    (rest ?p - waypoint))            ; the pen rests at p (the end of the letter)
 
   (:action reach
     :parameters (?from ?to - waypoint)

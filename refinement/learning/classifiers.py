@@ -1,5 +1,5 @@
 """Success classifiers (Sec. 4.2.2): does an action reach its goal without failing (e.g. without bumping a
-ball lying at its goal pose)?
+object lying at its goal pose)?
 
 A scikit-learn decision tree on the action's features, made pessimistic by a cost matrix: predicting
 success for an episode that collides costs COST_FALSE_SUCCESS times as much as predicting a collision for

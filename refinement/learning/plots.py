@@ -103,7 +103,7 @@ REGION_VG = 0.15  # m/s, mid-range of the collision experience (0 to 0.3 m/s)
 
 
 def region_params(start_heading: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(x, y, params): starts on a grid round the goal (ball point at the origin, heading +x), standing,
+    """(x, y, params): starts on a grid round the goal (the goal at the origin, heading +x), standing,
     with heading `start_heading` relative to the direction toward the goal (0: facing it)."""
     axis = np.linspace(-REGION_HALF_SIZE, REGION_HALF_SIZE, REGION_SAMPLES)
     x, y = np.meshgrid(axis, axis)

@@ -4,17 +4,17 @@
     episodes = 6000            # per scenario, the default of `tailor train`
     fresh_episodes = 1000      # fresh episodes each classifier is evaluated on (Table 4.4)
 
-    [training.models.goToPose]         # a duration model per executable action ...
-    scenario = "goToPose"              # ... learned from this experience scenario of the simulator
+    [training.models.navigate]         # a duration model per executable action ...
+    scenario = "navigate"              # ... learned from this experience scenario (or a list of them)
     feature_space = "pose"             # ... in this feature space (Table 4.1)
 
-    [training.classifiers.goToPose]    # a success classifier (Sec. 4.2.2), optional
-    scenario = "goToPoseAtBall"
+    [training.classifiers.navigate]    # a success classifier (Sec. 4.2.2), optional
+    scenario = "navigateToObject"
     feature_space = "pose"
 
     [[training.subgoal_experience]]    # optional: experience at refined subgoals (Sec. 8.1)
-    problem = "score"                  # a problem beside the domain whose plan is the chain
-    action = "dribbleBall"             # the action that learns from it
+    situations = "tour"                # the simulator's situation generator drawing the chains
+    action = "navigate"                # the action that learns from it
     share = 0.5                        # situations per episode of a scenario
     rounds = 3                         # gathered in rounds, each with the model the round before retrained
 """
@@ -28,7 +28,7 @@ from typing import Any
 
 from tailor.refinement.binding import Binding, load_domain_binding
 from tailor.refinement.errors import BindingError
-from tailor.refinement.models.features import FEATURE_SPACES
+from tailor.refinement.models.features import feature_spaces
 from tailor.sims.protocol import ActionSpec
 
 
@@ -37,16 +37,16 @@ class ModelRecipe:
     """A learned model of `action` (a duration model tree or a success classifier)."""
 
     action: str
-    scenario: str
+    scenarios: tuple[str, ...]  # experience scenarios whose episodes it learns from, together
     feature_space: str
 
 
 @dataclass(frozen=True)
 class SubgoalExperience:
     """`action` also learns from episodes that start at the subgoals refinement chooses in random situations
-    of the chain `problem` (Sec. 8.1, tailor.refinement.learning.subgoal_experience)."""
+    drawn by the simulator's situation generator `situations` (Sec. 8.1, learning.subgoal_experience)."""
 
-    problem: str
+    situations: str
     action: str
     share: float
     rounds: int
@@ -96,19 +96,20 @@ def recipe_from_binding(binding: Binding, domain_dir: Path) -> TrainingRecipe:
         where = f"subgoal_experience[{k}]"
         if not isinstance(chain, dict):
             raise fail(f"{where} must be a table")
-        _keys(chain, {"problem", "action", "share", "rounds"}, where, fail)
+        _keys(chain, {"situations", "action", "share", "rounds"}, where, fail)
         action = chain.get("action")
         if action not in {m.action for m in models}:
             raise fail(f"{where} action = {action!r} has no duration model to retrain")
-        problem = chain.get("problem")
-        if not isinstance(problem, str) or not (Path(domain_dir) / "problems" / f"{problem}.pddl").is_file():
-            raise fail(f"{where} problem = {problem!r} is not a problem beside the domain")
+        situations = chain.get("situations")
+        if not isinstance(situations, str) or situations not in entry.situations:
+            raise fail(f"{where} situations = {situations!r} is not a situation generator of simulator "
+                       f"{entry.name!r} (known: {', '.join(entry.situations) or 'none'})")
         share = chain.get("share", 0.5)
         if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0 <= share <= 10:
             raise fail(f"{where} share must be a number in [0, 10], not {share!r}")
         if entry.subgoal_episode is None:
             raise fail(f"{where}: simulator {entry.name!r} cannot start episodes at subgoals")
-        chains.append(SubgoalExperience(problem, action, float(share),
+        chains.append(SubgoalExperience(situations, action, float(share),
                                         _positive_int(chain.get("rounds", 1), f"{where} rounds", fail)))
     return TrainingRecipe(binding.domain or Path(domain_dir).name, Path(domain_dir), entry.name, models, classifiers,
                           episodes, fresh, tuple(chains), entry.actions)
@@ -145,18 +146,23 @@ def _models(section: Any, key: str, entry, fail) -> tuple[ModelRecipe, ...]:
         if action not in entry.actions:
             raise fail(f"{where}: {action!r} is not an action of simulator {entry.name!r} "
                        f"(known: {', '.join(entry.actions)})")
-        scenario = table.get("scenario", action)
-        if scenario not in entry.scenarios:
-            raise fail(f"{where} scenario = {scenario!r} is not an experience scenario of simulator {entry.name!r} "
-                       f"(known: {', '.join(entry.scenarios)})")
-        if entry.scenarios[scenario].action != action:
-            raise fail(f"{where} scenario = {scenario!r} runs {entry.scenarios[scenario].action}, not {action}")
+        scenarios = table.get("scenario", action)
+        scenarios = [scenarios] if isinstance(scenarios, str) else scenarios
+        if not isinstance(scenarios, list) or not scenarios:
+            raise fail(f"{where} scenario must be a scenario name or a non-empty list of them")
+        for scenario in scenarios:
+            if not isinstance(scenario, str) or scenario not in entry.scenarios:
+                raise fail(f"{where} scenario = {scenario!r} is not an experience scenario of simulator "
+                           f"{entry.name!r} (known: {', '.join(entry.scenarios)})")
+            if entry.scenarios[scenario].action != action:
+                raise fail(f"{where} scenario = {scenario!r} runs {entry.scenarios[scenario].action}, not {action}")
         space = table.get("feature_space")
-        if space not in FEATURE_SPACES:
+        spaces = feature_spaces()
+        if not isinstance(space, str) or space not in spaces:
             raise fail(f"{where} feature_space = {space!r} is not a feature space "
-                       f"(known: {', '.join(sorted(FEATURE_SPACES))})")
-        if len(FEATURE_SPACES[space].parameters) != len(entry.actions[action].parameters):
-            raise fail(f"{where} feature_space = {space!r} reads {len(FEATURE_SPACES[space].parameters)} parameters, "
+                       f"(known: {', '.join(sorted(spaces))})")
+        if len(spaces[space].parameters) != len(entry.actions[action].parameters):
+            raise fail(f"{where} feature_space = {space!r} reads {len(spaces[space].parameters)} parameters, "
                        f"{action} has {len(entry.actions[action].parameters)}")
-        out.append(ModelRecipe(action, scenario, space))
+        out.append(ModelRecipe(action, tuple(scenarios), space))
     return tuple(out)

@@ -59,14 +59,20 @@ def train_domain(
     fresh_episodes = recipe.fresh_episodes if fresh_episodes is None else fresh_episodes
     started = time.perf_counter()
 
-    experience: dict[str, list[Episode]] = {}
-    for scenario in dict.fromkeys(m.scenario for m in (*recipe.models, *recipe.classifiers)):
-        experience[scenario] = gather(recipe.simulator, scenario, episodes, seed=seed, jobs=jobs, progress=progress)
+    gathered_by_scenario: dict[str, list[Episode]] = {}
+    for scenario in dict.fromkeys(s for m in (*recipe.models, *recipe.classifiers) for s in m.scenarios):
+        gathered_by_scenario[scenario] = gather(recipe.simulator, scenario, episodes, seed=seed, jobs=jobs,
+                                                progress=progress)
+
+    def experience_of(m) -> list[Episode]:
+        return [e for scenario in m.scenarios for e in gathered_by_scenario[scenario]]
+
     fresh = {}
     for c in recipe.classifiers:
-        fresh[c.action] = gather(recipe.simulator, c.scenario, fresh_episodes, seed=seed + FRESH_SEED_OFFSET,
-                                 jobs=jobs, progress=progress)
-        shared = {e.seed for e in experience[c.scenario]} & {e.seed for e in fresh[c.action]}
+        fresh[c.action] = [e for scenario in c.scenarios
+                           for e in gather(recipe.simulator, scenario, fresh_episodes, seed=seed + FRESH_SEED_OFFSET,
+                                           jobs=jobs, progress=progress)]
+        shared = {e.seed for e in experience_of(c)} & {e.seed for e in fresh[c.action]}
         if shared:
             raise DataError(f"fresh and training episodes share seeds {sorted(shared)[:3]}: choose another seed")
     gathered = time.perf_counter()
@@ -80,13 +86,14 @@ def train_domain(
         models = {}
         for m in recipe.models:
             models[m.action] = train_duration_model(
-                m.action, experience[m.scenario], seed, m.feature_space, recipe.specs[m.action].observed, step=step,
+                m.action, experience_of(m), seed, m.feature_space, recipe.specs[m.action].observed, step=step,
                 n_i_candidates=n_i_candidates, episode_fractions=episode_fractions).model
-        classifiers = {c.action: train_collision_model(c.action, experience[c.scenario], fresh[c.action], seed,
+        classifiers = {c.action: train_collision_model(c.action, experience_of(c), fresh[c.action], seed,
                                                        c.feature_space, step=step).model
                        for c in recipe.classifiers}
         bar.n = bar.total
         bar.refresh()
+    experience = {m.action: experience_of(m) for m in recipe.models}
     subgoal = [_learn_at_subgoals(recipe, chain, models, experience, round(chain.share * episodes), seed, jobs,
                                   progress, n_i_candidates, episode_fractions)
                for chain in recipe.subgoal_experience]
@@ -116,27 +123,27 @@ def _learn_at_subgoals(recipe: TrainingRecipe, chain: SubgoalExperience, models:
     retrained model has in turn are visited too (the optimizer's curse moves with the model)."""
     if situations < 1:
         return None
-    from tailor.refinement.learning.subgoal_experience import gather_subgoal_experience, subgoal_job
+    from tailor.refinement.learning.subgoal_experience import gather_subgoal_experience
 
     model_recipe = next(m for m in recipe.models if m.action == chain.action)
-    job = subgoal_job(recipe.domain_dir, chain.problem, seed)  # planned once for all rounds
+    planned: dict = {}  # each problem planned once for all rounds
     rounds = max(1, min(chain.rounds, situations))
     bounds = [round(situations * k / rounds) for k in range(rounds + 1)]
     extra: list[Episode] = []
     fits = _fits_per_model(n_i_candidates, episode_fractions)
     for k in range(rounds):
-        extra += gather_subgoal_experience(recipe.domain_dir, chain.problem, chain.action, models,
+        extra += gather_subgoal_experience(recipe.domain_dir, chain.situations, chain.action, models,
                                            bounds[k + 1] - bounds[k], seed, jobs=jobs, progress=progress,
-                                           first=bounds[k], job=job)
+                                           first=bounds[k], planned=planned)
         label = f"retraining {chain.action} ({k + 1}/{rounds})"
         with tqdm(total=fits, desc=label, unit="fit", disable=not progress) as bar:
             models[chain.action] = train_duration_model(
-                chain.action, experience[model_recipe.scenario] + extra, seed, model_recipe.feature_space,
+                chain.action, experience[chain.action] + extra, seed, model_recipe.feature_space,
                 recipe.specs[chain.action].observed, step=lambda _: bar.update(1), n_i_candidates=n_i_candidates,
                 episode_fractions=episode_fractions).model
             bar.n = bar.total
             bar.refresh()
-    return {"problem": chain.problem, "action": chain.action, "situations": situations, "episodes": len(extra),
+    return {"generator": chain.situations, "action": chain.action, "situations": situations, "episodes": len(extra),
             "rounds": rounds, "succeeded": sum(e.succeeded for e in extra)}
 
 

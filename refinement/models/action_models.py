@@ -19,7 +19,7 @@ import numpy as np
 
 from tailor.refinement.models.decision_tree import DecisionTree, LeafBox
 from tailor.refinement.errors import ModelFileError
-from tailor.refinement.models.features import FEATURE_SPACES, compute_features
+from tailor.refinement.models.features import compute_features, feature_spaces
 from tailor.refinement.models.model_tree import ModelTree
 
 ACTION_MODEL_SCHEMA = "tailor.action_model/1"
@@ -85,7 +85,7 @@ class ActionModel:
 
 @dataclass(frozen=True, eq=False)
 class CollisionModel:
-    """Predicts whether an action reaches its goal without failing, e.g. without bumping a ball (Sec. 4.2.2).
+    """Predicts whether an action reaches its goal without failing, e.g. without bumping an object at its goal (Sec. 4.2.2).
 
     The decision tree was trained with a cost matrix that makes it pessimistic: where in doubt it predicts
     a collision, since a wrongly predicted success costs more (an asserted subgoal only costs some time).
@@ -204,9 +204,10 @@ def _common_fields(data: dict, source: str) -> tuple[str, str, tuple[str, ...]]:
     action, feature_set, names = data.get("action"), data.get("feature_set"), data.get("feature_names")
     if not isinstance(action, str) or not action:
         raise ModelFileError("'action' must be a non-empty string", file=source)
-    if not isinstance(feature_set, str) or feature_set not in FEATURE_SPACES:
-        raise ModelFileError(f"unknown feature set {feature_set!r} (known: {', '.join(FEATURE_SPACES)})", file=source)
-    expected = FEATURE_SPACES[feature_set].names
+    spaces = feature_spaces()
+    if not isinstance(feature_set, str) or feature_set not in spaces:
+        raise ModelFileError(f"unknown feature set {feature_set!r} (known: {', '.join(sorted(spaces))})", file=source)
+    expected = spaces[feature_set].names
     if not isinstance(names, list) or tuple(names) != expected:
         raise ModelFileError(f"feature_names {names!r} do not match feature set {feature_set!r} {list(expected)}", file=source)
     return action, feature_set, expected

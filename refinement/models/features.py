@@ -1,7 +1,7 @@
 """Feature spaces of action models (Table 4.1), a registry chosen per action in the domain's data, and the
 intermediate examples of an episode (Sec. 4.1.2).
 
-Features exploit the invariances of an action: for goToPose only the goal pose relative to the robot
+Features exploit the invariances of an action: for a navigation to a pose only the goal pose relative to the robot
 matters, so its 8 parameters (x, y, phi, v, xg, yg, phig, vg) map to a few features that do not change when
 the whole scene is translated, rotated or mirrored. Each space declares the action parameters it reads and
 a random transform of them under which its features must not change: its invariance test.
@@ -15,34 +15,15 @@ of Table 4.1 (angles between joint-space directions) is not: refinement falls ba
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
 from tailor.refinement.errors import DataError
+from tailor.sims import registry
 from tailor.sims.episode import Episode
+from tailor.sims.protocol import FeatureSpace
 
 Transform = Callable[[np.ndarray, np.random.Generator], np.ndarray]
-
-
-@dataclass(frozen=True)
-class FeatureSpace:
-    """A row of Table 4.1: the action parameters it reads (in order), its feature names, the map between
-    them, and a random change of the parameters its features are invariant to (described in words)."""
-
-    name: str
-    parameters: tuple[str, ...]
-    names: tuple[str, ...]
-    compute: Callable[[np.ndarray], np.ndarray]  # (n, len(parameters)) -> (n, len(names))
-    invariance: str
-    transform: Transform | None = None
-
-    def __call__(self, params: np.ndarray) -> np.ndarray:
-        params = np.atleast_2d(np.asarray(params, dtype=float))
-        if params.ndim != 2 or params.shape[1] != len(self.parameters):
-            raise ValueError(f"feature space {self.name!r} takes parameters of shape (n, {len(self.parameters)}) "
-                             f"({', '.join(self.parameters)}), got {params.shape}")
-        return self.compute(params)
 
 
 def norm(angle: np.ndarray) -> np.ndarray:
@@ -55,7 +36,7 @@ def _sgn(a: np.ndarray) -> np.ndarray:
     return np.where(a < 0.0, -1.0, 1.0)
 
 
-# --- pose: goToPose-like actions (x, y, phi, v -> xg, yg, phig, vg) ------------------------------------
+# --- pose: navigation to a pose (x, y, phi, v -> xg, yg, phig, vg) ------------------------------------
 POSE_PARAMETERS = ("x", "y", "phi", "v", "xg", "yg", "phig", "vg")
 
 
@@ -197,12 +178,22 @@ for _space in (
     register_feature_space(_space)
 
 
+def feature_spaces() -> dict[str, FeatureSpace]:
+    """Every feature space: the generic ones here and those the registered simulators bring."""
+    spaces = dict(FEATURE_SPACES)
+    for entry in registry.simulators().values():
+        for space in entry.feature_spaces:
+            spaces.setdefault(space.name, space)
+    return spaces
+
+
 def feature_space(name: str) -> FeatureSpace:
-    try:
+    if name in FEATURE_SPACES:
         return FEATURE_SPACES[name]
-    except KeyError:
-        known = ", ".join(sorted(FEATURE_SPACES))
-        raise DataError(f"unknown feature space {name!r} (known: {known})") from None
+    spaces = feature_spaces()
+    if name not in spaces:
+        raise DataError(f"unknown feature space {name!r} (known: {', '.join(sorted(spaces))})")
+    return spaces[name]
 
 
 def feature_names(name: str) -> tuple[str, ...]:

@@ -1,4 +1,4 @@
-"""Synthetic refinement problems: random model trees over feature maps like those of the soccer actions.
+"""Synthetic refinement problems: random model trees over feature maps like those of two pose actions in a chain.
 
 Used by the optimizer tests and benchmarks, independent of learned models. A feature is bound (a constant),
 affine in one free parameter, an absolute wrapped angle (like angle_to), a wrapped angle (like angle_at of
@@ -172,18 +172,19 @@ def _term(maps, n_leaves, free, rng, label) -> Term:
     return Term(model=tree, features=features, label=label)
 
 
-def soccer_like(rng: np.random.Generator, n_leaves: int = 100) -> Objective:
-    """approachBall -> dribbleBall with the subgoal's heading phi and speed v free (Fig. 5.8/5.9 shape)."""
-    free = (FreeParameter("ball.phi", -np.pi, np.pi), FreeParameter("ball.v", 0.0, 0.3))
+def pose_chain(rng: np.random.Generator, n_leaves: int = 100) -> Objective:
+    """Two pose actions in a chain with the shared subgoal's heading phi and speed v free (the shape of
+    Figs. 5.8/5.9: arrive at a subgoal, then leave it)."""
+    free = (FreeParameter("sub.phi", -np.pi, np.pi), FreeParameter("sub.v", 0.0, 0.3))
     a1, a2 = rng.uniform(-np.pi, np.pi, size=2)
-    approach = [  # dist, angle_to (bound: the start pose is known), angle_at (phi free), v, vg
+    arrive = [  # dist, angle_to (bound: the start pose is known), angle_at (phi free), v, vg
         FeatureMap("bound", -1, 0.0, float(rng.uniform(0.5, 4))),
         FeatureMap("bound", -1, 0.0, float(rng.uniform(0, np.pi))),
         FeatureMap("wrap", 0, float(a1), 0.0),
         FeatureMap("bound", -1, 0.0, 0.0),
         FeatureMap("affine", 1, 1.0, 0.0),
     ]
-    dribble = [  # dist, angle_to (phi free), angle_at (sign flips with phi), v (free), vg
+    leave = [  # dist, angle_to (phi free), angle_at (sign flips with phi), v (free), vg
         FeatureMap("bound", -1, 0.0, float(rng.uniform(0.5, 4))),
         FeatureMap("abs", 0, float(a2), 0.0),
         FeatureMap("sign", 0, float(a2), float(rng.uniform(0.1, np.pi))),
@@ -191,7 +192,7 @@ def soccer_like(rng: np.random.Generator, n_leaves: int = 100) -> Objective:
         FeatureMap("bound", -1, 0.0, 0.0),
     ]
     terms = (
-        _term(approach, n_leaves, free, rng, "approachBall"),
-        _term(dribble, n_leaves, free, rng, "dribbleBall"),
+        _term(arrive, n_leaves, free, rng, "arrive"),
+        _term(leave, n_leaves, free, rng, "leave"),
     )
     return Objective(free, terms)

@@ -13,7 +13,8 @@ from __future__ import annotations
 import math
 
 from tailor.sims.soccer.control import Pose, axle_pose
-from tailor.sims.soccer.dubins import DubinsPath, all_paths, bounds, distance_to, surely_inside
+from tailor.sims.soccer.dubins import (DubinsPath, all_paths, candidates, surely_inside, word_bounds,
+                                       word_distance)
 from tailor.sims.soccer.follow import Follower
 from tailor.sims.soccer.world import (A_MAX, BALL_RADIUS, FIELD_HALF_LENGTH, FIELD_HALF_WIDTH,
                                ROBOT_HALF_LENGTH, V_MAX, W_MAX, WALL_RUNOFF, ALPHA_MAX)
@@ -42,13 +43,13 @@ def _clear_path(start: Pose, goal: Pose, ball: tuple[float, float], clearance: f
     """The shortest Dubins path from start to goal keeping `clearance` from the ball, inside the box."""
     box = APPROACH.box
     check_box = not surely_inside(start, goal, R_APPROACH, box)
-    for path in all_paths(start, goal, R_APPROACH):
+    for _, word, lengths, exact in candidates(start, goal, R_APPROACH):
         if check_box:
-            x0, x1, y0, y1 = bounds(start, path)
+            x0, x1, y0, y1 = word_bounds(start, word, lengths, R_APPROACH)
             if x0 < box[0] or x1 > box[1] or y0 < box[2] or y1 > box[3]:
                 continue
-        if distance_to(start, path, ball) >= clearance:
-            return path
+        if word_distance(start, word, lengths, R_APPROACH, ball) >= clearance:
+            return DubinsPath(word, lengths, R_APPROACH, exact)
     return None
 
 

@@ -11,10 +11,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from operator import itemgetter
 
 TWO_PI = 2.0 * math.pi
 WORDS = ("LSL", "RSR", "LSR", "RSL", "RLR", "LRL")
 _EPS = 1e-9
+_HALF_PI, _THREE_HALF_PI = 0.5 * math.pi, 1.5 * math.pi
 TANGENT_SLACK = 1.0  # (radius units)^2: a mixed word whose circles overlap this little is taken as tangent
 
 
@@ -41,24 +43,20 @@ def _mod(angle: float) -> float:
     return angle % TWO_PI
 
 
-def _words(alpha: float, beta: float, d: float) -> dict[str, tuple | None]:
-    """Normalized segment lengths (t, p, q) of each word, None where the word does not exist."""
+def _words(alpha: float, beta: float, d: float) -> list[tuple[str, float, float, float, bool]]:
+    """(word, t, p, q, exact): the normalized segment lengths of each existing word, in WORDS order."""
     sa, ca, sb, cb = math.sin(alpha), math.cos(alpha), math.sin(beta), math.cos(beta)
     cab = math.cos(alpha - beta)
-    out: dict[str, tuple[float, float, float] | None] = {}
+    out: list[tuple[str, float, float, float, bool]] = []
 
     p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb)  # LSL
     if p2 >= 0.0:
         th = math.atan2(cb - ca, d + sa - sb)
-        out["LSL"] = (_mod(th - alpha), math.sqrt(p2), _mod(beta - th))
-    else:
-        out["LSL"] = None
+        out.append(("LSL", _mod(th - alpha), math.sqrt(p2), _mod(beta - th), True))
     p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa)  # RSR
     if p2 >= 0.0:
         th = math.atan2(ca - cb, d - sa + sb)
-        out["RSR"] = (_mod(alpha - th), math.sqrt(p2), _mod(th - beta))
-    else:
-        out["RSR"] = None
+        out.append(("RSR", _mod(alpha - th), math.sqrt(p2), _mod(th - beta), True))
     # LSR and RSL: where the two circles (nearly) touch, the straight shrinks to nothing; a robot following
     # such a path drifts across that boundary with any noise, so a slight overlap counts as touching
     # instead of making the word vanish (and the robot switch to a path a loop longer).
@@ -66,56 +64,53 @@ def _words(alpha: float, beta: float, d: float) -> dict[str, tuple | None]:
     if p2 >= -TANGENT_SLACK:
         p = math.sqrt(max(p2, 0.0))
         th = math.atan2(-ca - cb, d + sa + sb) - math.atan2(-2.0, p)
-        out["LSR"] = (_mod(th - alpha), p, _mod(th - beta), p2 >= 0.0)
-    else:
-        out["LSR"] = None
+        out.append(("LSR", _mod(th - alpha), p, _mod(th - beta), p2 >= 0.0))
     p2 = -2.0 + d * d + 2.0 * cab - 2.0 * d * (sa + sb)  # RSL
     if p2 >= -TANGENT_SLACK:
         p = math.sqrt(max(p2, 0.0))
         th = math.atan2(ca + cb, d - sa - sb) - math.atan2(2.0, p)
-        out["RSL"] = (_mod(alpha - th), p, _mod(beta - th), p2 >= 0.0)
-    else:
-        out["RSL"] = None
+        out.append(("RSL", _mod(alpha - th), p, _mod(beta - th), p2 >= 0.0))
     c = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0  # RLR
     if abs(c) <= 1.0:
         p = _mod(TWO_PI - math.acos(c))
         t = _mod(alpha - math.atan2(ca - cb, d - sa + sb) + p / 2.0)
-        out["RLR"] = (t, p, _mod(alpha - beta - t + p))
-    else:
-        out["RLR"] = None
+        out.append(("RLR", t, p, _mod(alpha - beta - t + p), True))
     c = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa)) / 8.0  # LRL
     if abs(c) <= 1.0:
         p = _mod(TWO_PI - math.acos(c))
         t = _mod(-alpha + math.atan2(-ca + cb, d + sa - sb) + p / 2.0)
-        out["LRL"] = (t, p, _mod(beta - alpha - t + p))
-    else:
-        out["LRL"] = None
+        out.append(("LRL", t, p, _mod(beta - alpha - t + p), True))
     return out
 
 
-def _clean(t: float) -> float:
-    """An arc of (almost) a full turn that is numerically zero is zero."""
-    return 0.0 if t > TWO_PI - _EPS else t
+Candidate = tuple[float, str, tuple[float, float, float], bool]  # (length, word, lengths, exact)
 
 
-def all_paths(start: tuple[float, float, float], goal: tuple[float, float, float],
-              radius: float) -> list[DubinsPath]:
-    """Every existing Dubins path from start (x, y, heading) to goal, shortest first."""
+def candidates(start: tuple[float, float, float], goal: tuple[float, float, float],
+               radius: float) -> list[Candidate]:
+    """Every existing Dubins path from start (x, y, heading) to goal as (length, word, lengths, exact),
+    shortest first: all_paths without building the DubinsPaths (the controllers need one path of six)."""
     if radius <= 0.0:
         raise ValueError(f"Dubins radius must be positive, got {radius}")
     dx, dy = goal[0] - start[0], goal[1] - start[1]
     d = math.hypot(dx, dy) / radius
     th = math.atan2(dy, dx) if d > _EPS else 0.0
     alpha, beta = _mod(start[2] - th), _mod(goal[2] - th)
-    paths = []
-    for word, seg in _words(alpha, beta, d).items():
-        if seg is not None:
-            t, p, q = seg[:3]
-            arc_p = p if word[1] == "S" else _clean(p)
-            exact = seg[3] if len(seg) > 3 else True
-            paths.append(DubinsPath(word, (_clean(t) * radius, arc_p * radius, _clean(q) * radius), radius, exact))
-    paths.sort(key=lambda path: path.length)
-    return paths
+    out = []
+    full = TWO_PI - _EPS  # an arc of (almost) a full turn is numerically zero: it is zero
+    for word, t, p, q, exact in _words(alpha, beta, d):
+        lengths = ((0.0 if t > full else t) * radius, (0.0 if p > full and word[1] != "S" else p) * radius,
+                   (0.0 if q > full else q) * radius)
+        out.append((lengths[0] + lengths[1] + lengths[2], word, lengths, exact))
+    out.sort(key=itemgetter(0))  # stable: equally long words stay in WORDS order
+    return out
+
+
+def all_paths(start: tuple[float, float, float], goal: tuple[float, float, float],
+              radius: float) -> list[DubinsPath]:
+    """Every existing Dubins path from start (x, y, heading) to goal, shortest first."""
+    return [DubinsPath(word, lengths, radius, exact)
+            for _, word, lengths, exact in candidates(start, goal, radius)]
 
 
 def shortest_path(start: tuple[float, float, float], goal: tuple[float, float, float],
@@ -149,26 +144,48 @@ def advance(pose: tuple[float, float, float], curvature: float, length: float) -
 
 def bounds(start: tuple[float, float, float], path: DubinsPath) -> tuple[float, float, float, float]:
     """The axis-aligned bounding box (xmin, xmax, ymin, ymax) of the path driven from `start`, exactly."""
-    pose = start
-    xs, ys = [start[0]], [start[1]]
-    for seg in range(3):
-        length, k = path.lengths[seg], path.curvature(seg)
-        end = advance(pose, k, length)
-        xs.append(end[0])
-        ys.append(end[1])
-        if k != 0.0 and length > 0.0:
-            x, y, h = pose
+    return word_bounds(start, path.word, path.lengths, path.radius)
+
+
+def word_bounds(start: tuple[float, float, float], word: str, lengths: tuple[float, float, float],
+                radius: float) -> tuple[float, float, float, float]:
+    """`bounds` of the path (word, lengths, radius): the segment ends and the arcs' extreme points."""
+    x, y, h = start
+    xs, ys = [x], [y]
+    for kind, length in zip(word, lengths):
+        k = 1.0 / radius if kind == "L" else -1.0 / radius if kind == "R" else 0.0
+        sin_h, cos_h = math.sin(h), math.cos(h)
+        if abs(k) < 1e-12:  # advance(), inlined
+            ex, ey, eh = x + length * cos_h, y + length * sin_h, h
+        else:
+            eh = h + k * length
+            ex, ey = x + (math.sin(eh) - sin_h) / k, y - (math.cos(eh) - cos_h) / k
+        xs.append(ex)
+        ys.append(ey)
+        if k != 0.0 and length > 0.0:  # the arc's points furthest east, north, west, south it passes
             r = 1.0 / abs(k)
-            cx, cy = x - math.sin(h) / k, y + math.cos(h) / k
+            cx, cy = x - sin_h / k, y + cos_h / k
             theta0 = math.atan2(y - cy, x - cx)
             sweep = abs(k) * length
-            for target, px, py in ((0.0, cx + r, cy), (0.5 * math.pi, cx, cy + r),
-                                   (math.pi, cx - r, cy), (1.5 * math.pi, cx, cy - r)):
-                offset = (target - theta0) % TWO_PI if k > 0.0 else (theta0 - target) % TWO_PI
-                if offset <= sweep:
-                    xs.append(px)
-                    ys.append(py)
-        pose = end
+            if k > 0.0:
+                east, north = (0.0 - theta0) % TWO_PI, (_HALF_PI - theta0) % TWO_PI
+                west, south = (math.pi - theta0) % TWO_PI, (_THREE_HALF_PI - theta0) % TWO_PI
+            else:
+                east, north = (theta0 - 0.0) % TWO_PI, (theta0 - _HALF_PI) % TWO_PI
+                west, south = (theta0 - math.pi) % TWO_PI, (theta0 - _THREE_HALF_PI) % TWO_PI
+            if east <= sweep:
+                xs.append(cx + r)
+                ys.append(cy)
+            if north <= sweep:
+                xs.append(cx)
+                ys.append(cy + r)
+            if west <= sweep:
+                xs.append(cx - r)
+                ys.append(cy)
+            if south <= sweep:
+                xs.append(cx)
+                ys.append(cy - r)
+        x, y, h = ex, ey, eh
     return min(xs), max(xs), min(ys), max(ys)
 
 
@@ -177,48 +194,64 @@ def surely_inside(start: tuple[float, float, float], goal: tuple[float, float, f
     """Whether every Dubins path between start and goal stays in the box: no point of one is further than
     4 radii from both ends (a CCC path's middle circle lies within 3 radii of its first circle's centre)."""
     m = 4.0 * radius
-    return all(box[0] + m <= p[0] <= box[1] - m and box[2] + m <= p[1] <= box[3] - m for p in (start, goal))
+    xmin, xmax, ymin, ymax = box[0] + m, box[1] - m, box[2] + m, box[3] - m
+    return (xmin <= start[0] <= xmax and ymin <= start[1] <= ymax
+            and xmin <= goal[0] <= xmax and ymin <= goal[1] <= ymax)
 
 
 def shortest_path_inside(start: tuple[float, float, float], goal: tuple[float, float, float], radius: float,
                          box: tuple[float, float, float, float]) -> DubinsPath:
     """The shortest Dubins path that stays inside box = (xmin, xmax, ymin, ymax); if none does, the one that
     leaves it least (a robot already outside the box gets back in as directly as it can)."""
-    paths = all_paths(start, goal, radius)
+    paths = candidates(start, goal, radius)
     if surely_inside(start, goal, radius, box):
-        return paths[0]
-    best, best_excess = None, math.inf
-    for path in paths:
-        x0, x1, y0, y1 = bounds(start, path)
-        excess = max(box[0] - x0, x1 - box[1], box[2] - y0, y1 - box[3])
-        if excess <= 0.0:
-            return path
-        if excess < best_excess - 1e-9:
-            best, best_excess = path, excess
-    return best
+        best = paths[0]
+    else:
+        best, best_excess = None, math.inf
+        for path in paths:
+            x0, x1, y0, y1 = word_bounds(start, path[1], path[2], radius)
+            excess = max(box[0] - x0, x1 - box[1], box[2] - y0, y1 - box[3])
+            if excess <= 0.0:
+                best = path
+                break
+            if excess < best_excess - 1e-9:
+                best, best_excess = path, excess
+        if best is None:
+            return None
+    return DubinsPath(best[1], best[2], radius, best[3])
 
 
 def distance_to(start: tuple[float, float, float], path: DubinsPath, point: tuple[float, float]) -> float:
     """The least distance from `point` to the path driven from `start` (exact: segments and arcs)."""
+    return word_distance(start, path.word, path.lengths, path.radius, point)
+
+
+def word_distance(start: tuple[float, float, float], word: str, lengths: tuple[float, float, float],
+                  radius: float, point: tuple[float, float]) -> float:
+    """`distance_to` the path (word, lengths, radius)."""
     px, py = point
-    pose = start
-    best = math.hypot(px - start[0], py - start[1])
-    for seg in range(3):
-        length, k = path.lengths[seg], path.curvature(seg)
+    x, y, h = start
+    best = math.hypot(px - x, py - y)
+    for kind, length in zip(word, lengths):
         if length <= 0.0:
             continue
-        end = advance(pose, k, length)
-        best = min(best, math.hypot(px - end[0], py - end[1]))
-        x, y, h = pose
-        if k == 0.0:
-            t = (px - x) * math.cos(h) + (py - y) * math.sin(h)
-            if 0.0 < t < length:
-                best = min(best, abs(-(px - x) * math.sin(h) + (py - y) * math.cos(h)))
+        k = 1.0 / radius if kind == "L" else -1.0 / radius if kind == "R" else 0.0
+        sin_h, cos_h = math.sin(h), math.cos(h)
+        if abs(k) < 1e-12:  # advance(), inlined
+            ex, ey, eh = x + length * cos_h, y + length * sin_h, h
         else:
-            cx, cy = x - math.sin(h) / k, y + math.cos(h) / k
+            eh = h + k * length
+            ex, ey = x + (math.sin(eh) - sin_h) / k, y - (math.cos(eh) - cos_h) / k
+        best = min(best, math.hypot(px - ex, py - ey))
+        if k == 0.0:
+            t = (px - x) * cos_h + (py - y) * sin_h
+            if 0.0 < t < length:
+                best = min(best, abs(-(px - x) * sin_h + (py - y) * cos_h))
+        else:
+            cx, cy = x - sin_h / k, y + cos_h / k
             theta0 = math.atan2(y - cy, x - cx)
             offset = (math.atan2(py - cy, px - cx) - theta0) % TWO_PI
             if (offset if k > 0.0 else (TWO_PI - offset) % TWO_PI) <= abs(k) * length:
                 best = min(best, abs(math.hypot(px - cx, py - cy) - 1.0 / abs(k)))
-        pose = end
+        x, y, h = ex, ey, eh
     return best

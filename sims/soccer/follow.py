@@ -22,7 +22,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from tailor.sims.soccer.control import Pose, clip, in_frame, profile_speed
-from tailor.sims.soccer.dubins import DubinsPath, bounds
+from tailor.sims.soccer.dubins import DubinsPath, word_bounds
 from tailor.sims.soccer.world import wrap
 
 CORRECTION_SHARE = 0.5  # a small first arc before a straight is turned within this share of the straight,
@@ -73,8 +73,9 @@ class Follower:
         pre-pose (side +1: a left turn), heading along it, and that arc stays in the box; else None."""
         x, y, phi = start
         r = self.radius
+        sin_pre, cos_pre = math.sin(pre[2]), math.cos(pre[2])
         for side in (1.0, -1.0):
-            cx, cy = pre[0] - side * r * math.sin(pre[2]), pre[1] + side * r * math.cos(pre[2])
+            cx, cy = pre[0] - side * r * sin_pre, pre[1] + side * r * cos_pre
             rho = math.hypot(x - cx, y - cy)
             if abs(rho - r) > self.capture_radial:
                 continue
@@ -85,8 +86,7 @@ class Follower:
             to_go = (side * (math.atan2(pre[1] - cy, pre[0] - cx) - at)) % (2.0 * math.pi)
             if to_go > self.capture_angle:
                 continue
-            arc_path = DubinsPath("LSL" if side > 0.0 else "RSR", (to_go * r, 0.0, 0.0), r)
-            x0, x1, y0, y1 = bounds(start, arc_path)
+            x0, x1, y0, y1 = word_bounds(start, "LSL" if side > 0.0 else "RSR", (to_go * r, 0.0, 0.0), r)
             if x0 < self.box[0] or x1 > self.box[1] or y0 < self.box[2] or y1 > self.box[3]:
                 continue
             # aim toward the circle when off it (outside: turn in more; inside: less)

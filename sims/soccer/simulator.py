@@ -66,16 +66,49 @@ class Noise:
         return cls(0.0, 0.0, 0.0, 0.0)
 
 
+# The body properties' setters called directly: pymunk's Body routes every attribute assignment through a
+# Python-level __setattr__ first, which costs as much as the physics step of the robot itself.
+_set_velocity = pymunk.Body.velocity.fset
+_set_angular_velocity = pymunk.Body.angular_velocity.fset
+_get_velocity = pymunk.Body.velocity.fget
+_A_STEP = W.A_MAX * DT  # m/s, largest change of v in one physics step
+_ALPHA_STEP = W.ALPHA_MAX * DT  # rad/s, largest change of phidot in one physics step
+
+
+_set_damping = pymunk.Space.damping.fset
+_ROLL_DROP = W.ROLL_DECELERATION * DT  # m/s, speed a rolling ball loses in one physics step
+
+
 def _ball_velocity(body: pymunk.Body, gravity: tuple[float, float], damping: float, dt: float) -> None:
     """Rolling friction: the ball's speed drops by ROLL_DECELERATION * dt each step, down to rest."""
-    vx, vy = body.velocity
+    vx, vy = _get_velocity(body)
     speed = math.hypot(vx, vy)
     drop = W.ROLL_DECELERATION * dt
     if speed <= drop:
-        body.velocity = (0.0, 0.0)
+        _set_velocity(body, (0.0, 0.0))
     else:
         k = (speed - drop) / speed
-        body.velocity = (vx * k, vy * k)
+        _set_velocity(body, (vx * k, vy * k))
+
+
+def _rolling_damping(vx: float, vy: float) -> float | None:
+    """The space damping with which pymunk's own velocity integration of a ball moving at (vx, vy) is
+    bit-for-bit `_ball_velocity` (None if there is none): pymunk computes v * pow(damping, DT) + 0 (no
+    gravity, no force), so the damping must have pow(damping, DT) == k exactly, k the friction factor
+    (0 for a ball coming to rest). Python's math.pow and pymunk call the same C pow; a factor that no
+    damping reaches, or a zero velocity component (whose -0.0 pymunk's + 0 would turn into +0.0), gets None.
+    """
+    speed = math.hypot(vx, vy)
+    if speed <= _ROLL_DROP:
+        return 0.0  # pow(0, DT) == 0: (+0, +0) either way
+    k = (speed - _ROLL_DROP) / speed
+    if vx * k == 0.0 or vy * k == 0.0:
+        return None
+    damping = k ** (1.0 / DT)  # pow(damping, DT) is flat: a few neighbouring dampings give each factor
+    for candidate in (damping, math.nextafter(damping, 0.0), math.nextafter(damping, 1.0)):
+        if math.pow(candidate, DT) == k:
+            return candidate
+    return None
 
 
 STATE_COLUMNS = ("x", "y", "phi", "v", "ball_x", "ball_y")  # the logged believed state (ball NaN without one)
@@ -105,6 +138,7 @@ class SoccerSim:
         ball_shape = pymunk.Circle(self.ball, W.BALL_RADIUS)
         ball_shape.friction, ball_shape.elasticity = 0.0, W.WALL_ELASTICITY
         self._ball_shape = ball_shape
+        self._friction_callback, self._damping = True, 1.0  # how pymunk steps the ball's friction (_advance)
         self.has_ball = False
         self.time = 0.0
         self.v = self.w = 0.0  # true translational / rotational velocity
@@ -163,15 +197,19 @@ class SoccerSim:
 
     def believed_state(self) -> tuple[float, float, float, float, float, float]:
         """The true state with the seeded sensing noise of `self.noise`."""
-        x, y, phi, v, bx, by = self.true_state()
-        n, e = self.noise, self.rng.standard_normal(6)
+        return self._believe(self.true_state())
+
+    def _believe(self, true: tuple[float, float, float, float, float, float]
+                 ) -> tuple[float, float, float, float, float, float]:
+        x, y, phi, v, bx, by = true
+        n, e = self.noise, self.rng.standard_normal(6).tolist()  # floats: numpy scalars slow the actions
         return (x + n.position * e[0], y + n.position * e[1], W.wrap(phi + n.heading * e[2]), v + n.speed * e[3],
                 bx + n.position * e[4], by + n.position * e[5])
 
     # --- dynamics ---------------------------------------------------------------------------------------
     def command(self, v_cmd: float, w_cmd: float) -> None:
         """Send a motor command [v, phidot]; the motors execute it with noise, within the velocity limits."""
-        e = self.rng.standard_normal(2) if self.noise.motor > 0.0 else (0.0, 0.0)
+        e = self.rng.standard_normal(2).tolist() if self.noise.motor > 0.0 else (0.0, 0.0)
         v_cmd *= 1.0 + self.noise.motor * e[0]
         w_cmd *= 1.0 + self.noise.motor * e[1]
         self.v_cmd = max(-W.V_MAX, min(W.V_MAX, v_cmd))
@@ -179,16 +217,69 @@ class SoccerSim:
 
     def step(self) -> None:
         """One physics step: accelerate toward the command within the limits, move, resolve contacts."""
-        dv, dw = self.v_cmd - self.v, self.w_cmd - self.w
-        a, alpha = W.A_MAX * DT, W.ALPHA_MAX * DT
-        self.v += a if dv > a else -a if dv < -a else dv
-        self.w += alpha if dw > alpha else -alpha if dw < -alpha else dw
-        robot = self.robot
-        robot.velocity = (self.v * math.cos(self.phi), self.v * math.sin(self.phi))
-        robot.angular_velocity = self.w
-        self.space.step(DT)
-        self.phi += self.w * DT
-        self.time += DT
+        try:
+            self._advance(1)
+        finally:
+            self._restore_friction()
+
+    def _advance(self, steps: int) -> None:
+        """`steps` physics steps (see `step`), with the per-step work kept to what changes the outcome.
+
+        Two shortcuts, both exact (the episodes are bit-for-bit those of one `space.step` after setting every
+        velocity each step with the `_ball_velocity` callback installed and a damping of 1):
+        - the robot's velocities are sent to pymunk only when they changed, as pymunk never alters a
+          kinematic body's velocity (its inverse mass and moment are 0, so an impulse adds +-0, which can only
+          turn a -0.0 into +0.0: a velocity with a zero component is sent every step);
+        - the ball's rolling friction is pymunk's own velocity integration with the damping of
+          `_rolling_damping`, computed from the ball's velocity before the step (pymunk integrates the
+          velocities after finding the contacts, which leave them alone, and before solving them); where
+          there is no such damping, the callback runs, a Python call from C that costs more than the rest of
+          the step. The caller puts the callback and a damping of 1 back (`_restore_friction`) before
+          anyone else can step the space.
+        """
+        robot, space, ball = self.robot, self.space, self.ball
+        v, w, phi, time = self.v, self.w, self.phi, self.time
+        v_cmd, w_cmd, a, alpha = self.v_cmd, self.w_cmd, _A_STEP, _ALPHA_STEP
+        v_sent = phi_sent = w_sent = None  # what pymunk holds (None: send it again)
+        has_ball, callback, damping_sent = self.has_ball, self._friction_callback, self._damping
+        try:
+            for _ in range(steps):
+                if has_ball:
+                    damping = _rolling_damping(*_get_velocity(ball))
+                    if damping is None:
+                        damping = 1.0
+                        if not callback:
+                            ball.velocity_func, callback = _ball_velocity, True
+                    elif callback:
+                        ball.velocity_func, callback = pymunk.Body.update_velocity, False
+                    if damping != damping_sent:
+                        _set_damping(space, damping)
+                        damping_sent = damping
+                dv, dw = v_cmd - v, w_cmd - w
+                v += a if dv > a else -a if dv < -a else dv
+                w += alpha if dw > alpha else -alpha if dw < -alpha else dw
+                if v != v_sent or phi != phi_sent:
+                    vx, vy = v * math.cos(phi), v * math.sin(phi)
+                    _set_velocity(robot, (vx, vy))
+                    v_sent, phi_sent = (v, phi) if vx != 0.0 and vy != 0.0 else (None, None)
+                if w != w_sent:
+                    _set_angular_velocity(robot, w)
+                    w_sent = w
+                space.step(DT)
+                phi += w * DT
+                time += DT
+        finally:
+            self.v, self.w, self.phi, self.time = v, w, phi, time
+            self._friction_callback, self._damping = callback, damping_sent
+
+    def _restore_friction(self) -> None:
+        """Install the rolling-friction callback and a damping of 1 again (see `_advance`)."""
+        if not self._friction_callback:
+            self.ball.velocity_func = _ball_velocity
+            self._friction_callback = True
+        if self._damping != 1.0:
+            _set_damping(self.space, 1.0)
+            self._damping = 1.0
 
     # --- actions ----------------------------------------------------------------------------------------
     def run(self, call: ActionCall) -> Episode:
@@ -224,35 +315,38 @@ class SoccerSim:
         params = None
         max_ticks = int(round(TIMEOUT * CONTROL_HZ))
         outcome = "timeout"
-        while True:
-            if trajectory is not None and self.time >= self._next_sample - 1e-9:
-                trajectory.append((self.time, *self.true_state()))
-                self._next_sample += 1.0 / LOG_HZ
-            belief = self.believed_state()
-            if params is None:
-                params = np.array([*belief[:4], xg, yg, phig, vg], dtype=float)
-            if ticks % CONTROLS_PER_LOG == 0:
-                log_t.append(ticks / CONTROL_HZ)
-                log_state.append(belief)
-            ended = self._judge(call.action, dribbling, ball_start, xg, yg, phig, vg)
-            if ended is not None:
-                outcome = ended
-                break
-            if ticks >= max_ticks:
-                break
-            self.command(*act(belief[0], belief[1], belief[2], belief[3], xg, yg, phig, vg))
-            for _ in range(STEPS_PER_CONTROL):
-                self.step()
-            self._keep_inside()
-            ticks += 1
+        try:
+            while True:
+                true = self.true_state()
+                if trajectory is not None and self.time >= self._next_sample - 1e-9:
+                    trajectory.append((self.time, *true))
+                    self._next_sample += 1.0 / LOG_HZ
+                belief = self._believe(true)
+                if params is None:
+                    params = np.array([*belief[:4], xg, yg, phig, vg], dtype=float)
+                if ticks % CONTROLS_PER_LOG == 0:
+                    log_t.append(ticks / CONTROL_HZ)
+                    log_state.append(belief)
+                ended = self._judge(true, call.action, dribbling, ball_start, xg, yg, phig, vg)
+                if ended is not None:
+                    outcome = ended
+                    break
+                if ticks >= max_ticks:
+                    break
+                self.command(*act(belief[0], belief[1], belief[2], belief[3], xg, yg, phig, vg))
+                self._advance(STEPS_PER_CONTROL)
+                self._keep_inside()
+                ticks += 1
+        finally:
+            self._restore_friction()
         episode = Episode(call.action, params, np.array(log_t), np.array(log_state, dtype=float).reshape(-1, 6),
                           STATE_COLUMNS, outcome, ticks / CONTROL_HZ, self.seed)
         return episode
 
-    def _judge(self, action: str, dribbling: bool, ball_start, xg: float, yg: float, phig: float,
-               vg: float) -> str | None:
-        """The outcome if the action has ended in the current true state, else None."""
-        x, y, phi, v, bx, by = self.true_state()
+    def _judge(self, true: tuple[float, float, float, float, float, float], action: str, dribbling: bool,
+               ball_start, xg: float, yg: float, phig: float, vg: float) -> str | None:
+        """The outcome if the action has ended in the true state `true`, else None."""
+        x, y, phi, v, bx, by = true
         ball_gap = math.hypot(bx - x, by - y) if self.has_ball else math.nan
         if dribbling and ball_gap > BALL_LOST_DISTANCE:
             return "ball_lost"

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from tailor.refinement.optimizers import optimize
-from tailor.refinement.optimizers.synthetic import soccer_like
+from tailor.refinement.optimizers.synthetic import pose_chain
 
 PROBLEMS = 40
 REPEATS = 5
@@ -36,7 +36,7 @@ def test_optimizer_speed():
     rng = np.random.default_rng(2024)
     analytic_times, ga_times, walls, agree, fallbacks = [], [], {"analytic": [], "ga": []}, 0, 0
     for k in range(PROBLEMS):
-        objective = soccer_like(rng, n_leaves=int(rng.integers(50, 151)))
+        objective = pose_chain(rng, n_leaves=int(rng.integers(50, 151)))
         optimize(objective, "analytic")  # warm the rule cache as a refinement of a chain would
         t_a, w_a, analytic = _median_seconds(objective, "analytic", k)
         t_g, w_g, ga = _median_seconds(objective, "ga", k)

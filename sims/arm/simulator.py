@@ -1,0 +1,255 @@
+"""ArmSim: the planar PowerCube-like arm in a pymunk space stepped at a fixed rate (headless).
+
+The two links are dynamic bodies: link A hangs on the static base by a PivotJoint at the shoulder, link B on
+link A by a PivotJoint at the elbow. A SimpleMotor per joint (torque limited) drives the joint at the rate
+the controller commands; the motors execute each command with seeded relative noise, saturated at OMEGA_HARD.
+
+The reach action (App. A.4) plans synchronized ramp profiles (`profile.synchronize`) from the believed start
+state to the goal and tracks them: each control tick a PID per joint commands the profile's velocity over the
+next tick plus corrections of the position error (P, I) and the velocity error (D, the position error's
+derivative). If the profile has ended REPLAN_AFTER s ago and the goal is not reached, it plans anew from the
+believed state. Timing: physics at PHYSICS_HZ, control at CONTROL_HZ, the believed state logged at LOG_HZ.
+
+A reach ends (Episode.outcome), judged on the true state at each control tick, with
+- "success": both joint angles within ANGLE_TOL of the goal angles and both joint velocities within
+  SPEED_TOL of the goal velocities (with a moving goal the arm passes it: a sequence goes on from there);
+- "joint_limit": a joint angle is outside its limits (world.THETA_A_LIMITS, THETA_B_LIMITS);
+- "timeout": TIMEOUT simulated seconds passed.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pymunk
+
+from tailor.sims.arm import world as W
+from tailor.sims.arm.profile import synchronize
+from tailor.sims.episode import ActionCall, ActionResult, Episode, SequenceResult
+from tailor.sims.errors import SimError
+
+PHYSICS_HZ = 100  # Hz, fixed physics step
+CONTROL_HZ = 50  # Hz, PID rate (must divide PHYSICS_HZ)
+LOG_HZ = 10  # Hz, logging rate (must divide CONTROL_HZ)
+DT = 1.0 / PHYSICS_HZ  # s
+DT_CONTROL = 1.0 / CONTROL_HZ  # s
+STEPS_PER_CONTROL = PHYSICS_HZ // CONTROL_HZ
+CONTROLS_PER_LOG = CONTROL_HZ // LOG_HZ
+
+ANGLE_TOL = 0.02  # rad, each joint angle to its goal angle
+SPEED_TOL = 0.1  # rad/s, each joint velocity to its goal velocity
+TIMEOUT = 20.0  # s, simulated time a reach may take
+REPLAN_AFTER = 0.2  # s after the profile's end without success: plan a new profile from the believed state
+
+KP = 8.0  # 1/s, rad/s commanded per rad of position error
+KI = 2.0  # 1/s^2, rad/s commanded per rad s of integrated position error
+KD = 0.2  # rad/s commanded per rad/s of velocity error
+INTEGRAL_LIMIT = 0.05  # rad s, anti-windup bound of the integrated position error
+
+ACTIONS = ("reach",)
+STATE_COLUMNS = ("theta_a", "omega_a", "theta_b", "omega_b", "tip_x", "tip_y")  # logged believed state
+TRAJECTORY_COLUMNS = ("t", *STATE_COLUMNS)  # the true state of a dispatched sequence
+_NOISE_BLOCK = 512  # control ticks of noise drawn at once (4 sensing + 2 motor values per tick)
+
+
+@dataclass(frozen=True)
+class Noise:
+    """Seeded noise: on the motor commands (as the motors execute them) and on the measured joint state.
+
+    motor: relative standard deviation of each executed joint rate, drawn anew each control tick;
+    angle (rad), velocity (rad/s): standard deviations of the measured joint angles and velocities.
+    """
+
+    motor: float = 0.03
+    angle: float = 0.002
+    velocity: float = 0.01
+
+    @classmethod
+    def off(cls) -> Noise:
+        return cls(0.0, 0.0, 0.0)
+
+
+class ArmSim:
+    """The arm on its base; `run` executes one reach as an Episode, `run_sequence` several back to back."""
+
+    state_columns = STATE_COLUMNS
+
+    def __init__(self, seed: int, noise: Noise = Noise()):
+        self.noise = noise
+        self.seed = int(seed)
+        self.rng = np.random.default_rng(seed)
+        self._draws: list[list[float]] = []
+        self.time = 0.0
+        self.place(0.0, 0.0, 0.0, 0.0)
+
+    # --- state ------------------------------------------------------------------------------------------
+    def reset(self, scene: Mapping[str, Sequence[float]]) -> None:
+        """The protocol's reset: scene {"arm": (theta_a, omega_a, theta_b, omega_b)}."""
+        if set(scene) != {"arm"}:
+            raise SimError(f"the arm scene has one object, arm (theta_a, omega_a, theta_b, omega_b); "
+                           f"it has {', '.join(scene) or 'nothing'}")
+        arm = tuple(scene["arm"])
+        if len(arm) != 4:
+            raise SimError(f"the arm scene's arm is (theta_a, omega_a, theta_b, omega_b), got {arm}")
+        self.place(*arm)
+
+    def place(self, theta_a: float, omega_a: float, theta_b: float, omega_b: float) -> None:
+        """Put the arm at joint angles (rad) moving at joint velocities (rad/s), in a fresh space."""
+        q = tuple(float(v) for v in (theta_a, omega_a, theta_b, omega_b))
+        if not all(math.isfinite(v) for v in q) or max(abs(q[1]), abs(q[3])) > W.OMEGA_HARD:
+            raise SimError(f"invalid arm state {q}: finite values and joint speeds <= {W.OMEGA_HARD} rad/s")
+        theta_a, omega_a, theta_b, omega_b = q
+        self.space = space = pymunk.Space()
+        la, lb = W.LINK_A_LENGTH, W.LINK_B_LENGTH
+        self.link_a = a = pymunk.Body(W.LINK_A_MASS, W.LINK_A_MASS * la * la / 12.0)
+        self.link_b = b = pymunk.Body(W.LINK_B_MASS, W.LINK_B_MASS * lb * lb / 12.0)
+        ex, ey = W.elbow(theta_a)
+        phi_b, w_b = theta_a + theta_b, omega_a + omega_b
+        a.angle, a.angular_velocity = theta_a, omega_a
+        a.position = (0.5 * ex, 0.5 * ey)
+        a.velocity = (-omega_a * 0.5 * ey, omega_a * 0.5 * ex)
+        rbx, rby = 0.5 * lb * math.cos(phi_b), 0.5 * lb * math.sin(phi_b)
+        b.angle, b.angular_velocity = phi_b, w_b
+        b.position = (ex + rbx, ey + rby)
+        b.velocity = (-omega_a * ey - w_b * rby, omega_a * ex + w_b * rbx)
+        # SimpleMotor(p, q, rate) holds p.w - q.w = rate, so a joint turning at omega needs rate -omega
+        self.motor_a = pymunk.SimpleMotor(space.static_body, a, -omega_a)
+        self.motor_b = pymunk.SimpleMotor(a, b, -omega_b)
+        self.motor_a.max_force, self.motor_b.max_force = W.TORQUE_A_MAX, W.TORQUE_B_MAX
+        space.add(a, b, self.motor_a, self.motor_b,
+                  pymunk.PivotJoint(space.static_body, a, (0.0, 0.0), (-0.5 * la, 0.0)),
+                  pymunk.PivotJoint(a, b, (0.5 * la, 0.0), (-0.5 * lb, 0.0)))
+        self.time = 0.0
+
+    def true_state(self) -> tuple[float, float, float, float, float, float]:
+        """(theta_a, omega_a, theta_b, omega_b, tip_x, tip_y) of the arm as it is."""
+        a, b = self.link_a, self.link_b
+        theta_a, omega_a = a.angle, a.angular_velocity
+        theta_b, omega_b = b.angle - theta_a, b.angular_velocity - omega_a
+        return (theta_a, omega_a, theta_b, omega_b, *W.forward(theta_a, theta_b))
+
+    def _draw(self) -> list[float]:
+        """Six standard normal numbers for one control tick (4 sensing, 2 motor), drawn in blocks."""
+        if not self._draws:
+            self._draws = self.rng.standard_normal((_NOISE_BLOCK, 6)).tolist()
+            self._draws.reverse()
+        return self._draws.pop()
+
+    def _believe(self, true: Sequence[float], e: Sequence[float]) -> tuple[float, float, float, float]:
+        n = self.noise
+        return (true[0] + n.angle * e[0], true[1] + n.velocity * e[1], true[2] + n.angle * e[2],
+                true[3] + n.velocity * e[3])
+
+    def believed_state(self) -> tuple[float, float, float, float, float, float]:
+        """The true state with the seeded sensing noise of `self.noise` (the tip from the believed angles)."""
+        q = self._believe(self.true_state(), self._draw())
+        return (*q, *W.forward(q[0], q[2]))
+
+    # --- dynamics ---------------------------------------------------------------------------------------
+    def command(self, omega_a: float, omega_b: float, e: Sequence[float] = (0.0, 0.0)) -> None:
+        """Send joint rates (rad/s); the motors execute them with relative noise e * motor, saturated."""
+        m, hard = self.noise.motor, W.OMEGA_HARD
+        self.motor_a.rate = -max(-hard, min(hard, omega_a * (1.0 + m * e[0])))
+        self.motor_b.rate = -max(-hard, min(hard, omega_b * (1.0 + m * e[1])))
+
+    def step(self) -> None:
+        """One physics step."""
+        self.space.step(DT)
+        self.time += DT
+
+    # --- actions ----------------------------------------------------------------------------------------
+    def run(self, call: ActionCall) -> Episode:
+        """Execute one reach from the current state until it ends; the Episode logs the believed state."""
+        return self._execute(call, None)
+
+    def run_sequence(self, calls: Sequence[ActionCall]) -> SequenceResult:
+        """Dispatch reaches back to back without stopping (each passes its way-point at the goal velocities);
+        stop at the first failure."""
+        trajectory: list[tuple[float, ...]] = []
+        results = []
+        self._next_sample = self.time
+        for call in calls:
+            start = self.time
+            episode = self._execute(call, trajectory)
+            results.append(ActionResult(call.action, episode.outcome, episode.duration, start))
+            if not episode.succeeded:
+                break
+        log = np.array(trajectory, dtype=float).reshape(-1, len(TRAJECTORY_COLUMNS))
+        return SequenceResult(tuple(results), log, TRAJECTORY_COLUMNS)
+
+    def _execute(self, call: ActionCall, trajectory: list | None) -> Episode:
+        goal = _check_call(call)
+        ga, gwa, gb, gwb = goal
+        lo_a, hi_a = W.THETA_A_LIMITS
+        lo_b, hi_b = W.THETA_B_LIMITS
+        ticks, max_ticks = 0, round(TIMEOUT * CONTROL_HZ)
+        log_t, log_state = [], []
+        params = None
+        outcome = "timeout"
+        plan_tick, pa, pb = 0, None, None
+        ia = ib = 0.0  # integrated position errors
+        while True:
+            true = self.true_state()
+            if trajectory is not None and self.time >= self._next_sample - 1e-9:
+                trajectory.append((self.time, *true))
+                self._next_sample += 1.0 / LOG_HZ
+            e = self._draw()
+            ta, wa, tb, wb = self._believe(true, e)
+            if params is None:
+                params = np.array([ta, wa, tb, wb, *goal], dtype=float)
+            if ticks % CONTROLS_PER_LOG == 0:
+                log_t.append(ticks / CONTROL_HZ)
+                log_state.append((ta, wa, tb, wb, *W.forward(ta, tb)))
+            if not (lo_a <= true[0] <= hi_a and lo_b <= true[2] <= hi_b):
+                outcome = "joint_limit"
+                break
+            if (abs(true[0] - ga) <= ANGLE_TOL and abs(true[2] - gb) <= ANGLE_TOL
+                    and abs(true[1] - gwa) <= SPEED_TOL and abs(true[3] - gwb) <= SPEED_TOL):
+                outcome = "success"
+                break
+            if ticks >= max_ticks:
+                break
+            t = (ticks - plan_tick) * DT_CONTROL
+            if pa is None or t > pa.duration + REPLAN_AFTER:
+                pa, pb = synchronize(((ta, wa), (tb, wb)), ((ga, gwa), (gb, gwb)), W.OMEGA_MAX, W.ALPHA_MAX)
+                plan_tick, t, ia, ib = ticks, 0.0, 0.0, 0.0
+            ra, rwa = pa.at(t)
+            rb, rwb = pb.at(t)
+            na, nb = pa.at(t + DT_CONTROL)[0], pb.at(t + DT_CONTROL)[0]
+            ea, eb = ra - ta, rb - tb
+            ia = max(-INTEGRAL_LIMIT, min(INTEGRAL_LIMIT, ia + ea * DT_CONTROL))
+            ib = max(-INTEGRAL_LIMIT, min(INTEGRAL_LIMIT, ib + eb * DT_CONTROL))
+            self.command((na - ra) * CONTROL_HZ + KP * ea + KI * ia + KD * (rwa - wa),
+                         (nb - rb) * CONTROL_HZ + KP * eb + KI * ib + KD * (rwb - wb), e[4:])
+            for _ in range(STEPS_PER_CONTROL):
+                self.space.step(DT)
+            self.time += DT_CONTROL
+            ticks += 1
+        return Episode(call.action, params, np.array(log_t), np.array(log_state, dtype=float).reshape(-1, 6),
+                       STATE_COLUMNS, outcome, ticks / CONTROL_HZ, self.seed)
+
+
+def _check_call(call: ActionCall) -> tuple[float, float, float, float]:
+    """The goal of a reach call as 4 floats; a SimError for an unknown action or an invalid goal."""
+    if call.action not in ACTIONS:
+        raise SimError(f"unknown arm action {call.action!r}; known: {', '.join(ACTIONS)}")
+    if len(call.goal) != 4:
+        raise SimError(f"reach: goal must be 4 numbers (theta_ga, omega_ga, theta_gb, omega_gb), "
+                       f"got {call.goal}")
+    goal = tuple(float(g) for g in call.goal)
+    if not all(math.isfinite(g) for g in goal):
+        raise SimError(f"reach: goal must be finite, got {call.goal}")
+    if max(abs(goal[1]), abs(goal[3])) > W.OMEGA_MAX + 1e-6:
+        raise SimError(f"reach: goal joint speeds must be <= {W.OMEGA_MAX} rad/s, got {call.goal}")
+    return goal  # type: ignore[return-value]
+
+
+def simulate_sequence(arm: tuple[float, float, float, float], calls: Sequence[ActionCall], seed: int,
+                      noise: Noise | None = None) -> SequenceResult:
+    """Execute reaches in a fresh simulator: place the arm at `arm`, then run_sequence."""
+    sim = ArmSim(seed, Noise() if noise is None else noise)
+    sim.place(*arm)
+    return sim.run_sequence(list(calls))

@@ -1,0 +1,76 @@
+"""A robot brought from outside tailor: the point-mass fixture (tests/fixtures/pointmass) registers its
+simulator by entry point, its domain is a folder given by path, and train -> refine -> simulate -> evaluate run
+on it end to end through the `tailor` command, with nothing about it in tailor's own code."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+FIXTURE = Path(__file__).parent / "fixtures" / "pointmass"
+
+
+def tailor(*args: str, plugin: bool = True) -> subprocess.CompletedProcess:
+    env = dict(os.environ)
+    env.pop("PYTHONPATH", None)
+    if plugin:
+        env["PYTHONPATH"] = str(FIXTURE / "site")
+    return subprocess.run([sys.executable, "-m", "tailor.refinement.cli", *args], capture_output=True, text=True,
+                          env=env, timeout=600)
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory) -> Path:
+    domain = tmp_path_factory.mktemp("rail") / "rail"
+    shutil.copytree(FIXTURE / "domain", domain)
+    run = tailor("train", str(domain), "--episodes", "200", "--n-i", "1,3", "--seed", "3", "--json")
+    assert run.returncode == 0, run.stderr
+    report = json.loads(run.stdout)
+    assert report["simulator"] == "pointmass" and set(report["models"]) == {"move"}
+    move = report["models"]["move"]
+    assert move["mae"] < 0.15 * move["mean_duration"]  # a learnable action, learned
+    assert (domain / "models" / "move.json").is_file() and (domain / "training" / "mae_vs_n_i.png").is_file()
+    return domain
+
+
+def test_the_entry_point_registers_the_simulator_and_the_domain_folder_is_listed(trained):
+    run = tailor("domains", str(trained), "--json")
+    assert run.returncode == 0, run.stderr
+    listing = json.loads(run.stdout)
+    assert "pointmass" in [s["name"] for s in listing["simulators"]]
+    rail = next(d for d in listing["domains"] if d["path"] == str(trained))
+    assert rail["simulator"] == "pointmass" and rail["can"] == ["plan", "refine", "train", "evaluate"]
+
+
+def test_refine_and_simulate_a_plan_of_the_outside_domain(trained):
+    run = tailor("refine", str(trained / "domain.pddl"), "line", "--simulate", "--json", "--plot",
+                 str(trained / "line.png"))
+    assert run.returncode == 0, run.stderr
+    result = json.loads(run.stdout)
+    assert [a["pddl"] for a in result["actions"]] == ["(move p0 p1)", "(move p1 p2)", "(move p2 p3)"]
+    assert [p["id"] for p in result["free_parameters"]] == ["p1.v", "p2.v"]  # p3 stops: v = [0, 0] binds it
+    assert result["succeeded"] and result["greedy"]["succeeded"]
+    assert result["predicted_total"] <= result["greedy"]["predicted_total"] + 1e-9
+    assert (trained / "line.png").stat().st_size > 0
+
+
+def test_evaluate_the_outside_domain(trained):
+    run = tailor("evaluate", str(trained), "--episodes", "12", "--oracle-episodes", "2", "--horizon-episodes", "4",
+                 "--json")
+    assert run.returncode == 0, run.stderr
+    report = json.loads(run.stdout)
+    assert report["simulator"] == "pointmass" and report["problems"] == ["line"] and report["scenarios"] == 12
+    assert [row["horizon"] for row in report["horizons"]["horizons"]] == [1, 2, 3, 4]
+
+
+def test_without_the_plugin_the_binding_error_is_one_line(trained):
+    run = tailor("refine", str(trained / "domain.pddl"), "line", plugin=False)
+    assert run.returncode == 11
+    assert run.stderr.count("\n") == 1 and "Traceback" not in run.stderr
+    assert "simulator = 'pointmass'" in run.stderr and "actions.toml" in run.stderr

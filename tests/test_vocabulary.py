@@ -1,0 +1,47 @@
+"""No module outside a robot's own package names that robot: tailor's core is domain-generic (DESIGN.md).
+
+The soccer robot's vocabulary (its name, its ball, its actions, its field) may appear only in sims/soccer/ and
+domains/soccer/; the core finds robots through the simulator registry."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+CORE = ("planner_bridge", "refinement", "sims")
+ROBOT_PACKAGES = ("sims/soccer", "sims/arm")  # each robot's own package may use its own words
+SOCCER = re.compile(r"soccer|ball|dribbl|gotopose|approach_?ball|field_(half|x|y|margin)|pioneer|robocup", re.I)
+
+
+def core_files() -> list[Path]:
+    files = [ROOT / "__init__.py", ROOT / "errors.py"]
+    for package in CORE:
+        for path in sorted((ROOT / package).rglob("*")):
+            relative = path.relative_to(ROOT).as_posix()
+            if path.is_file() and path.suffix in (".py", ".toml", ".json") and not relative.startswith(ROBOT_PACKAGES):
+                files.append(path)
+    return files
+
+
+def test_the_core_names_no_robot():
+    offending = []
+    for path in core_files():
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            if SOCCER.search(line):
+                offending.append(f"{path.relative_to(ROOT)}:{number}: {line.strip()}")
+    assert not offending, "soccer vocabulary outside sims/soccer and domains/soccer:\n" + "\n".join(offending)
+
+
+def test_the_check_sees_the_core_and_would_fail_on_a_robot_name():
+    names = {p.relative_to(ROOT).as_posix() for p in core_files()}
+    assert {"refinement/dispatch.py", "sims/registry.py", "planner_bridge/bridge.py"} <= names
+    assert not any(n.startswith("sims/soccer/") for n in names)
+    assert SOCCER.search("from tailor.sims.soccer import SoccerSim")
+    assert SOCCER.search('RANGES["goToPose"]') and SOCCER.search("dribbleBall")
+
+
+def test_the_arm_package_does_not_borrow_the_soccer_robot():
+    for path in sorted((ROOT / "sims" / "arm").rglob("*.py")):
+        text = path.read_text(encoding="utf-8")
+        assert "sims.soccer" not in text, f"{path} imports the soccer robot"
