@@ -23,12 +23,14 @@ def negative(fact: int) -> int:
 
 @dataclass(frozen=True)
 class GroundAction:
-    """One ground action: `preconditions` need a causal link, `static` hold initially and forever."""
+    """One ground action: `preconditions` need a causal link, `static` hold initially and forever;
+    `conditions` lists both in the order the PDDL action writes them."""
 
     name: str
     args: tuple[str, ...]
     preconditions: tuple[int, ...]
     static: tuple[int, ...]
+    conditions: tuple[int, ...]
     effects: frozenset[int]  # the literals the action makes true (adds as positive, deletes as negative)
 
 
@@ -221,7 +223,7 @@ def _number(problem, schemas, grounded, initial_facts, changing) -> GroundTask:
     for number, args in grounded:
         schema = schemas[number]
         binding = dict(zip(schema.parameters, args))
-        needs, static = [], []
+        needs, static, conditions = [], [], []
         for kind, template in schema.conditions:
             if kind not in ("+", "-"):
                 continue  # equalities were decided while grounding
@@ -230,12 +232,13 @@ def _number(problem, schemas, grounded, initial_facts, changing) -> GroundTask:
             target = static if fact[0] not in changing else needs
             if literal not in target:
                 target.append(literal)
+                conditions.append(literal)
         adds = {fact_number(_bind(t, binding)) for t in schema.adds}
         deletes = {fact_number(_bind(t, binding)) for t in schema.deletes} - adds  # PDDL: adds win
         effects = frozenset({positive(f) for f in adds} | {negative(f) for f in deletes})
         if any(literal ^ 1 in needs for literal in needs) or effects <= set(needs):
             continue  # contradictory preconditions, or a step that changes nothing: never needed in a plan
-        actions.append(GroundAction(schema.name, args, tuple(needs), tuple(static), effects))
+        actions.append(GroundAction(schema.name, args, tuple(needs), tuple(static), tuple(conditions), effects))
     goal: list[int] = []
     for kind, template in (lit for g in problem.goals for lit in _literals(g, [])):
         if kind not in ("+", "-"):
