@@ -5,8 +5,9 @@
 
 Each plan is made in this process by plan_here (parse, compile, search, validate, causal links); for a
 planner that finds no causal links (pyperplan) the sequence is deordered. `orderings` counts the transitively
-reduced ordering constraints, time is the best of `--repeat` runs after one warm-up run, `pairs` the ordered pairs of steps (its closure), `width` the most steps no
+reduced ordering constraints, `pairs` the ordered pairs of steps (its closure), `width` the most steps no
 ordering relates (the longest antichain): more width and fewer pairs is less commitment.
+Time is the best of `--repeat` runs, after one warm-up run per planner (imports are not planning time).
 """
 
 from __future__ import annotations
@@ -39,8 +40,8 @@ def closure(plan: AbstractPlan) -> set[tuple[int, int]]:
     for first, second in plan.orderings:
         after[first].add(second)
     pairs = set()
-    for start in after:
-        todo = list(after[start])
+    for start, successors in after.items():
+        todo = list(successors)
         while todo:
             step = todo.pop()
             if (start, step) not in pairs:

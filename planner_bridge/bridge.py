@@ -51,7 +51,7 @@ def plan_here(
     return AbstractPlan(domain_name, parsed.name, planner, steps, links, orderings)
 
 
-def _from_causal_link_plan(parsed, plan) -> tuple[tuple[Step, ...], tuple[CausalLink, ...], tuple[tuple[int, int], ...]]:
+def _from_causal_link_plan(parsed, plan) -> tuple[tuple[Step, ...], tuple[CausalLink, ...], tuple]:
     """Steps, causal links and orderings as the planner found them; links on fluents a compiler added (not in
     the PDDL) are left out."""
     steps = tuple(

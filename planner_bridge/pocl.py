@@ -19,7 +19,7 @@ import time
 from dataclasses import dataclass
 
 from tailor.planner_bridge.pocl_ground import GroundTask
-from tailor.planner_bridge.pocl_heuristic import HEURISTICS, additive_costs, reusable
+from tailor.planner_bridge.pocl_heuristic import HEURISTICS, additive_costs
 
 INIT, GOAL = 0, 1
 Link = tuple[int, int, int]  # (producer step, literal, consumer step)
@@ -84,7 +84,9 @@ class Planner:
     def threatens(plan: PartialPlan, step: int, link: Link) -> bool:
         """Whether `step` may fall between the link's producer and consumer (it negates the literal)."""
         producer, _, consumer = link
-        return step not in (producer, consumer) and not plan.precedes(step, producer) and not plan.precedes(consumer, step)
+        if step in (producer, consumer):
+            return False
+        return not plan.precedes(step, producer) and not plan.precedes(consumer, step)
 
     # --- refinements -------------------------------------------------------------------------------------
     def initial_plan(self) -> PartialPlan:
@@ -269,6 +271,7 @@ def flaws_of(task: GroundTask, plan: PartialPlan) -> list[str]:
         if producer != INIT and consumer != GOAL and not plan.precedes(producer, consumer):
             problems.append(f"step {producer} is not ordered before step {consumer}")
         for step in range(2, len(plan.steps)):
-            if literal ^ 1 in task.actions[plan.steps[step]].effects and Planner.threatens(plan, step, (producer, literal, consumer)):
+            negates = literal ^ 1 in task.actions[plan.steps[step]].effects
+            if negates and Planner.threatens(plan, step, (producer, literal, consumer)):
                 problems.append(f"step {step} threatens {producer} -> {task.literal_text(literal)} -> {consumer}")
     return problems

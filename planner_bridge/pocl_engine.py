@@ -8,7 +8,8 @@ them from the planner instead of deordering a sequence. `register()` adds it to 
 from __future__ import annotations
 
 import time
-from typing import IO, Callable, Optional
+from collections.abc import Callable
+from typing import IO
 
 import unified_planning as up
 from unified_planning.engines import Engine, PlanGenerationResult, PlanGenerationResultStatus
@@ -46,7 +47,7 @@ class CausalLinkPlan(PartialOrderPlan):
         self.orderings = tuple(orderings)
         self.causal_links = tuple(causal_links)
 
-    def replace_action_instances(self, replace_function: Callable[[ActionInstance], Optional[ActionInstance]]):
+    def replace_action_instances(self, replace_function: Callable[[ActionInstance], ActionInstance | None]):
         """The same plan over the mapped steps (a compiler's map back); a step mapped to None leaves the plan,
         with its causal links, and the orderings through it are kept."""
         mapped = [replace_function(step) for step in self.steps]
@@ -58,7 +59,7 @@ class CausalLinkPlan(PartialOrderPlan):
             CausalLink(INITIAL if link.producer == INITIAL else number[link.producer], link.fact,
                        GOAL if link.consumer == GOAL else number[link.consumer])
             for link in self.causal_links
-            if (link.producer == INITIAL or link.producer in number) and (link.consumer == GOAL or link.consumer in number)
+            if link.producer in (INITIAL, *number) and link.consumer in (GOAL, *number)
         ]
         steps = [mapped[k - 1] for k in keep]
         return CausalLinkPlan(steps, orderings, links, steps[0].action.environment if steps else self._environment)

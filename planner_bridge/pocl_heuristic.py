@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 import math
-from typing import Callable
+from collections.abc import Callable
 
 from tailor.planner_bridge.pocl_ground import GroundTask
 

@@ -104,7 +104,8 @@ def main(argv: list[str] | None = None) -> int:
     changed = 0
     outputs = [(golden_path(d, p, suffix), lambda d=d, p=p, extra=extra: tailor_plan_output(d, p, extra))
                for d, p in bundled_pairs() for suffix, extra in RENDERINGS.items()]
-    outputs += [(pocl_golden_path(d, p), lambda d=d, p=p: tailor_plan_output(d, p, POCL_ARGS)) for d, p in bundled_pairs()]
+    outputs += [(pocl_golden_path(d, p), lambda d=d, p=p: tailor_plan_output(d, p, POCL_ARGS))
+                for d, p in bundled_pairs()]
     outputs += [(refine_golden_path(d, p), lambda d=d, p=p: tailor_refine_output(d, p)) for d, p in refine_pairs()]
     for path, output in outputs:
         old = path.read_text(encoding="utf-8") if path.exists() else ""

@@ -160,8 +160,8 @@ def test_worker_timeout_applies_to_pocl():
 
 
 def test_cli_plan_with_the_pocl_alias_prints_the_golden_text():
-    done = subprocess.run([sys.executable, "-m", "tailor.refinement.cli", "plan", "soccer", "waypoints", "--planner", "pocl"],
-                          capture_output=True, text=True)
+    command = [sys.executable, "-m", "tailor.refinement.cli", "plan", "soccer", "waypoints", "--planner", "pocl"]
+    done = subprocess.run(command, capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout == pocl_golden_path("soccer", "waypoints").read_text(encoding="utf-8")
 
