@@ -5,10 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Callable
 
-from tailor.planner_bridge.abstract_plan import AbstractPlan
-from tailor.planner_bridge.causal import partial_order
+from tailor.planner_bridge.abstract_plan import AbstractPlan, CausalLink, Step
+from tailor.planner_bridge.causal import partial_order, sorted_links
 from tailor.planner_bridge.reading import check_files, read_problem
-from tailor.planner_bridge.solving import solve
+from tailor.planner_bridge.solving import canonical, solve
 
 DEFAULT_PLANNER = "pyperplan"
 
@@ -28,22 +28,37 @@ def plan_files(
         raise ValueError(f"the timeout must be positive, not {timeout}")
     domain, problem = Path(domain), Path(problem)
     check_files(domain, problem)  # bad files fail here, fast, before a child process is started
-    return plan_in_worker(domain, problem, planner, timeout)
+    return plan_in_worker(domain, problem, canonical(planner), timeout)
 
 
 def plan_here(
     domain: str | Path, problem: str | Path, planner: str = DEFAULT_PLANNER, on_search: Callable[[], None] | None = None
 ) -> AbstractPlan:
-    """The pipeline in this process: parse, solve (compiling away what the engine lacks), validate, link.
+    """The pipeline in this process: parse, solve (compiling away what the engine lacks), validate, link
+    (the causal links come from the planner when it finds them, as tailor-pocl does, else from deordering).
 
     Without a fixed PYTHONHASHSEED, the engine may pick a different one of several valid plans on each run.
     """
     domain, problem = Path(domain), Path(problem)
     parsed, domain_name = read_problem(domain, problem)
     parsed.environment.credits_stream = None  # no engine credits on stdout: `--json` output must be pure JSON
-    sequential = solve(parsed, planner, str(problem), on_search)
-    steps, links, orderings = partial_order(parsed, sequential)
+    planner = canonical(planner)
+    found = solve(parsed, planner, str(problem), on_search)
+    if hasattr(found, "causal_links"):
+        steps, links, orderings = _from_causal_link_plan(parsed, found)
+    else:
+        steps, links, orderings = partial_order(parsed, found)
     return AbstractPlan(domain_name, parsed.name, planner, steps, links, orderings, *problem_facts(parsed))
+
+
+def _from_causal_link_plan(parsed, plan) -> tuple[tuple[Step, ...], tuple[CausalLink, ...], tuple]:
+    """Steps, causal links and orderings as the planner found them; links on fluents a compiler added (not in
+    the PDDL) are left out."""
+    steps = tuple(
+        Step(k, s.action.name, tuple(p.object().name for p in s.actual_parameters)) for k, s in enumerate(plan.steps, 1)
+    )
+    links = [link for link in plan.causal_links if parsed.has_fluent(link.fact[0])]
+    return steps, sorted_links(links), tuple(plan.orderings)
 
 
 def problem_facts(parsed) -> tuple[tuple[tuple[str, tuple[str, ...]], ...], tuple[tuple[str, ...], ...]]:

@@ -134,7 +134,7 @@ def partial_order(problem, plan) -> tuple[tuple[Step, ...], tuple[CausalLink, ..
         for fact in _unique(needs.negative):
             producer = max((s.step.id for s in steps[: at - 1] if fact in s.deletes), default=INITIAL)
             _protect(steps, producer, at, [s.step.id for s in steps if fact in s.adds], orderings)
-    return tuple(s.step for s in steps), _sorted(links), transitive_reduction(orderings)
+    return tuple(s.step for s in steps), sorted_links(links), transitive_reduction(orderings)
 
 
 def _total_order(problem, plan, steps, goal):
@@ -155,10 +155,10 @@ def _total_order(problem, plan, steps, goal):
             made_true = [k for k in range(1, at) if holds(node, k) and not holds(node, k - 1)]
             links.append(CausalLink(made_true[-1] if made_true else INITIAL, fact, consumer))
     chain = tuple((k, k + 1) for k in range(1, len(steps)))
-    return tuple(s.step for s in steps), _sorted(links), chain
+    return tuple(s.step for s in steps), sorted_links(links), chain
 
 
-def _sorted(links: list[CausalLink]) -> tuple[CausalLink, ...]:
+def sorted_links(links: list[CausalLink]) -> tuple[CausalLink, ...]:
     """Links grouped by consumer (steps in order, then the goal), each group by producer; stable otherwise."""
 
     def key(link: CausalLink) -> tuple[int, int]:

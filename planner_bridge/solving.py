@@ -14,6 +14,9 @@ from typing import Callable
 
 from tailor.planner_bridge.errors import NoPlanError, PlannerError, PlannerTimeoutError, PlannerUnavailableError
 
+# Other names accepted for an engine: `--planner pocl` is our POCL engine (planner_bridge.pocl_engine).
+ALIASES = {"pocl": "tailor-pocl"}
+
 # Compilations tried, in this order, until the engine supports what is left of the problem.
 REMOVALS = (
     "QUANTIFIERS_REMOVING",
@@ -26,11 +29,19 @@ REMOVALS = (
 )
 
 
+def canonical(planner: str) -> str:
+    """The engine name behind an alias (`pocl` is `tailor-pocl`); other names are kept."""
+    return ALIASES.get(planner, planner)
+
+
 def oneshot_planners() -> list[str]:
-    """Names of the installed unified-planning engines that can plan (OneshotPlanner)."""
+    """Names of the installed unified-planning engines that can plan (OneshotPlanner), ours included."""
     from unified_planning.engines.mixins import OneshotPlannerMixin
     from unified_planning.shortcuts import get_environment
 
+    from tailor.planner_bridge.pocl_engine import register
+
+    register()
     factory = get_environment().factory
     return sorted(name for name in factory.engines if issubclass(factory.engine(name), OneshotPlannerMixin))
 
@@ -74,32 +85,29 @@ def compile_for(planner: str, problem, file: str):
     return problem, map_backs
 
 
-def _search(planner: str, problem) -> tuple[str, list[tuple[str, list[str]]] | None]:
-    """Run the engine quietly; return its status name and the plan as (action, object names) pairs."""
+def _search(planner: str, problem):
+    """Run the engine quietly; return its status name and its plan (or None)."""
     from unified_planning.shortcuts import OneshotPlanner
 
     with contextlib.redirect_stdout(io.StringIO()), warnings.catch_warnings():
         warnings.simplefilter("ignore")
         with OneshotPlanner(name=planner) as engine:
             result = engine.solve(problem)
-    actions = None
-    if result.plan is not None:
-        actions = [
-            (a.action.name, [p.object().name for p in a.actual_parameters]) for a in result.plan.actions
-        ]
-    return result.status.name, actions
+    return result.status.name, result.plan
 
 
 def solve(problem, planner: str, file: str, on_search: Callable[[], None] | None = None):
-    """Plan for `problem` (the original, uncompiled one) and return a validated SequentialPlan of its actions;
-    `on_search` is called when the engine starts searching (the worker starts its timeout clock there)."""
+    """Plan for `problem` (the original, uncompiled one) and return a validated SequentialPlan of its actions,
+    or, from an engine that finds causal links (tailor-pocl), a validated CausalLinkPlan; `on_search` is called
+    when the engine starts searching (the worker starts its timeout clock there)."""
     from unified_planning.plans import ActionInstance, SequentialPlan
 
+    planner = canonical(planner)
     compiled, map_backs = compile_for(planner, problem, file)
     if on_search is not None:
         on_search()
     try:
-        status, actions = _search(planner, compiled)
+        status, found = _search(planner, compiled)
     except (KeyboardInterrupt, PlannerError):
         raise
     except Exception as exc:
@@ -112,9 +120,12 @@ def solve(problem, planner: str, file: str, on_search: Callable[[], None] | None
         raise NoPlanError(f"no plan exists (planner '{planner}' ended its search without one)", file)
     if status == "UNSUPPORTED_PROBLEM":
         raise PlannerUnavailableError(f"planner '{planner}' does not support this problem", file)
-    if actions is None:
+    if found is None:
         raise PlannerError(f"planner '{planner}' returned no plan (status {status})", file)
+    if hasattr(found, "causal_links"):
+        return _mapped_back(problem, found, map_backs, planner, file)
 
+    actions = [(a.action.name, [p.object().name for p in a.actual_parameters]) for a in found.actions]
     objects = compiled.environment.expression_manager
     plan = []
     for name, args in actions:
@@ -126,6 +137,21 @@ def solve(problem, planner: str, file: str, on_search: Callable[[], None] | None
     sequential = SequentialPlan(plan)
     validate(problem, sequential, planner, file)
     return sequential
+
+
+def _mapped_back(problem, plan, map_backs, planner: str, file: str):
+    """A CausalLinkPlan of the compiled problem as one of the original actions, validated in its step order."""
+    from unified_planning.plans import SequentialPlan
+
+    def back(step):
+        for map_back in reversed(map_backs):
+            step = map_back(step) if step is not None else None
+        return step
+
+    if map_backs:
+        plan = plan.replace_action_instances(back)
+    validate(problem, SequentialPlan(list(plan.steps), problem.environment), planner, file)
+    return plan
 
 
 def validate(problem, plan, planner: str, file: str) -> None:

@@ -5,6 +5,8 @@
 
 For every bundled pair domains/<domain>/problems/<problem>.pddl the golden file <domain>/<problem>.json holds
 exactly what `tailor plan <domain> <problem> --json` prints; <domain>/<problem>.txt holds the text rendering.
+The golden file tests/golden/pocl/<domain>/<problem>.txt holds the text of `tailor plan <domain> <problem>
+--planner pocl` (our partial-order causal-link planner).
 For every bundled problem of a domain with an action library binding (actions.toml), the golden file
 tests/golden/refine/<domain>/<problem>.json holds what `tailor refine <domain> <problem> --simulate --json`
 prints with seed 0, without the optimizers' wall-clock times ("seconds"), which differ from run to run.
@@ -25,6 +27,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 GOLDEN_DIR = ROOT / "tests" / "golden" / "plan"
 REFINE_GOLDEN_DIR = ROOT / "tests" / "golden" / "refine"
+POCL_GOLDEN_DIR = ROOT / "tests" / "golden" / "pocl"
+POCL_ARGS = ["--planner", "pocl"]
 REFINE_ARGS = ["--simulate", "--json", "--seed", "0"]
 RENDERINGS = {".json": ["--json"], ".txt": []}  # golden file suffix -> extra `tailor plan` arguments
 
@@ -48,6 +52,10 @@ def tailor_plan_output(domain: str, problem: str, extra: list[str]) -> str:
     if status != 0:
         raise SystemExit(f"tailor plan {domain} {problem} {' '.join(extra)} failed with status {status}")
     return out.getvalue()
+
+
+def pocl_golden_path(domain: str, problem: str) -> Path:
+    return POCL_GOLDEN_DIR / domain / f"{problem}.txt"
 
 
 def refine_pairs() -> list[tuple[str, str]]:
@@ -96,6 +104,8 @@ def main(argv: list[str] | None = None) -> int:
     changed = 0
     outputs = [(golden_path(d, p, suffix), lambda d=d, p=p, extra=extra: tailor_plan_output(d, p, extra))
                for d, p in bundled_pairs() for suffix, extra in RENDERINGS.items()]
+    outputs += [(pocl_golden_path(d, p), lambda d=d, p=p: tailor_plan_output(d, p, POCL_ARGS))
+                for d, p in bundled_pairs()]
     outputs += [(refine_golden_path(d, p), lambda d=d, p=p: tailor_refine_output(d, p)) for d, p in refine_pairs()]
     for path, output in outputs:
         old = path.read_text(encoding="utf-8") if path.exists() else ""

@@ -14,7 +14,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("domain", metavar="DOMAIN", help="domain.pddl file, or the name of a bundled domain (see `tailor domains`)")
     parser.add_argument("problem", metavar="PROBLEM", help="problem .pddl file, or the name of one of its problems")
     parser.add_argument(
-        "--planner", default="pyperplan", metavar="NAME", help="any installed unified-planning engine (default: pyperplan)"
+        "--planner", default="pyperplan", metavar="NAME", help="any installed unified-planning engine, or pocl (our POCL planner; default: pyperplan)"
     )
     parser.add_argument(
         "--timeout", type=positive_seconds, default=None, metavar="S", help="seconds the planner may search (default: no limit)"

@@ -27,7 +27,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="actions optimized together (default 2; 1 is greedy)")
     parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed of optimizer and simulator (default 0)")
     parser.add_argument("--belief", metavar="FILE", help="belief state file (default: PROBLEM's stem + .toml)")
-    parser.add_argument("--planner", default="pyperplan", metavar="NAME", help="unified-planning engine")
+    parser.add_argument("--planner", default="pyperplan", metavar="NAME", help="unified-planning engine, or pocl")
     parser.add_argument("--timeout", type=positive_seconds, default=None, metavar="S", help="planner time limit")
     parser.add_argument("--simulate", action="store_true", help="execute greedy and refined sequences in the simulator")
     parser.add_argument("--plot", metavar="FILE.png",
