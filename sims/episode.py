@@ -89,3 +89,18 @@ class SequenceResult:
 
     def has_column(self, name: str) -> bool:
         return name in self.columns
+
+
+def run_in_sequence(execute, calls, clock, columns: tuple[str, ...]) -> SequenceResult:
+    """Dispatch `calls` back to back without stopping: `execute(call, trajectory)` runs one action, appending
+    true states (rows of `columns`) to the shared trajectory, and `clock()` tells the simulated time; stop at
+    the first failure. The shared loop of every simulator's `run_sequence`."""
+    trajectory: list[tuple[float, ...]] = []
+    results = []
+    for call in calls:
+        start = clock()
+        episode = execute(call, trajectory)
+        results.append(ActionResult(call.action, episode.outcome, episode.duration, start))
+        if not episode.succeeded:
+            break
+    return SequenceResult(tuple(results), np.array(trajectory, dtype=float).reshape(-1, len(columns)), columns)

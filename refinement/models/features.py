@@ -21,6 +21,7 @@ import numpy as np
 from tailor.refinement.errors import DataError
 from tailor.sims import registry
 from tailor.sims.episode import Episode
+from tailor.sims.invariances import shift_mirror_axes
 from tailor.sims.protocol import FeatureSpace
 
 Transform = Callable[[np.ndarray, np.random.Generator], np.ndarray]
@@ -114,14 +115,7 @@ def _joints(params: np.ndarray) -> np.ndarray:
 
 def _joint_shift_mirror(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """Each joint's start and goal shifted by one offset, and (half the time) each joint mirrored."""
-    out = params.copy()
-    for angle, velocity in ((0, 1), (2, 3)):
-        shift, flip = rng.uniform(-1, 1), -1.0 if rng.random() < 0.5 else 1.0
-        for k in (angle, angle + 4):
-            out[:, k] = flip * (params[:, k] + shift)
-        for k in (velocity, velocity + 4):
-            out[:, k] = flip * params[:, k]
-    return out
+    return shift_mirror_axes(params, rng, ((0, 1), (2, 3)), goal_offset=4)
 
 
 def _joint_rotation(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -146,10 +140,7 @@ def _line(params: np.ndarray) -> np.ndarray:
 
 
 def _line_shift_mirror(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    shift, flip = rng.uniform(-5, 5), -1.0 if rng.random() < 0.5 else 1.0
-    out = flip * params
-    out[:, [0, 2]] = flip * (params[:, [0, 2]] + shift)
-    return out
+    return shift_mirror_axes(params, rng, ((0, 1),), goal_offset=2, shift=5.0)
 
 
 FEATURE_SPACES: dict[str, FeatureSpace] = {}

@@ -14,6 +14,7 @@ import numpy as np
 
 from tailor.sims.arm import world as W
 from tailor.sims.arm.profile import EPS
+from tailor.sims.invariances import shift_mirror_axes
 from tailor.sims.protocol import FeatureSpace
 
 PARAMETERS = ("theta_a", "omega_a", "theta_b", "omega_b", "theta_ga", "omega_ga", "theta_gb", "omega_gb")
@@ -52,14 +53,7 @@ def _ramps(params: np.ndarray) -> np.ndarray:
 
 def _shift_mirror(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """Each joint's start and goal shifted by one offset, and (half the time) each joint mirrored."""
-    out = params.copy()
-    for angle, velocity in ((0, 1), (2, 3)):
-        shift, flip = rng.uniform(-1, 1), -1.0 if rng.random() < 0.5 else 1.0
-        for k in (angle, angle + 4):
-            out[:, k] = flip * (params[:, k] + shift)
-        for k in (velocity, velocity + 4):
-            out[:, k] = flip * params[:, k]
-    return out
+    return shift_mirror_axes(params, rng, ((0, 1), (2, 3)), goal_offset=4)
 
 
 RAMPS = FeatureSpace("ramps", PARAMETERS, NAMES, _ramps, "translation and mirroring of each joint", _shift_mirror)

@@ -28,7 +28,7 @@ import pymunk
 
 from tailor.sims.arm import world as W
 from tailor.sims.arm.profile import synchronize
-from tailor.sims.episode import ActionCall, ActionResult, Episode, SequenceResult
+from tailor.sims.episode import ActionCall, Episode, SequenceResult, run_in_sequence
 from tailor.sims.errors import SimError
 
 PHYSICS_HZ = 100  # Hz, fixed physics step
@@ -168,17 +168,8 @@ class ArmSim:
     def run_sequence(self, calls: Sequence[ActionCall]) -> SequenceResult:
         """Dispatch reaches back to back without stopping (each passes its way-point at the goal velocities);
         stop at the first failure."""
-        trajectory: list[tuple[float, ...]] = []
-        results = []
         self._next_sample = self.time
-        for call in calls:
-            start = self.time
-            episode = self._execute(call, trajectory)
-            results.append(ActionResult(call.action, episode.outcome, episode.duration, start))
-            if not episode.succeeded:
-                break
-        log = np.array(trajectory, dtype=float).reshape(-1, len(TRAJECTORY_COLUMNS))
-        return SequenceResult(tuple(results), log, TRAJECTORY_COLUMNS)
+        return run_in_sequence(self._execute, calls, lambda: self.time, TRAJECTORY_COLUMNS)
 
     def _execute(self, call: ActionCall, trajectory: list | None) -> Episode:
         goal = _check_call(call)

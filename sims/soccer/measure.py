@@ -1,10 +1,10 @@
 """Measure the soccer actions: outcomes per experience scenario, subgoal-chain success, duration spread.
 
-    python -m sims.measure scenarios [--episodes 200] [--seed 0] [--jobs 2]
-    python -m sims.measure chains [--episodes 200] [--seed 0] [--jobs 2]
-    python -m sims.measure spread [--episodes 20]
+    python -m tailor.sims.soccer.measure scenarios [--episodes 200] [--seed 0] [--jobs 2]
+    python -m tailor.sims.soccer.measure chains [--episodes 200] [--seed 0] [--jobs 2]
+    python -m tailor.sims.soccer.measure spread [--episodes 20]
 
-`scenarios`: per scenario of sims.experience.SCENARIOS, the outcome counts and the mean and standard
+`scenarios`: per experience scenario of the soccer simulator (scenarios.RANGES), the outcome counts and the mean and standard
 deviation of the duration of the successful episodes (the episodes of `gather(scenario, n, seed)`).
 `chains`: random approachBall -> dribbleBall chains (sims.experience.sample_chain) and how many succeed.
 `spread`: one fixed parameterization per action executed with `--episodes` noise seeds: std / mean duration.
@@ -19,7 +19,8 @@ import math
 import numpy as np
 
 from tailor.sims.episode import ActionCall
-from tailor.sims.experience import SCENARIOS, episode_seeds, run_chain, run_episode
+from tailor.sims.experience import episode_seeds, run_episode
+from tailor.sims.soccer.scenarios import RANGES, run_chain
 from tailor.sims.soccer.simulator import SoccerSim
 
 # (robot start, ball, call) per action for `spread`: a parameterization with a turn at the start
@@ -33,7 +34,7 @@ SPREAD_CASES = {
 
 
 def _episode(scenario: str, seed: int) -> tuple[str, float]:
-    episode = run_episode(scenario, seed)
+    episode = run_episode("soccer", scenario, seed)
     return episode.outcome, episode.duration
 
 
@@ -45,7 +46,7 @@ def _chain(seed: int) -> tuple[tuple[str, ...], float]:
 def measure_scenarios(episodes: int, seed: int, jobs: int) -> None:
     from joblib import Parallel, delayed
 
-    for scenario in SCENARIOS:
+    for scenario in RANGES:
         runs = Parallel(n_jobs=jobs)(delayed(_episode)(scenario, s) for s in episode_seeds(seed, episodes))
         counts = collections.Counter(outcome for outcome, _ in runs)
         done = np.array([d for outcome, d in runs if outcome == "success"])
@@ -68,7 +69,7 @@ def measure_spread(episodes: int) -> None:
         durations, outcomes = [], []
         for seed in range(episodes):
             sim = SoccerSim(seed)
-            sim.reset(robot, ball)
+            sim.place(robot, ball)
             episode = sim.run(call)
             durations.append(episode.duration)
             outcomes.append(episode.outcome)
@@ -78,7 +79,7 @@ def measure_spread(episodes: int) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m sims.measure", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m tailor.sims.soccer.measure", description=__doc__.splitlines()[0])
     parser.add_argument("what", choices=("scenarios", "chains", "spread"))
     parser.add_argument("--episodes", type=int, default=None)
     parser.add_argument("--seed", type=int, default=0)

@@ -19,12 +19,13 @@ Termination is judged on the true state; the action sees (and the Episode logs) 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 import pymunk
 
-from tailor.sims.episode import ActionCall, ActionResult, Episode, SequenceResult
+from tailor.sims.episode import ActionCall, Episode, SequenceResult, run_in_sequence
 from tailor.sims.errors import SimError
 from tailor.sims.soccer import world as W
 from tailor.sims.soccer.actions import ACTION_FUNCTIONS
@@ -156,6 +157,8 @@ class SoccerSim:
     # --- state ------------------------------------------------------------------------------------------
     def reset(self, scene) -> None:
         """The protocol's reset: scene {"robot": (x, y, phi, v), "ball": (x, y)} (the ball is optional)."""
+        if not isinstance(scene, Mapping):
+            raise SimError(f"reset takes a scene mapping {{'robot': (x, y, phi, v), 'ball': (x, y)}}, not {scene!r}")
         if "robot" not in scene:
             raise SimError(f"the soccer scene needs a robot (x, y, phi, v); it has {', '.join(scene) or 'nothing'}")
         unknown = set(scene) - {"robot", "ball"}
@@ -288,16 +291,8 @@ class SoccerSim:
 
     def run_sequence(self, calls: list[ActionCall]) -> SequenceResult:
         """Dispatch actions one after the other without stopping between them; stop at the first failure."""
-        trajectory: list[tuple[float, ...]] = []
-        results = []
         self._next_sample = self.time
-        for call in calls:
-            start = self.time
-            episode = self._execute(call, trajectory)
-            results.append(ActionResult(call.action, episode.outcome, episode.duration, start))
-            if not episode.succeeded:
-                break
-        return SequenceResult(tuple(results), np.array(trajectory, dtype=float).reshape(-1, 7), TRAJECTORY_COLUMNS)
+        return run_in_sequence(self._execute, calls, lambda: self.time, TRAJECTORY_COLUMNS)
 
     def _execute(self, call: ActionCall, trajectory: list | None) -> Episode:
         if call.action not in ACTION_FUNCTIONS:
