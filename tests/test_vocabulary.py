@@ -45,3 +45,24 @@ def test_the_arm_package_does_not_borrow_the_soccer_robot():
     for path in sorted((ROOT / "sims" / "arm").rglob("*.py")):
         text = path.read_text(encoding="utf-8")
         assert "sims.soccer" not in text, f"{path} imports the soccer robot"
+
+
+IMPORT = re.compile(r"^\s*(?:from|import)\s+(tailor\.[\w.]+)", re.M)
+BOUNDARIES = {  # package -> the tailor packages it must not import (DESIGN.md's layout table)
+    "sims": ("tailor.refinement", "tailor.planner_bridge"),
+    "planner_bridge": ("tailor.refinement", "tailor.sims"),
+    "refinement/models": ("tailor.refinement.learning", "tailor.refinement.evaluation", "tailor.refinement.cli"),
+    "refinement/learning": ("tailor.refinement.evaluation", "tailor.refinement.cli"),
+}
+
+
+def test_packages_import_only_what_the_layout_allows():
+    broken = []
+    for package, forbidden in BOUNDARIES.items():
+        for path in sorted((ROOT / package).rglob("*.py")):
+            for module in IMPORT.findall(path.read_text(encoding="utf-8")):
+                if module.startswith(forbidden):
+                    broken.append(f"{path.relative_to(ROOT)} imports {module}")
+    assert not broken, "\n".join(broken)
+    assert IMPORT.findall("    from tailor.refinement.evaluation.experiments import x") == [
+        "tailor.refinement.evaluation.experiments"]
