@@ -106,6 +106,13 @@ class DataError(TailorError):
     exit_code = 14
 
 
+# --- outputs (any command) ------------------------------------------------------------------------------
+class OutputFileError(TailorError):
+    """An output file or folder cannot be written: not writable, a directory where a file is meant, a wrong suffix."""
+
+    exit_code = 16
+
+
 # --- simulators -----------------------------------------------------------------------------------------
 class SimError(TailorError):
     """Invalid simulator input: an unknown action or simulator, a state or parameter outside the world."""

@@ -36,7 +36,7 @@ class CausalLink:
 class AbstractPlan:
     """A validated partial-order plan with its causal links, and what refinement needs of the problem it
     solves (so no later stage parses the PDDL again): each object with its type chain (most specific type
-    first), and the facts that hold initially."""
+    first), and the facts that hold initially; and the chain of compilations the engine needed (if any)."""
 
     domain: str
     problem: str
@@ -46,6 +46,7 @@ class AbstractPlan:
     orderings: tuple[tuple[int, int], ...]
     objects: tuple[tuple[str, tuple[str, ...]], ...] = ()
     initial: tuple[tuple[str, ...], ...] = ()
+    compilations: tuple[str, ...] = ()  # unified-planning compilations the problem went through, in order
 
     @property
     def object_types(self) -> dict[str, tuple[str, ...]]:
@@ -74,6 +75,8 @@ class AbstractPlan:
             "links": [{"from": k.producer, "fact": list(k.fact), "to": k.consumer} for k in self.links],
             "orderings": [list(o) for o in self.orderings],
         }
+        if self.compilations:  # only when there were any: plans that needed none keep their JSON form
+            data["compilations"] = list(self.compilations)
         if facts:
             data["objects"] = [{"name": name, "types": list(chain)} for name, chain in self.objects]
             data["initial"] = [list(fact) for fact in self.initial]
@@ -93,4 +96,5 @@ class AbstractPlan:
             orderings=tuple((int(a), int(b)) for a, b in data["orderings"]),
             objects=tuple((o["name"], tuple(o["types"])) for o in data.get("objects", ())),
             initial=tuple(tuple(fact) for fact in data.get("initial", ())),
+            compilations=tuple(data.get("compilations", ())),
         )

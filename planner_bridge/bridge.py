@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Callable
 
@@ -11,24 +12,34 @@ from tailor.planner_bridge.reading import check_files, read_problem
 from tailor.planner_bridge.solving import canonical, solve
 
 DEFAULT_PLANNER = "pyperplan"
+# The planner process's address space (RLIMIT_AS, see planner_bridge.worker): a bound, so a huge problem ends
+# in one line instead of swapping the machine; its imports alone take about 0.4 GB.
+MEMORY_LIMIT_GB = 8.0
 
 
 def plan_files(
-    domain: str | Path, problem: str | Path, planner: str = DEFAULT_PLANNER, timeout: float | None = None
+    domain: str | Path,
+    problem: str | Path,
+    planner: str = DEFAULT_PLANNER,
+    timeout: float | None = None,
+    memory_gb: float | None = MEMORY_LIMIT_GB,
 ) -> AbstractPlan:
     """Plan the PDDL pair: the same files give the same plan on every run (it runs in a child process with a
-    fixed hash seed, see planner_bridge.worker); `timeout` limits the search, in seconds.
+    fixed hash seed, see planner_bridge.worker); `timeout` limits parsing, compiling and search together, in
+    seconds, and `memory_gb` the planner's address space (None: no limit).
 
     Raises the errors of planner_bridge.errors: InputFileError, PDDLSyntaxError, PDDLSemanticError, NoPlanError,
-    PlannerTimeoutError, PlannerUnavailableError (and PlannerError itself for an engine's failure).
+    PlannerTimeoutError, PlannerUnavailableError (and PlannerError itself for an engine's failure, or when the
+    planner runs out of memory).
     """
     from tailor.planner_bridge.worker import plan_in_worker
 
-    if timeout is not None and not timeout > 0:
-        raise ValueError(f"the timeout must be positive, not {timeout}")
+    for name, limit in (("timeout", timeout), ("memory limit", memory_gb)):
+        if limit is not None and not (limit > 0 and math.isfinite(limit)):
+            raise ValueError(f"the {name} must be positive and finite (None for no limit), not {limit}")
     domain, problem = Path(domain), Path(problem)
     check_files(domain, problem)  # bad files fail here, fast, before a child process is started
-    return plan_in_worker(domain, problem, canonical(planner), timeout)
+    return plan_in_worker(domain, problem, canonical(planner), timeout, memory_gb)
 
 
 def plan_here(
@@ -43,12 +54,13 @@ def plan_here(
     parsed, domain_name = read_problem(domain, problem)
     parsed.environment.credits_stream = None  # no engine credits on stdout: `--json` output must be pure JSON
     planner = canonical(planner)
-    found = solve(parsed, planner, str(problem), on_search)
+    found, chain = solve(parsed, planner, str(problem), on_search)
     if hasattr(found, "causal_links"):
         steps, links, orderings = _from_causal_link_plan(parsed, found)
     else:
         steps, links, orderings = partial_order(parsed, found)
-    return AbstractPlan(domain_name, parsed.name, planner, steps, links, orderings, *problem_facts(parsed))
+    objects, initial = problem_facts(parsed)
+    return AbstractPlan(domain_name, parsed.name, planner, steps, links, orderings, objects, initial, chain)
 
 
 def _from_causal_link_plan(parsed, plan) -> tuple[tuple[Step, ...], tuple[CausalLink, ...], tuple]:

@@ -6,12 +6,14 @@ that deletes a linked fact outside the link (before the producer or after the co
 sequential plan has it); negative preconditions are protected the same way against steps that add the fact.
 Then no link is threatened and every linearization of the orderings is a valid plan (Sec. 5.2, Fig. 5.6).
 Plans of actions with conditional or quantified effects, or with conditions other than conjunctions of
-literals, keep their sequential order: a total order is a valid partial order and cannot threaten a link.
+literals, keep their sequential order: a total order is a valid partial order and cannot threaten a link;
+their links name the facts the chosen disjunct, quantifier instance or fired conditional effect used.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import product
 
 from tailor.planner_bridge.abstract_plan import GOAL, INITIAL, CausalLink, Step
 
@@ -138,24 +140,93 @@ def partial_order(problem, plan) -> tuple[tuple[Step, ...], tuple[CausalLink, ..
 
 
 def _total_order(problem, plan, steps, goal):
-    """Sequential order kept; each positive conjunct is linked to the last step that made it true."""
+    """Sequential order kept; each fact a step (or the goal) used is linked to the last step that made it true.
+    The facts used are found in the state the step was applied in: all conjuncts, the first disjunct (or
+    existential instance) that held, every universal instance, the consequent of an implication whose
+    antecedent held, and the conditions of the conditional effects that fired."""
+    from unified_planning.model.walkers import StateEvaluator
     from unified_planning.shortcuts import SequentialSimulator
 
     with SequentialSimulator(problem) as simulator:
         states = [simulator.get_initial_state()]
         for instance in plan.actions:
             states.append(simulator.apply(states[-1], instance))
+    evaluator = StateEvaluator(problem)
 
     def holds(node, index: int) -> bool:
-        return states[index].get_value(node).bool_constant_value()
+        return evaluator.evaluate(node, states[index]).bool_constant_value()
 
     links = []
-    for consumer, at, needs in _consumers(steps, goal):
-        for fact, node in {f: n for f, n in needs.positive}.items():
+    for consumer, at, _ in _consumers(steps, goal):
+        conditions = _goal_conditions(problem) if consumer == GOAL else _step_conditions(problem, plan.actions[at - 1])
+        used: dict[Fact, object] = {}
+        for condition in conditions:
+            for fact, node in _used_facts(problem, condition, lambda n, at=at: holds(n, at - 1)):
+                used.setdefault(fact, node)
+        for fact, node in used.items():
             made_true = [k for k in range(1, at) if holds(node, k) and not holds(node, k - 1)]
             links.append(CausalLink(made_true[-1] if made_true else INITIAL, fact, consumer))
     chain = tuple((k, k + 1) for k in range(1, len(steps)))
     return tuple(s.step for s in steps), sorted_links(links), chain
+
+
+def _goal_conditions(problem) -> list:
+    return list(problem.goals)
+
+
+def _step_conditions(problem, instance) -> list:
+    """A ground step's preconditions, then the conditions of its conditional effects (universal ones expanded);
+    an effect's condition that does not hold is skipped by _used_facts' caller (it is evaluated false)."""
+    action = instance.action
+    manager = action.environment.expression_manager
+    binding = {manager.ParameterExp(p): v for p, v in zip(action.parameters, instance.actual_parameters)}
+    conditions = [c.substitute(binding) for c in action.preconditions]
+    for effect in action.effects:
+        for expanded in effect.expand_effect(problem):
+            if expanded.is_conditional():
+                conditions.append(_Fired(expanded.condition.substitute(binding)))
+    return conditions
+
+
+@dataclass(frozen=True)
+class _Fired:
+    """The condition of a conditional effect: it was needed only if it held (the effect fired)."""
+
+    condition: object
+
+
+def _used_facts(problem, node, true) -> list[tuple[Fact, object]]:
+    """The positive ground facts that made `node` true (see _total_order); `true(n)` evaluates n in the state."""
+    if isinstance(node, _Fired):
+        return _used_facts(problem, node.condition, true) if true(node.condition) else []
+    fact = _fact(node)
+    if fact is not None:
+        return [(fact, node)] if true(node) else []
+    if node.is_and():
+        return [used for arg in node.args for used in _used_facts(problem, arg, true)]
+    if node.is_or():
+        chosen = next((arg for arg in node.args if true(arg)), None)
+        return [] if chosen is None else _used_facts(problem, chosen, true)
+    if node.is_implies():
+        return _used_facts(problem, node.arg(1), true) if true(node.arg(0)) else []
+    if node.is_exists() or node.is_forall():
+        instances = _instances(problem, node)
+        if node.is_exists():
+            chosen = next((i for i in instances if true(i)), None)
+            return [] if chosen is None else _used_facts(problem, chosen, true)
+        return [used for i in instances for used in _used_facts(problem, i, true)]
+    return []  # negations, equalities, constants: no positive fact to link
+
+
+def _instances(problem, node) -> list:
+    """The ground instances of a quantified formula's body, one per combination of objects."""
+    manager = problem.environment.expression_manager
+    variables = node.variables()
+    choices = [list(problem.objects(v.type)) for v in variables]
+    return [
+        node.arg(0).substitute({manager.VariableExp(v): manager.ObjectExp(o) for v, o in zip(variables, objects)})
+        for objects in product(*choices)
+    ]
 
 
 def sorted_links(links: list[CausalLink]) -> tuple[CausalLink, ...]:

@@ -3,14 +3,14 @@
 unified-planning reports some of these mistakes with an unclear message or none at all (an undefined type in
 a problem, a problem written for another domain), so we check them here, each naming the file, line and column:
 undefined predicates, types, objects and variables, wrong arity, and a problem naming another domain.
-Only the usual PDDL subset is checked; anything unfamiliar is left for the PDDL reader to judge.
+Requirements the reader does not know or support are named. Only the usual PDDL subset is checked; anything unfamiliar is left for the PDDL reader to judge.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from tailor.planner_bridge.errors import PDDLSemanticError, PDDLSyntaxError
+from tailor.planner_bridge.errors import PDDLSemanticError, PDDLSyntaxError, PlannerUnavailableError
 from tailor.planner_bridge.sexpr import Expr, SList, Symbol
 
 CONNECTIVES = {"and", "or", "not", "imply"}
@@ -18,6 +18,18 @@ QUANTIFIERS = {"forall", "exists"}
 NUMERIC = {"=", "<", ">", "<=", ">=", "increase", "decrease", "assign", "scale-up", "scale-down"}
 SKIPPED = {"preference"}  # PDDL3 preferences: left to the reader
 BUILTIN_TYPES = {"object", "number"}
+# Requirements unified-planning's PDDL reader accepts (its grammar lists them; any other stops it with an
+# unhelpful "Expected ')'"), and those of PDDL 1.2-3.1 that it does not.
+SUPPORTED_REQUIREMENTS = {
+    ":strips", ":typing", ":negative-preconditions", ":disjunctive-preconditions", ":equality",
+    ":existential-preconditions", ":universal-preconditions", ":quantified-preconditions", ":conditional-effects",
+    ":fluents", ":numeric-fluents", ":adl", ":durative-actions", ":duration-inequalities", ":timed-initial-literals",
+    ":timed-initial-effects", ":action-costs", ":hierarchy", ":method-preconditions", ":constraints", ":contingent",
+    ":preferences", ":time", ":continuous-effects",
+}
+UNSUPPORTED_REQUIREMENTS = {":derived-predicates", ":object-fluents", ":domain-axioms", ":safety-constraints",
+                            ":expression-evaluation", ":open-world", ":true-negation", ":ucpop", ":action-expansions",
+                            ":foreach-expansions", ":dag-expansions", ":subgoals-through-axioms", ":multi-agent"}
 
 
 @dataclass
@@ -124,10 +136,28 @@ def _keyword_values(items: tuple[Expr, ...]) -> dict[str, Expr]:
     return values
 
 
+def _check_requirements(sections: list[SList], file: str) -> None:
+    """Name a requirement the reader does not know or does not support (it would only say "Expected ')'")."""
+    for section in sections:
+        if section.head != ":requirements":
+            continue
+        for item in section.items[1:]:
+            text = item.text if isinstance(item, Symbol) else _render(item)
+            if text in SUPPORTED_REQUIREMENTS:
+                continue
+            if text in UNSUPPORTED_REQUIREMENTS:
+                raise PlannerUnavailableError(
+                    f"requirement {text} is not supported (unified-planning's PDDL reader cannot read it)",
+                    file, item.line, item.col,
+                )
+            raise PDDLSyntaxError(f"syntax error: unknown requirement {text}", file, item.line, item.col)
+
+
 def check_domain(define: SList, file: str) -> DomainSignature:
     """Check a domain's declarations and action bodies; return what it declares for checking problems."""
     sig = DomainSignature(file)
     sections = _sections(define)
+    _check_requirements(sections, file)
     for section in sections:
         if section.head == "domain" and len(section.items) == 2 and isinstance(section.items[1], Symbol):
             sig.name = section.items[1].text
@@ -170,6 +200,7 @@ def check_domain(define: SList, file: str) -> DomainSignature:
 def check_problem(define: SList, sig: DomainSignature, file: str) -> None:
     """Check that a problem belongs to the domain and uses only what the domain and its objects declare."""
     sections = _sections(define)
+    _check_requirements(sections, file)
     objects = set(sig.constants)
     for section in sections:
         if section.head == ":domain" and len(section.items) == 2 and isinstance(section.items[1], Symbol):

@@ -15,13 +15,15 @@ _UP_PLACE = re.compile(r"line:\s*(\d+),\s*col:?\s*(\d+)")
 
 
 def read_text(path: Path) -> str:
-    """The file's text; a missing, unreadable or non-text file is an InputFileError."""
+    """The file's text (without a UTF-8 byte-order mark); a missing, unreadable or non-text file is an
+    InputFileError."""
     if not path.exists():
         raise InputFileError("no such file", str(path))
     if not path.is_file():
         raise InputFileError("not a file", str(path))
     try:
-        return path.read_text(encoding="utf-8")
+        # "utf-8-sig" drops a leading byte-order mark, as Windows editors write one: the BOM is accepted.
+        return path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:
         raise InputFileError(f"not a UTF-8 text file (byte {exc.start})", str(path)) from None
     except OSError as exc:
@@ -62,10 +64,14 @@ def read_problem(domain: Path, problem: Path):
     # Parse the domain alone first, so that an error the reader finds is attributed to the right file.
     try:
         PDDLReader().parse_problem_string(domain_text)
+    except MemoryError:
+        raise
     except Exception as exc:  # the reader raises pyparsing errors, SyntaxError, KeyError, ...
         raise _reader_error(exc, str(domain)) from None
     try:
         parsed = PDDLReader().parse_problem_string(domain_text, problem_text)
+    except MemoryError:
+        raise
     except Exception as exc:
         raise _reader_error(exc, str(problem)) from None
     return parsed, domain_name

@@ -7,6 +7,11 @@ from typing import Union
 
 from tailor.planner_bridge.errors import PDDLSyntaxError
 
+# Deepest nesting of parentheses accepted. unified-planning's reader recurses once per level (and several
+# frames deep), so a goal of thousands of nested (not ...) would end in a RecursionError; real domains stay
+# below about 12 levels; the reader copes with about 44 from a shallow stack, 32 leaves room for a deep caller.
+MAX_DEPTH = 32
+
 
 @dataclass(frozen=True)
 class Symbol:
@@ -53,6 +58,11 @@ def read_sexpr(text: str, file: str) -> SList:
             col, i = col + 1, i + 1
             continue
         if ch == "(":
+            if len(stack) >= MAX_DEPTH:
+                raise PDDLSyntaxError(
+                    f"syntax error: lists nested deeper than {MAX_DEPTH} levels (the most this reader accepts)",
+                    file, line, col,
+                )
             stack.append((line, col, []))
         elif ch == ")":
             if not stack:

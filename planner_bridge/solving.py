@@ -1,7 +1,8 @@
 """Solve a unified-planning Problem with any installed OneshotPlanner and return a validated sequential plan.
 
-When the engine cannot handle a feature of the problem (negative conditions, conditional effects, ...) the
-problem goes through unified-planning's compilers first and the plan is mapped back to the original actions.
+When the engine cannot handle a feature of the problem (negative conditions, conditional effects, equality,
+quantifiers, ...) the problem goes through the shortest chain of unified-planning's compilers that makes it
+supported (found by search, see compile_for), and the plan is mapped back to the original actions.
 Timeouts are enforced by planner_bridge.worker, which runs all of this in a child process.
 """
 
@@ -10,15 +11,17 @@ from __future__ import annotations
 import contextlib
 import io
 import warnings
-from typing import Callable
+from collections.abc import Callable
+from dataclasses import dataclass
 
 from tailor.planner_bridge.errors import NoPlanError, PlannerError, PlannerTimeoutError, PlannerUnavailableError
 
 # Other names accepted for an engine: `--planner pocl` is our POCL engine (planner_bridge.pocl_engine).
 ALIASES = {"pocl": "tailor-pocl"}
 
-# Compilations tried, in this order, until the engine supports what is left of the problem.
-REMOVALS = (
+# The compilations a chain is built from, in the order they are tried at each length; grounding last, as it
+# is the costliest and the others keep the actions' parameters. Chains are at most MAX_CHAIN long.
+COMPILATIONS = (
     "QUANTIFIERS_REMOVING",
     "CONDITIONAL_EFFECTS_REMOVING",
     "DISJUNCTIVE_CONDITIONS_REMOVING",
@@ -26,7 +29,19 @@ REMOVALS = (
     "USERTYPE_FLUENTS_REMOVING",
     "BOUNDED_TYPES_REMOVING",
     "STATE_INVARIANTS_REMOVING",
+    "GROUNDING",
 )
+MAX_CHAIN = 4
+
+
+@dataclass(frozen=True)
+class Compiled:
+    """A problem the engine supports, the compilations that made it (in order; empty when none was needed)
+    and the functions that map its action instances back, one per compilation."""
+
+    problem: object
+    chain: tuple[str, ...] = ()
+    map_backs: tuple[Callable, ...] = ()
 
 
 def canonical(planner: str) -> str:
@@ -55,34 +70,58 @@ def _engine_class(planner: str):
     return get_environment().factory.engine(planner)
 
 
-def compile_for(planner: str, problem, file: str):
-    """Remove the features the engine lacks; return the problem it can solve and the map-back functions."""
+def _compile(problem, kind_name: str):
+    """The CompilerResult of one compilation, or None when no installed compiler accepts or handles the problem."""
     from unified_planning.engines import CompilationKind
     from unified_planning.exceptions import UPException
     from unified_planning.shortcuts import Compiler
 
-    engine = _engine_class(planner)
-    map_backs = []
-    for kind_name in REMOVALS:
-        if engine.supports(problem.kind):
-            break
-        kind = CompilationKind[kind_name]
+    kind = CompilationKind[kind_name]
+    try:
+        compiler = Compiler(problem_kind=problem.kind, compilation_kind=kind)
+    except UPException:
+        return None  # no compiler of this kind accepts the problem as it is now
+    with compiler, contextlib.redirect_stdout(io.StringIO()), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
         try:
-            compiler = Compiler(problem_kind=problem.kind, compilation_kind=kind)
-        except UPException:
-            continue  # no compiler of this kind accepts the problem as it is now
-        with compiler:
-            if compiler.resulting_problem_kind(problem.kind, kind) == problem.kind:
-                continue  # nothing for this compilation to remove
-            result = compiler.compile(problem, kind)
-        problem = result.problem
-        map_backs.append(result.map_back_action_instance)
-    if not engine.supports(problem.kind):
-        lacking = sorted(problem.kind.features - engine.supported_kind().features)
-        raise PlannerUnavailableError(
-            f"planner '{planner}' cannot solve this problem: no compilation removes {', '.join(lacking)}", file
-        )
-    return problem, map_backs
+            return compiler.compile(problem, kind)
+        except MemoryError:
+            raise
+        except Exception:  # a compiler failing on its own input (unified-planning 1.3's quantifier remover
+            return None  # asks for a ProblemKind method that does not exist): one chain less to try
+
+
+def compile_for(planner: str, problem, file: str) -> Compiled:
+    """Find the shortest chain of compilations after which the engine supports the problem (breadth first,
+    each step judged by the kind of the problem it really produced, not by what the compiler promises)."""
+    engine = _engine_class(planner)
+    if engine.supports(problem.kind):
+        return Compiled(problem)
+    frontier = [Compiled(problem)]
+    seen = {frozenset(problem.kind.features)}
+    for _ in range(MAX_CHAIN):
+        longer = []
+        for current in frontier:
+            for kind_name in COMPILATIONS:
+                result = _compile(current.problem, kind_name)
+                if result is None or frozenset(result.problem.kind.features) in seen:
+                    continue  # it failed, removed nothing, or reached a kind already tried
+                seen.add(frozenset(result.problem.kind.features))
+                step = Compiled(
+                    result.problem,
+                    current.chain + (kind_name,),
+                    current.map_backs + (result.map_back_action_instance,),
+                )
+                if engine.supports(step.problem.kind):
+                    return step
+                longer.append(step)
+        frontier = longer
+    lacking = sorted(problem.kind.features - engine.supported_kind().features)
+    raise PlannerUnavailableError(
+        f"planner '{planner}' cannot solve this problem: no compilation removes {', '.join(lacking)} "
+        f"(chains of up to {MAX_CHAIN} tried)",
+        file,
+    )
 
 
 def _search(planner: str, problem):
@@ -97,18 +136,20 @@ def _search(planner: str, problem):
 
 
 def solve(problem, planner: str, file: str, on_search: Callable[[], None] | None = None):
-    """Plan for `problem` (the original, uncompiled one) and return a validated SequentialPlan of its actions,
-    or, from an engine that finds causal links (tailor-pocl), a validated CausalLinkPlan; `on_search` is called
-    when the engine starts searching (the worker starts its timeout clock there)."""
+    """Plan for `problem` (the original, uncompiled one); return a validated SequentialPlan of its actions,
+    or, from an engine that finds causal links (tailor-pocl), a validated CausalLinkPlan, and the chain of
+    compilations used (empty when the engine supports the problem as it is); `on_search` is called when the
+    engine starts searching."""
     from unified_planning.plans import ActionInstance, SequentialPlan
 
     planner = canonical(planner)
-    compiled, map_backs = compile_for(planner, problem, file)
+    found_chain = compile_for(planner, problem, file)
+    compiled, map_backs, chain = found_chain.problem, found_chain.map_backs, found_chain.chain
     if on_search is not None:
         on_search()
     try:
         status, found = _search(planner, compiled)
-    except (KeyboardInterrupt, PlannerError):
+    except (KeyboardInterrupt, MemoryError, PlannerError):
         raise
     except Exception as exc:
         raise PlannerError(f"planner '{planner}' failed: {type(exc).__name__}: {exc}", file) from None
@@ -123,7 +164,9 @@ def solve(problem, planner: str, file: str, on_search: Callable[[], None] | None
     if found is None:
         raise PlannerError(f"planner '{planner}' returned no plan (status {status})", file)
     if hasattr(found, "causal_links"):
-        return _mapped_back(problem, found, map_backs, planner, file)
+        if "GROUNDING" not in chain:  # a ground problem's links name ground fluents: deorder its steps instead
+            return _mapped_back(problem, found, map_backs, planner, file), chain
+        found = SequentialPlan(list(found.steps), compiled.environment)
 
     actions = [(a.action.name, [p.object().name for p in a.actual_parameters]) for a in found.actions]
     objects = compiled.environment.expression_manager
@@ -136,7 +179,7 @@ def solve(problem, planner: str, file: str, on_search: Callable[[], None] | None
             plan.append(step)
     sequential = SequentialPlan(plan)
     validate(problem, sequential, planner, file)
-    return sequential
+    return sequential, chain
 
 
 def _mapped_back(problem, plan, map_backs, planner: str, file: str):

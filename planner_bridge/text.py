@@ -19,6 +19,8 @@ def render_text(plan: AbstractPlan) -> str:
         if link.producer == INITIAL and link.fact not in used:
             used.append(link.fact)
     lines = [f";; domain {plan.domain}, problem {plan.problem}, planner {plan.planner}"]
+    if plan.compilations:
+        lines[0] += ", compiled by " + " then ".join(plan.compilations)
     lines.append(f"Initial {INITIAL} : " + " ".join(_atom(f) for f in used))
     for step in plan.steps:
         lines.append(f"Step {step.id} : {_atom((step.action, *step.args))}")

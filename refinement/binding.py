@@ -26,6 +26,7 @@ from tailor.sims.protocol import GROUPS, ActionSpec, SimulatorEntry
 
 SCHEMA = 2  # 2: the binding names its simulator
 BINDING_FILE = "actions.toml"
+DOMAIN_FILE = "domain.pddl"  # the PDDL domain beside it, which the binding is checked against
 DEFAULT_TYPE = "default"  # [types.default]: ranges for objects of a type the binding does not name
 NAMED_BOUNDS = {"pi": math.pi, "-pi": -math.pi}  # strings a range bound may be written as
 
@@ -137,9 +138,16 @@ def load_binding(path: Path | str) -> Binding:
     return parse_binding(data, file)
 
 
-def load_domain_binding(domain_dir: Path | str) -> Binding:
-    """The binding of the domain in `domain_dir` (its `actions.toml`)."""
-    return load_binding(Path(domain_dir) / BINDING_FILE)
+def load_domain_binding(domain_dir: Path | str, domain_file: Path | str | None = None) -> Binding:
+    """The binding of the domain in `domain_dir` (its `actions.toml`), checked against the PDDL domain
+    `domain_file` (default: `domain_dir/domain.pddl` where it exists): no table names what the domain lacks."""
+    from tailor.refinement.binding_domain import check_against_domain
+
+    binding = load_binding(Path(domain_dir) / BINDING_FILE)
+    domain_file = Path(domain_dir) / DOMAIN_FILE if domain_file is None else Path(domain_file)
+    if domain_file.is_file():
+        check_against_domain(binding, domain_file, DEFAULT_TYPE)
+    return binding
 
 
 def parse_binding(data: Mapping[str, Any], file: str | None = None) -> Binding:
@@ -191,7 +199,14 @@ def _tables(data: Mapping[str, Any], key: str, fail) -> list[tuple[str, Mapping[
 def _check_keys(table: Mapping[str, Any], allowed: set[str], where: str, fail) -> None:
     for key in table:
         if key not in allowed:
-            raise fail(f"{where}: unknown key '{key}' (expected one of {', '.join(sorted(allowed))})")
+            raise fail(f"{where}: unknown key '{key}' (expected one of {', '.join(sorted(allowed))})"
+                       f"{_did_you_mean(key, allowed)}")
+
+
+def _did_you_mean(name: str, known) -> str:
+    from tailor.refinement.binding_domain import did_you_mean
+
+    return did_you_mean(name, known)
 
 
 def _index(where: str, value: Any, fail) -> int:
@@ -205,8 +220,9 @@ def _action(name: str, table: Mapping[str, Any], entry: SimulatorEntry, fail) ->
     _check_keys(table, {"executable", *GROUPS}, where, fail)
     executable = table.get("executable")
     if not isinstance(executable, str) or executable not in entry.actions:
+        hint = _did_you_mean(executable, entry.actions) if isinstance(executable, str) else ""
         raise fail(f"{where} executable = {executable!r} is not an executable action of simulator "
-                   f"{entry.name!r} (known: {', '.join(entry.actions)})")
+                   f"{entry.name!r} (known: {', '.join(entry.actions)}){hint}")
     spec = entry.actions[executable]
     args = {}
     for group in GROUPS:
@@ -254,7 +270,8 @@ def _ranges(where: str, table: Mapping[str, Any], extra: set[str], quantities: t
             continue
         if key not in quantities:
             allowed = ", ".join([*sorted(extra), *quantities])
-            raise fail(f"{where}: unknown key '{key}' (expected one of {allowed})")
+            raise fail(f"{where}: unknown key '{key}' (expected one of {allowed})"
+                       f"{_did_you_mean(key, [*extra, *quantities])}")
         ranges[key] = _range(f"{where} {key}", value, fail)
     return ranges
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from tailor.refinement.action_sequence import ActionSequence
-from tailor.refinement.errors import TailorError
+from tailor.refinement.errors import SimError, TailorError
 from tailor.sims import registry
 from tailor.sims.episode import ActionCall, SequenceResult
 
@@ -28,3 +28,18 @@ def dispatch(sequence: ActionSequence, seed: int = 0, noise=None) -> SequenceRes
     simulator = registry.get(sequence.simulator).create(seed, noise)
     simulator.reset({name: tuple(float(x) for x in values) for name, values in sequence.scene.items()})
     return simulator.run_sequence(calls)
+
+
+def check_scene(sequence: ActionSequence, binding_file: str | None = None) -> None:
+    """Reset a fresh simulator to the sequence's scene before anything is refined or simulated, so that a scene
+    object the simulator does not have (a binding's `scene = "goalpost"`) or a belief value outside its world
+    fails at once, naming the binding, not after the optimization."""
+    if not sequence.actions or not sequence.simulator:
+        return
+    simulator = registry.get(sequence.simulator).create(0, None)
+    try:
+        simulator.reset({name: tuple(float(x) for x in values) for name, values in sequence.scene.items()})
+    except SimError as exc:
+        placed = ", ".join(sorted(sequence.scene)) or "nothing"
+        raise SimError(f"simulator {sequence.simulator!r} rejects the scene the binding's `scene` keys place "
+                       f"({placed}): {exc.message}", file=binding_file) from None

@@ -6,5 +6,7 @@ from tailor.errors import (  # noqa: F401
     DataError,
     EmptyRangeError,
     ModelFileError,
+    OutputFileError,
+    SimError,
     TailorError,
 )

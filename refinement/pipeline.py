@@ -57,7 +57,7 @@ def load_binding(task: Task) -> Binding:
     if not (task.domain_dir / BINDING_FILE).exists():
         raise BindingError(f"no action library binding {BINDING_FILE} beside the domain; refinement needs one",
                            file=str(task.domain_dir / BINDING_FILE))
-    return load_domain_binding(task.domain_dir)
+    return load_domain_binding(task.domain_dir, task.domain)
 
 
 def load_models(task: Task, sequence: ActionSequence) -> dict[str, ActionModel]:

@@ -72,6 +72,14 @@ def model_for(action: ExecutableAction, models: Mapping[str, ActionModel]) -> Ac
                              f"(step {action.step}, {action.pddl})") from None
 
 
+def _predicted(action: ExecutableAction, model: ActionModel) -> float:
+    """The model's prediction for the bound action, checked: an absurd model (not finite, far outside the
+    durations seen in training) stops here with a ModelFileError naming its file; below 0 s is clipped."""
+    value = float(model.predict_duration(action.values()[None, :])[0])
+    check = getattr(model, "check_duration", None)  # duck-typed models (tests, plug-ins) may not check
+    return check(value, f"step {action.step} {action.action}") if check else value
+
+
 def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon: int = 2,
            method: str = "analytic", seed: int = 0) -> RefinedSequence:
     """Bind every free parameter of `sequence`, h actions at a time, minimizing summed predicted duration."""
@@ -100,7 +108,5 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
             if p.id in chosen:
                 assignment[p.id] = float(chosen[p.id])
     bound = sequence.bind(assignment)
-    predicted = tuple(
-        float(model_for(a, models).predict_duration(a.values()[None, :])[0]) for a in bound.actions
-    )
+    predicted = tuple(_predicted(a, model_for(a, models)) for a in bound.actions)
     return RefinedSequence(sequence=bound, predicted=predicted, windows=tuple(windows), horizon=horizon)

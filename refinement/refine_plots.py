@@ -16,15 +16,20 @@ LAYER_STYLES = (("-", "tab:blue"), ("--", "tab:orange"), (":", "tab:green"))
 
 def _save(fig, path: Path) -> None:
     """Write the figure atomically: a reader never sees half a PNG."""
+    from tailor.refinement.outputs import write_error
+
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(suffix=path.suffix or ".png", dir=path.parent)
-    os.close(fd)
+    tmp = None
     try:
-        fig.savefig(tmp, dpi=110, bbox_inches="tight")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix or ".png", dir=path.parent)
+        os.close(fd)
+        fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png")
         os.replace(tmp, path)
+    except OSError as exc:
+        raise write_error(path, exc) from None
     finally:
-        if os.path.exists(tmp):
+        if tmp is not None and os.path.exists(tmp):
             os.unlink(tmp)
 
 

@@ -88,7 +88,10 @@ def grounded(problem, action_instance, state=None):
     for effect in action.effects:
         for e in effect.expand_effect(problem) if effect.is_forall() else [effect]:
             condition = e.condition.substitute(binding)
-            if e.value.is_false() and (not e.is_conditional() or state.get_value(condition).is_true()):
+            fired = not e.is_conditional() or state.get_value(condition).is_true()
+            if e.is_conditional() and fired:  # what a fired conditional effect needed is linked too
+                needs += [c for c in conjuncts(condition) if c.is_fluent_exp()]
+            if e.value.is_false() and fired:
                 may_delete.append(e.fluent.substitute(binding))
     return needs, may_delete
 

@@ -96,7 +96,8 @@ def test_unknown_domain_is_one_line(capsys, tmp_path):
 def test_domain_without_a_training_recipe_is_one_line(capsys, tmp_path):
     domain = tmp_path / "delivery"
     domain.mkdir()
-    (domain / "domain.pddl").write_text("(define (domain delivery))")
+    (domain / "domain.pddl").write_text("(define (domain delivery) (:predicates (at ?p)) "
+                                        "(:action drive :parameters (?a ?b) :precondition (at ?a) :effect (at ?b)))")
     (domain / "actions.toml").write_text('schema = 2\nsimulator = "soccer"\n'
                                          '[actions.drive]\nexecutable = "goToPose"\nobserved = 0\ninternal = 1\n')
     out = tmp_path / "out"
@@ -108,12 +109,14 @@ def test_domain_without_a_training_recipe_is_one_line(capsys, tmp_path):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["--episodes", "5"], "--episodes must be at least 8 (a quarter of them is the test set), got 5"),
-    (["--jobs", "0"], "--jobs must be positive, got 0"),
+    (["--episodes", "5"], "argument --episodes: must be at least 8: '5'"),
+    (["--jobs", "0"], "argument --jobs: must be at least 1: '0'"),
 ])
 def test_bad_numbers_are_one_line(argv, message, capsys, tmp_path):
-    assert main(["train", "soccer", *argv, "--out", str(tmp_path)]) == 14
-    assert capsys.readouterr().err.strip() == f"tailor train: error: {message}"
+    with pytest.raises(SystemExit) as exit:  # a usage error, status 2 in every command (README)
+        main(["train", "soccer", *argv, "--out", str(tmp_path)])
+    assert exit.value.code == 2
+    assert capsys.readouterr().err.strip() == f"tailor train: error: {message} (see `tailor train --help`)"
 
 
 def test_interrupt_while_writing_leaves_nothing_half_written(tmp_path, monkeypatch, capsys):

@@ -3,16 +3,25 @@
 from __future__ import annotations
 
 import argparse
+import math
 from collections.abc import Callable
+
+MAX_SECONDS = 1e6  # about 11.6 days: longer limits (and inf) are refused; leave the option out for no limit
 
 
 def positive_seconds(text: str) -> float:
+    """An argparse type: a finite number of seconds, positive and at most MAX_SECONDS (`inf` is refused:
+    omitting the option means no limit)."""
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
     if not value > 0:
         raise argparse.ArgumentTypeError(f"must be positive: {text!r}")
+    if not math.isfinite(value) or value > MAX_SECONDS:
+        raise argparse.ArgumentTypeError(
+            f"must be at most {MAX_SECONDS:g} seconds: {text!r} (leave the option out for no limit)"
+        )
     return value
 
 
@@ -30,3 +39,29 @@ def whole_number(minimum: int) -> Callable[[str], int]:
 
     parse.__name__ = f"whole number >= {minimum}"
     return parse
+
+
+def cpu_count() -> int:
+    """The CPUs this process may run on (its affinity where the platform says, else os.cpu_count())."""
+    import os
+
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)
+
+
+def worker_count(text: str) -> int:
+    """An argparse type for --jobs: a whole number >= 1, capped at the CPU count with a note on stderr (more
+    worker processes than CPUs only cost memory and start-up time)."""
+    import sys
+
+    value = whole_number(1)(text)
+    cpus = cpu_count()
+    if value > cpus:
+        print(f"tailor: note: --jobs {value} capped at {cpus}, the number of CPUs", file=sys.stderr)
+        return cpus
+    return value
+
+
+worker_count.__name__ = "worker count"

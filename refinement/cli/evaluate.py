@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 
-from tailor.refinement.cli.arguments import whole_number
+from tailor.refinement.cli.arguments import whole_number, worker_count
 
 HELP = "measure refined vs greedy execution in the simulator over random situations"
 
@@ -22,7 +21,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--horizon-episodes", type=whole_number(0), default=100, metavar="N",
                         help="situations run with horizons 1-4 (Table 5.3; default 100)")
     parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed of situations and simulator")
-    parser.add_argument("--jobs", type=whole_number(1), default=1, metavar="J", help="worker processes (default 1)")
+    parser.add_argument("--jobs", type=worker_count, default=1, metavar="J",
+                        help="worker processes (default 1; at most the number of CPUs)")
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
 
 
@@ -136,7 +136,9 @@ def run(args: argparse.Namespace) -> int:
         report["horizon_situations"] = plan.horizons
         report["horizons"] = summarize_horizons(hrows, HORIZONS)
     if args.json:
-        sys.stdout.write(json.dumps(report, indent=1) + "\n")
+        from tailor.refinement.outputs import json_text
+
+        sys.stdout.write(json_text(report) + "\n")
     else:
         _print_text(report)
     return 0

@@ -151,12 +151,48 @@ def _zero_outcome(prepared, seed: int):
     return Outcome(RefinedSequence(sequence, predicted, (), 0), dispatch(sequence, seed=seed))
 
 
+NOTHING_TO_REFINE = "the goal holds in the initial state: the plan is empty, nothing to refine or simulate"
+
+
+def _nothing_to_refine(prepared, args: argparse.Namespace, simulate: bool) -> int:
+    """An empty plan is a success in every mode: it is printed, with zero durations (and, asked to simulate,
+    a trivially successful execution); no plot is drawn, since there is no trajectory."""
+    if args.plot:
+        print(f"tailor refine: note: {args.plot} not written: {NOTHING_TO_REFINE}", file=sys.stderr)
+    if args.json:
+        execution = {"horizon": args.horizon, "actions": [], "predicted_total": 0.0, "optimization": []}
+        if simulate:
+            execution.update(simulated_total=0.0, succeeded=True)
+        plan = prepared.plan
+        data = {"domain": plan.domain, "problem": plan.problem, "planner": plan.planner, "optimizer": args.optimizer,
+                "horizon": args.horizon, "seed": args.seed, "plan": plan.to_json(), "free_parameters": [],
+                **execution, "greedy": {**execution, "horizon": 1}, "note": NOTHING_TO_REFINE}
+        sys.stdout.write(json.dumps(data, indent=1, allow_nan=False) + "\n")
+    else:
+        from tailor.planner_bridge import render_text
+
+        plan = prepared.plan
+        sys.stdout.write(f"Plan ({plan.planner}) for {plan.domain}/{plan.problem}:\n{render_text(plan)}\n"
+                         f"Nothing to refine: {NOTHING_TO_REFINE}.\n")
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     from tailor.refinement.pipeline import GREEDY_HORIZON, prepare, refine_and_dispatch, resolve_task
 
+    if args.plot:  # before planning and refining: a plot that cannot be written must not cost their time
+        from tailor.refinement.outputs import check_output_file
+
+        check_output_file(args.plot, ".png")
     task = resolve_task(args.domain, args.problem, args.belief)
     prepared = prepare(task, args.planner, args.timeout)
     simulate = args.simulate or bool(args.plot)
+    if not prepared.sequence.actions:
+        return _nothing_to_refine(prepared, args, simulate)
+    if simulate:  # the scene is checked before refining: a scene object the simulator lacks fails at once
+        from tailor.refinement.dispatch import check_scene
+
+        check_scene(prepared.sequence, prepared.binding.file)
     outcomes = {"greedy": refine_and_dispatch(prepared, GREEDY_HORIZON, args.optimizer, args.seed, simulate),
                 "refined": refine_and_dispatch(prepared, args.horizon, args.optimizer, args.seed, simulate)}
     if args.plot:
@@ -167,7 +203,9 @@ def run(args: argparse.Namespace) -> int:
             executions = {"zero": _zero_outcome(prepared, args.seed), **outcomes}
         draw_refinement(args.plot, prepared, executions, prepared.binding.entry.views)
     if args.json:
-        sys.stdout.write(json.dumps(result_json(prepared, args.optimizer, args.seed, outcomes), indent=1) + "\n")
+        from tailor.refinement.outputs import json_text
+
+        sys.stdout.write(json_text(result_json(prepared, args.optimizer, args.seed, outcomes)) + "\n")
     else:
         _print_text(prepared, args.optimizer, outcomes)
         if args.plot:

@@ -3,21 +3,26 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
+
+from tailor.refinement.cli.arguments import whole_number, worker_count
+
+MIN_EPISODES = 8  # a quarter of the episodes is the test set
 
 HELP = "gather experience in the simulator and learn the action models (durations, success classifiers)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("domain", help="bundled domain name, a domain folder, or its domain.pddl")
-    parser.add_argument("--episodes", type=int, default=None, metavar="N",
-                        help="episodes gathered per scenario (default: the domain's [training] episodes)")
-    parser.add_argument("--fresh-episodes", type=int, default=None, metavar="M",
+    parser.add_argument("--episodes", type=whole_number(MIN_EPISODES), default=None, metavar="N",
+                        help="episodes gathered per scenario, at least 8: a quarter of them is the test set "
+                             "(default: the domain's [training] episodes)")
+    parser.add_argument("--fresh-episodes", type=whole_number(1), default=None, metavar="M",
                         help="fresh episodes each success classifier is evaluated on (default: the domain's)")
     parser.add_argument("--seed", type=int, default=0, help="seed of experience and training (default 0)")
-    parser.add_argument("--jobs", type=int, default=1, metavar="J", help="simulator worker processes (default 1)")
+    parser.add_argument("--jobs", type=worker_count, default=1, metavar="J",
+                        help="simulator worker processes (default 1; at most the number of CPUs)")
     parser.add_argument("--out", type=Path, default=None, metavar="DIR",
                         help="write DIR/models/*.json and DIR/training/ (default: the domain's folder)")
     parser.add_argument("--n-i", type=_positive_ints, default=None, metavar="LIST",
@@ -37,26 +42,29 @@ def _positive_ints(text: str) -> tuple[int, ...]:
 
 def run(args: argparse.Namespace) -> int:
     from tailor.planner_bridge import resolve_domain_dir
-    from tailor.refinement.errors import DataError
+    from tailor.refinement.binding import BINDING_FILE
+    from tailor.refinement.errors import BindingError
     from tailor.refinement.learning.protocol import N_I_CANDIDATES
     from tailor.refinement.learning.recipe import load_recipe
     from tailor.refinement.learning.training import train_domain
+    from tailor.refinement.outputs import check_output_dir, json_text
 
     recipe = load_recipe(resolve_domain_dir(args.domain))
     episodes = recipe.episodes if args.episodes is None else args.episodes
-    if episodes < 8:
-        raise DataError(f"--episodes must be at least 8 (a quarter of them is the test set), got {episodes}")
-    if args.fresh_episodes is not None and args.fresh_episodes < 1:
-        raise DataError(f"--fresh-episodes must be positive, got {args.fresh_episodes}")
-    if args.jobs < 1:
-        raise DataError(f"--jobs must be positive, got {args.jobs}")
+    if episodes < MIN_EPISODES:  # the domain's own [training] episodes
+        raise BindingError(f"[training] episodes must be at least {MIN_EPISODES} (a quarter of them is the test "
+                           f"set), got {episodes}", file=str(recipe.domain_dir / BINDING_FILE))
     out = recipe.domain_dir if args.out is None else args.out
+    check_output_dir(out)  # before gathering anything: minutes of work must not end in an unwritable folder
     report = train_domain(recipe, episodes, args.seed, out, jobs=args.jobs, fresh_episodes=args.fresh_episodes,
                           n_i_candidates=args.n_i or N_I_CANDIDATES, progress=True)
-    if args.json:
-        json.dump(report, sys.stdout, indent=1)
-        sys.stdout.write("\n")
-    else:
-        print((out / "training" / "report.txt").read_text(encoding="utf-8"), end="")
-        print(f"wrote {out / 'models'} and {out / 'training'}")
+    try:
+        if args.json:
+            sys.stdout.write(json_text(report) + "\n")
+        else:
+            print((out / "training" / "report.txt").read_text(encoding="utf-8"), end="")
+            print(f"wrote {out / 'models'} and {out / 'training'}")
+    except KeyboardInterrupt:  # the models are written and complete: report what is on disk, not the interrupt
+        print(f"tailor train: interrupted while printing the report; the models in {out / 'models'} are complete",
+              file=sys.stderr)
     return 0

@@ -176,6 +176,7 @@ def train_duration_model(
         "episodes_gathered": len(episodes),
         "outcomes": _outcome_counts(episodes),
         "mean_duration": float(durations.mean()),
+        "duration_range": [float(durations.min()), float(durations.max())],  # predictions are checked against it
         "simulated_hours": float(sum(e.duration for e in episodes) / 3600.0),
         "n_i": n_i,
         "min_samples_leaf": leaf,

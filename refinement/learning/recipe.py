@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from tailor.refinement.binding import Binding, load_domain_binding
+from tailor.refinement.binding_domain import did_you_mean
 from tailor.refinement.errors import BindingError
 from tailor.refinement.models.features import feature_spaces
 from tailor.sims.protocol import ActionSpec
@@ -98,7 +99,7 @@ def recipe_from_binding(binding: Binding, domain_dir: Path) -> TrainingRecipe:
             raise fail(f"{where} must be a table")
         _keys(chain, {"situations", "action", "share", "rounds"}, where, fail)
         action = chain.get("action")
-        if action not in {m.action for m in models}:
+        if not isinstance(action, str) or action not in {m.action for m in models}:
             raise fail(f"{where} action = {action!r} has no duration model to retrain")
         situations = chain.get("situations")
         if not isinstance(situations, str) or situations not in entry.situations:
@@ -123,7 +124,8 @@ def load_recipe(domain_dir: Path) -> TrainingRecipe:
 def _keys(table: Mapping[str, Any], allowed: set[str], where: str, fail) -> None:
     for key in table:
         if key not in allowed:
-            raise fail(f"{where + ': ' if where else ''}unknown key '{key}' (expected one of {', '.join(sorted(allowed))})")
+            raise fail(f"{where + ': ' if where else ''}unknown key '{key}' (expected one of "
+                       f"{', '.join(sorted(allowed))}){did_you_mean(key, allowed)}")
 
 
 def _positive_int(value: Any, where: str, fail) -> int:

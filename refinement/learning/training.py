@@ -8,9 +8,10 @@ is renamed over the target once all are complete: an interrupted run leaves the 
 
 from __future__ import annotations
 
-import json
 import os
+import signal
 import tempfile
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -28,6 +29,7 @@ from tailor.refinement.learning.protocol import (
 from tailor.refinement.learning.recipe import SubgoalExperience, TrainingRecipe
 from tailor.refinement.learning.report import format_report
 from tailor.refinement.models.action_models import COLLISION_SUFFIX
+from tailor.refinement.outputs import check_output_dir, json_text, write_error
 from tailor.sims.episode import Episode
 
 FILE_MODE = 0o644  # permissions of the written files
@@ -56,6 +58,7 @@ def train_domain(
         from tailor.sims.experience import gather
     if episodes < 1:
         raise DataError(f"--episodes must be positive, got {episodes}")
+    check_output_dir(out)  # before gathering: a folder we cannot write in must not cost the whole run
     fresh_episodes = recipe.fresh_episodes if fresh_episodes is None else fresh_episodes
     started = time.perf_counter()
 
@@ -174,6 +177,7 @@ def write_outputs(out: Path, recipe: TrainingRecipe, models: dict, classifiers: 
     """Stage every file beside its target, then rename them all into place."""
     files = training_files(out, recipe, models, classifiers, report)
     staged: list[tuple[Path, Path]] = []
+    target = Path(out)
     try:
         for target, write in files.items():
             target.parent.mkdir(parents=True, exist_ok=True)
@@ -182,12 +186,34 @@ def write_outputs(out: Path, recipe: TrainingRecipe, models: dict, classifiers: 
             staged.append((Path(tmp), target))
             write(Path(tmp))
             os.chmod(tmp, FILE_MODE)  # mkstemp makes files private; models and reports are for everyone
-        for tmp, target in staged:
-            os.replace(tmp, target)
+        _rename_all(staged)
+    except OSError as exc:
+        raise write_error(target, exc) from None
     finally:
         for tmp, _ in staged:
             tmp.unlink(missing_ok=True)
 
 
+def _rename_all(staged: list[tuple[Path, Path]]) -> None:
+    """Rename every staged file over its target with Ctrl-C (and SIGTERM) held back: once the renames begin they
+    all complete, and the run ends as done, so the status reported matches what is on disk. A signal that
+    arrives meanwhile is dropped (the work it would have interrupted is finished); before and after, the
+    handlers in place apply. Python runs signal handlers in the main thread only, so swapping them there
+    holds the signal back whichever thread the kernel delivers it to."""
+    held = (signal.SIGINT, signal.SIGTERM)
+    in_main = threading.current_thread() is threading.main_thread()
+    previous = {signum: signal.signal(signum, _hold) for signum in held} if in_main else {}
+    try:
+        for tmp, target in staged:
+            os.replace(tmp, target)
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+def _hold(signum, frame) -> None:
+    """A signal arriving while the finished files are renamed into place: let the renames complete."""
+
+
 def _json_writer(data: dict) -> Callable[[Path], None]:
-    return lambda path: path.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
+    return lambda path: path.write_text(json_text(data) + "\n", encoding="utf-8")

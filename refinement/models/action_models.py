@@ -10,6 +10,7 @@ Files are JSON with a schema key, never pickle: loading a model must not run cod
 from __future__ import annotations
 
 import json
+import math
 import os
 import tempfile
 from dataclasses import dataclass, field
@@ -25,6 +26,12 @@ from tailor.refinement.models.model_tree import ModelTree
 ACTION_MODEL_SCHEMA = "tailor.action_model/1"
 COLLISION_MODEL_SCHEMA = "tailor.collision_model/1"
 COLLISION_SUFFIX = ".collision.json"  # <action>.collision.json: the action's success classifier
+# A predicted duration is plausible within the durations seen in training, [lo, hi] (report.duration_range;
+# for files without it [0, OLD_FILE_SPAN * mean_duration]), widened by RANGE_MARGIN times its width on each
+# side. Outside (or not finite) the model file is broken: ModelFileError. A plausible prediction below zero
+# (a linear leaf extrapolating a little) is clipped to 0 s: no action takes negative time.
+RANGE_MARGIN = 1.0
+OLD_FILE_SPAN = 2.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -37,6 +44,7 @@ class ActionModel:
     duration: ModelTree
     n_i: int  # intermediate examples per episode it was trained with (Sec. 4.1.2)
     report: dict = field(default_factory=dict)
+    source: str | None = field(default=None, compare=False)  # the file it was read from, for error messages
 
     def features(self, params: np.ndarray) -> np.ndarray:
         """(n, p) action parameters -> (n, f) features."""
@@ -44,7 +52,35 @@ class ActionModel:
 
     def predict_duration(self, params: np.ndarray) -> np.ndarray:
         """Predicted duration (s) for each row of (n, p) action parameters."""
-        return np.asarray(self.duration.predict(self.features(params)), dtype=float)
+        with np.errstate(over="ignore", invalid="ignore"):  # absurd coefficients: see check_duration
+            return np.asarray(self.duration.predict(self.features(params)), dtype=float)
+
+    def plausible_range(self) -> tuple[float, float] | None:
+        """The durations a prediction may take (see RANGE_MARGIN); None where the report says nothing."""
+        seen = self.report.get("duration_range")
+        mean = self.report.get("mean_duration")
+        if (isinstance(seen, list) and len(seen) == 2 and all(_is_number(v) for v in seen)
+                and seen[0] <= seen[1]):
+            lo, hi = float(seen[0]), float(seen[1])
+        elif _is_number(mean) and mean > 0:
+            lo, hi = 0.0, OLD_FILE_SPAN * float(mean)
+        else:
+            return None
+        margin = RANGE_MARGIN * (hi - lo)
+        return lo - margin, hi + margin
+
+    def check_duration(self, value: float, where: str) -> float:
+        """`value` clipped at 0 s if it is a plausible prediction of this model, else a ModelFileError naming its
+        file: an absurd model (huge or infinite coefficients, a shifted intercept) must not be refined with."""
+        bounds = self.plausible_range()
+        if not math.isfinite(value):
+            raise ModelFileError(f"{where}: the model predicts a duration of {value} s: its coefficients are "
+                                 "broken (retrain with `tailor train`)", file=self.source)
+        if bounds is not None and not bounds[0] <= value <= bounds[1]:
+            raise ModelFileError(f"{where}: the model predicts {value:.4g} s, outside the plausible "
+                                 f"[{bounds[0]:.3g}, {bounds[1]:.3g}] s (the durations seen in training, with a "
+                                 "margin): the file is inconsistent (retrain with `tailor train`)", file=self.source)
+        return max(0.0, value)
 
     def rules_text(self) -> str:
         return self.duration.export_text(list(self.feature_names))
@@ -75,12 +111,12 @@ class ActionModel:
             tree = ModelTree.from_json(data["duration"], source)
         except ModelFileError:
             raise
-        except (KeyError, TypeError, ValueError) as exc:
+        except (KeyError, TypeError, ValueError, OverflowError) as exc:
             raise ModelFileError(f"invalid duration model tree: {exc}", file=source) from None
         n_in = getattr(tree, "n_features_in_", None)
         if n_in != len(names):
             raise ModelFileError(f"duration model tree takes {n_in} features, feature set has {len(names)}", file=source)
-        return cls(action, feature_set, names, tree, n_i, _report(data, source))
+        return cls(action, feature_set, names, tree, n_i, _report(data, source), source)
 
 
 @dataclass(frozen=True, eq=False)
@@ -134,7 +170,7 @@ class CollisionModel:
         try:
             tree = DecisionTree.from_json(data["tree"])
             return cls(action, feature_set, names, tree, _report(data, source))
-        except (KeyError, TypeError, ValueError) as exc:
+        except (KeyError, TypeError, ValueError, OverflowError) as exc:
             raise ModelFileError(f"invalid decision tree: {exc}", file=source) from None
 
 
@@ -170,13 +206,23 @@ def read_json(path: Path) -> dict:
         raise ModelFileError("file not found", file=str(path)) from None
     except OSError as exc:
         raise ModelFileError(f"cannot read: {exc.strerror}", file=str(path)) from None
+    except UnicodeDecodeError as exc:
+        raise ModelFileError(f"not JSON: not UTF-8 text (byte {exc.start})", file=str(path)) from None
     try:
-        data = json.loads(text)
+        data = json.loads(text, parse_constant=_reject_constant)
     except json.JSONDecodeError as exc:
         raise ModelFileError(f"not JSON: {exc.msg}", file=str(path), line=exc.lineno, col=exc.colno) from None
+    except ValueError as exc:  # NaN / Infinity, which JSON does not have; or numbers too deeply nested
+        raise ModelFileError(f"not JSON: {exc}", file=str(path)) from None
+    except RecursionError:
+        raise ModelFileError("not JSON: nested too deeply", file=str(path)) from None
     if not isinstance(data, dict):
         raise ModelFileError("expected a JSON object", file=str(path))
     return data
+
+
+def _reject_constant(name: str):
+    raise ValueError(f"{name} is not a JSON number (models hold finite numbers only)")
 
 
 def write_json_atomic(path: Path, data: dict) -> None:
@@ -193,6 +239,10 @@ def write_json_atomic(path: Path, data: dict) -> None:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def _check_schema(data: dict, schema: str, source: str) -> None:
