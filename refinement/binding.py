@@ -173,7 +173,7 @@ def parse_binding(data: Mapping[str, Any], file: str | None = None) -> Binding:
         raise fail(f"simulator = {simulator!r}: {exc.message}") from None
     quantities = entry.quantities
     actions = {name.lower(): _action(name, table, entry, fail) for name, table in _tables(data, "actions", fail)}
-    predicates = {name.lower(): _predicate(name, table, quantities, fail)
+    predicates = {name.lower(): _predicate(name, table, entry, fail)
                   for name, table in _tables(data, "predicates", fail)}
     types = {name: MappingProxyType(_ranges(f"[types.{name}]", table, set(), quantities, fail))
              for name, table in _tables(data, "types", fail)}
@@ -237,7 +237,8 @@ def _action(name: str, table: Mapping[str, Any], entry: SimulatorEntry, fail) ->
     return ActionBinding(name.lower(), executable, MappingProxyType(args), spec)
 
 
-def _predicate(name: str, table: Mapping[str, Any], quantities: tuple[str, ...], fail) -> PredicateBinding:
+def _predicate(name: str, table: Mapping[str, Any], entry: SimulatorEntry, fail) -> PredicateBinding:
+    quantities = entry.quantities
     where = f"[predicates.{name}]"
     extra = {"read", "scene", "args"}
     read = table.get("read", [])
@@ -251,6 +252,9 @@ def _predicate(name: str, table: Mapping[str, Any], quantities: tuple[str, ...],
     scene = table.get("scene")
     if scene is not None and (not isinstance(scene, str) or not scene):
         raise fail(f"{where} scene must be the name of a scene object, e.g. \"robot\"")
+    if scene is not None and entry.scene_objects and scene not in entry.scene_objects:
+        raise fail(f"{where} scene = {scene!r} is not a scene object of simulator {entry.name!r} "
+                   f"(known: {', '.join(entry.scene_objects)})")
     if scene is not None and not read:
         raise fail(f"{where} scene = {scene!r} needs a read list (the quantities that place the {scene})")
     args = table.get("args")

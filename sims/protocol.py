@@ -132,6 +132,7 @@ class SimulatorEntry:
     subgoal_episode: SubgoalEpisode | None = None
     views: tuple = ()  # trajectory columns worth drawing: pairs ("x", "y") or layers (("x", "y", "phi"), ...)
     feature_spaces: tuple[FeatureSpace, ...] = ()  # feature spaces of its own (Table 4.1 rows)
+    scene_objects: tuple[str, ...] = ()  # the objects reset(scene) places; () = not declared (not checked)
     description: str = ""
     extras: Mapping[str, Any] = field(default_factory=dict)
 

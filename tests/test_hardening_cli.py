@@ -202,13 +202,28 @@ def test_train_and_evaluate_check_the_binding_against_the_domain_too(soccer, cap
         assert "has no predicate 'atbal'" in one_line(capsys.readouterr().err)
 
 
-def test_a_scene_object_the_simulator_lacks_fails_before_refining(soccer, capsys, monkeypatch):
+@pytest.mark.parametrize("simulate", [(), ("--simulate",)])
+def test_a_scene_object_the_simulator_lacks_fails_when_the_binding_is_read(soccer, capsys, monkeypatch, simulate):
     binding = soccer / "actions.toml"
     binding.write_text(binding.read_text().replace('scene = "ball"', 'scene = "goalpost"'))
-    monkeypatch.setattr("tailor.refinement.pipeline.refine_and_dispatch", _no_work)
-    assert main(refine(soccer, "--simulate")) == 15
+    monkeypatch.setattr("tailor.refinement.pipeline.plan_task", _no_work)  # caught before planning
+    assert main(refine(soccer, *simulate)) == 11
     line = one_line(capsys.readouterr().err)
-    assert line.startswith(f"tailor refine: error: {binding}: ") and "goalpost" in line
+    assert line.startswith(f"tailor refine: error: {binding}: ") and "scene = 'goalpost' is not a scene object" in line
+
+
+def test_a_scene_the_simulator_rejects_fails_the_dry_reset():
+    """For simulators that declare no scene objects, dispatch's dry reset (run before refining) catches it."""
+    from tailor.refinement.action_sequence import ActionSequence, ExecutableAction
+    from tailor.refinement.dispatch import check_scene
+    from tailor.sims.errors import SimError
+
+    action = ExecutableAction(1, "(gotopose p0 p1)", "goToPose", ())
+    sequence = ActionSequence("soccer", "score", (action,), {"robot": (0.0, 0.0, 0.0, 0.0), "goalpost": (1.0, 1.0)},
+                              "soccer")
+    with pytest.raises(SimError, match=r"^actions.toml: simulator 'soccer' rejects the scene .*goalpost"):
+        check_scene(sequence, "actions.toml")
+    check_scene(ActionSequence("soccer", "score", (action,), {"robot": (0.0, 0.0, 0.0, 0.0)}, "soccer"))
 
 
 # --- 7. absurd but finite model coefficients -------------------------------------------------------------
@@ -273,19 +288,23 @@ def _group_members(pgid: int) -> list[int]:
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="walks /proc")
-def test_sigterm_to_train_leaves_no_worker(tmp_path):
-    process = subprocess.Popen([sys.executable, "-m", "tailor.refinement.cli", "train", "soccer", "--jobs", "2",
-                                "--episodes", "20000", "--out", str(tmp_path / "out")],
+@pytest.mark.parametrize("command", [
+    ["train", "soccer", "--jobs", "2", "--episodes", "20000"],
+    ["evaluate", "soccer", "--jobs", "2", "--episodes", "2000", "--oracle-episodes", "0"],
+])
+def test_sigterm_to_a_long_command_leaves_no_worker(tmp_path, command):
+    out = ["--out", str(tmp_path / "out")] if command[0] == "train" else []
+    process = subprocess.Popen([sys.executable, "-m", "tailor.refinement.cli", *command, *out],
                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline and len(_group_members(process.pid)) < 3:  # the workers started
             time.sleep(0.2)
-        assert len(_group_members(process.pid)) >= 3, "train did not start its workers"
+        assert len(_group_members(process.pid)) >= 3, f"{command[0]} did not start its workers"
         time.sleep(1.0)
         process.send_signal(signal.SIGTERM)
         assert process.wait(timeout=30) == 143
-        assert process.stderr.read().strip().endswith("tailor train: terminated")
+        assert process.stderr.read().strip().endswith(f"tailor {command[0]}: terminated")
         deadline = time.monotonic() + 10
         while _group_members(process.pid) and time.monotonic() < deadline:
             time.sleep(0.2)

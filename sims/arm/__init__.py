@@ -25,6 +25,7 @@ SIMULATOR = SimulatorEntry(
     scenarios={"reach": Scenario("reach", "reach", run_reach, run_reach.__doc__ or ""),
                "stroke": Scenario("stroke", "reach", run_stroke_leg, run_stroke_leg.__doc__ or "")},
     situations=SITUATIONS,
+    scene_objects=("arm",),
     subgoal_episode=subgoal_episode,
     views=(("tip_x", "tip_y"), ("theta_a", "theta_b")),
     feature_spaces=(RAMPS,),

@@ -23,6 +23,7 @@ SIMULATOR = SimulatorEntry(
     create=_create,
     scenarios={name: Scenario(name, r.action, r.run, r.__doc__ or "") for name, r in RANGES.items()},
     situations=SITUATIONS,
+    scene_objects=("robot", "ball"),
     subgoal_episode=subgoal_episode,
     description="RoboCup mid-size field, Pioneer-like robot with a ball guide, a ball (pymunk)",
 )
