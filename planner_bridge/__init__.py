@@ -3,7 +3,7 @@
 from tailor.planner_bridge.abstract_plan import GOAL, INITIAL, AbstractPlan, CausalLink, Step
 from tailor.planner_bridge.bridge import DEFAULT_PLANNER, plan_files, plan_here
 from tailor.planner_bridge.bundled import bundled_domains, bundled_problems, resolve_domain_dir, resolve_problem
-from tailor.planner_bridge.errors import (
+from tailor.errors import (
     InputFileError,
     NoPlanError,
     PDDLSemanticError,

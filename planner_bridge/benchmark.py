@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 from tailor.planner_bridge.abstract_plan import AbstractPlan
-from tailor.planner_bridge.errors import PlannerError, PlannerTimeoutError
+from tailor.errors import PlannerError, PlannerTimeoutError
 
 ROOT = Path(__file__).resolve().parent.parent
 FIXTURES = ROOT / "tests" / "fixtures" / "pddl"

@@ -28,7 +28,7 @@ def plan_files(
     fixed hash seed, see planner_bridge.worker); `timeout` limits parsing, compiling and search together, in
     seconds, and `memory_gb` the planner's address space (None: no limit).
 
-    Raises the errors of planner_bridge.errors: InputFileError, PDDLSyntaxError, PDDLSemanticError, NoPlanError,
+    Raises the errors of tailor.errors: InputFileError, PDDLSyntaxError, PDDLSemanticError, NoPlanError,
     PlannerTimeoutError, PlannerUnavailableError (and PlannerError itself for an engine's failure, or when the
     planner runs out of memory).
     """

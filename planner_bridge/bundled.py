@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tailor.planner_bridge.errors import InputFileError
+from tailor.errors import InputFileError
 
 DOMAINS_DIR = Path(__file__).resolve().parent.parent / "domains"  # packaged beside planner_bridge
 DOMAIN_FILE = "domain.pddl"

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from tailor.planner_bridge.errors import PDDLSemanticError, PDDLSyntaxError, PlannerUnavailableError
+from tailor.errors import PDDLSemanticError, PDDLSyntaxError, PlannerUnavailableError
 from tailor.planner_bridge.sexpr import Expr, SList, Symbol
 
 CONNECTIVES = {"and", "or", "not", "imply"}

@@ -6,7 +6,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from tailor.planner_bridge.errors import InputFileError, PDDLSemanticError, PDDLSyntaxError, PlannerError
+from tailor.errors import InputFileError, PDDLSemanticError, PDDLSyntaxError, PlannerError
 from tailor.planner_bridge.lint import check_domain, check_problem
 from tailor.planner_bridge.sexpr import read_sexpr
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Union
 
-from tailor.planner_bridge.errors import PDDLSyntaxError
+from tailor.errors import PDDLSyntaxError
 
 # Deepest nesting of parentheses accepted. unified-planning's reader recurses once per level (and several
 # frames deep), so a goal of thousands of nested (not ...) would end in a RecursionError; real domains stay

@@ -14,7 +14,7 @@ import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from tailor.planner_bridge.errors import NoPlanError, PlannerError, PlannerTimeoutError, PlannerUnavailableError
+from tailor.errors import NoPlanError, PlannerError, PlannerTimeoutError, PlannerUnavailableError
 
 # Other names accepted for an engine: `--planner pocl` is our POCL engine (planner_bridge.pocl_engine).
 ALIASES = {"pocl": "tailor-pocl"}

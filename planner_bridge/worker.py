@@ -31,7 +31,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from tailor.planner_bridge import errors
+from tailor import errors
 from tailor.planner_bridge.abstract_plan import AbstractPlan
 from tailor.planner_bridge.bridge import MEMORY_LIMIT_GB
 

@@ -37,7 +37,7 @@ _EXPORTS = {
     "RefinedSequence": "tailor.refinement.refine",
     "OPTIMIZERS": "tailor.refinement.optimizers",
     "optimize": "tailor.refinement.optimizers",
-    "TailorError": "tailor.refinement.errors",
+    "TailorError": "tailor.errors",
 }
 
 __all__ = sorted([*_EXPORTS, "dispatch", "instantiate", "refine"])

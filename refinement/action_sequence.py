@@ -13,7 +13,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from tailor.refinement.errors import EmptyRangeError, TailorError
+from tailor.errors import EmptyRangeError, TailorError
 
 SCHEMA = 1
 RANGE_TOLERANCE = 1e-9  # values this far outside a range (rounding) are clipped into it, not rejected

@@ -19,7 +19,7 @@ from types import MappingProxyType
 from typing import Any
 
 from tailor.refinement.binding import read_toml
-from tailor.refinement.errors import BeliefError
+from tailor.errors import BeliefError
 
 SCHEMA = 1
 BELIEF_SUFFIX = ".toml"

@@ -19,9 +19,9 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from tailor.refinement.errors import BindingError, TailorError
+from tailor.errors import BindingError, TailorError
 from tailor.sims import registry
-from tailor.sims.errors import SimError
+from tailor.errors import SimError
 from tailor.sims.protocol import GROUPS, ActionSpec, SimulatorEntry
 
 SCHEMA = 2  # 2: the binding names its simulator

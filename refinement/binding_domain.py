@@ -13,7 +13,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
-from tailor.refinement.errors import BindingError, TailorError
+from tailor.errors import BindingError, TailorError
 
 BUILTIN_TYPES = frozenset({"object"})
 

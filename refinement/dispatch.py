@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from tailor.refinement.action_sequence import ActionSequence
-from tailor.refinement.errors import SimError, TailorError
+from tailor.errors import SimError, TailorError
 from tailor.sims import registry
 from tailor.sims.episode import ActionCall, SequenceResult
 

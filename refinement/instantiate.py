@@ -18,7 +18,7 @@ from tailor.refinement.action_sequence import RANGE_TOLERANCE, ActionSequence, E
 from tailor.refinement.belief import BeliefState
 from tailor.refinement.binding import DEFAULT_TYPE, Binding, PredicateBinding
 from tailor.sims.protocol import GROUPS
-from tailor.refinement.errors import BindingError, EmptyRangeError
+from tailor.errors import BindingError, EmptyRangeError
 
 ObjectTypes = Mapping[str, "str | Sequence[str]"]  # object -> its type, or its type and ancestors
 

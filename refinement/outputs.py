@@ -14,7 +14,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from tailor.refinement.errors import OutputFileError
+from tailor.errors import OutputFileError
 
 
 def _nearest_existing(path: Path) -> Path:

@@ -14,7 +14,7 @@ from tailor.refinement.action_sequence import ActionSequence
 from tailor.refinement.belief import BeliefState, belief_path_for, load_belief
 from tailor.refinement.binding import BINDING_FILE, Binding, load_domain_binding
 from tailor.refinement.dispatch import dispatch
-from tailor.refinement.errors import BindingError, ModelFileError
+from tailor.errors import BindingError, ModelFileError
 from tailor.refinement.instantiate import instantiate
 from tailor.refinement.models.action_models import ActionModel, load_action_models
 from tailor.refinement.refine import RefinedSequence, refine

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Mapping
 import numpy as np
 
 from tailor.refinement.action_sequence import ActionSequence, ExecutableAction
-from tailor.refinement.errors import ModelFileError
+from tailor.errors import ModelFileError
 from tailor.refinement.optimizers import FreeParameter, Objective, OptimizationResult, Term, optimize
 
 if TYPE_CHECKING:  # the models' module imports scikit-learn; refining needs only their methods
@@ -80,6 +80,11 @@ def _predicted(action: ExecutableAction, model: ActionModel) -> float:
     return check(value, f"step {action.step} {action.action}") if check else value
 
 
+def predicted_durations(sequence: ActionSequence, models: Mapping[str, ActionModel]) -> tuple[float, ...]:
+    """The checked predicted duration (s) of each action of a fully bound sequence."""
+    return tuple(_predicted(a, model_for(a, models)) for a in sequence.actions)
+
+
 def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon: int = 2,
            method: str = "analytic", seed: int = 0) -> RefinedSequence:
     """Bind every free parameter of `sequence`, h actions at a time, minimizing summed predicted duration."""
@@ -108,5 +113,5 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
             if p.id in chosen:
                 assignment[p.id] = float(chosen[p.id])
     bound = sequence.bind(assignment)
-    predicted = tuple(_predicted(a, model_for(a, models)) for a in bound.actions)
-    return RefinedSequence(sequence=bound, predicted=predicted, windows=tuple(windows), horizon=horizon)
+    return RefinedSequence(sequence=bound, predicted=predicted_durations(bound, models), windows=tuple(windows),
+                           horizon=horizon)

@@ -6,7 +6,9 @@ A `Job` holds plain, picklable values, so worker processes can instantiate situa
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
+from pathlib import Path
 from types import MappingProxyType
 
 import numpy as np
@@ -14,9 +16,10 @@ import numpy as np
 from tailor.planner_bridge import AbstractPlan
 from tailor.refinement.action_sequence import ActionSequence
 from tailor.refinement.belief import BeliefState
-from tailor.refinement.errors import TailorError
+from tailor.errors import TailorError
 from tailor.refinement.instantiate import instantiate
-from tailor.refinement.pipeline import Prepared, Task, load_binding, load_models, plan_task
+from tailor.refinement.binding import Binding
+from tailor.refinement.pipeline import Task, load_binding, load_models, plan_task, resolve_task
 
 
 @dataclass(frozen=True)
@@ -26,10 +29,6 @@ class Job:
     task: Task
     plan: AbstractPlan
     seed: int
-
-
-def prepared_job(prepared: Prepared, seed: int) -> Job:
-    return Job(task=prepared.task, plan=prepared.plan, seed=seed)
 
 
 def planned_job(task: Task, seed: int) -> Job:
@@ -61,13 +60,23 @@ def situation_sequence(job: Job, objects: dict) -> ActionSequence:
     return instantiate(job.plan, job_binding(job), belief)
 
 
-def draw_situation(job: Job, generator: str, rng: np.random.Generator) -> tuple[str, dict]:
-    """(problem, belief values) from the simulator's situation generator `generator`."""
-    entry = job_binding(job).entry
+def draw_situations(domain_dir: Path, binding: Binding, generator: str, seeds: Iterable[tuple[int, int]],
+                    seed: int, planned: dict[str, Job]) -> list[tuple[Job, int, dict]]:
+    """(job, index, belief values) of each (index, its seed) drawn by the simulator's situation generator
+    `generator`, in this process (drawing is cheap); each problem the situations need is planned once, into
+    `planned` (problem -> Job), which callers keep across calls."""
+    entry = binding.entry
     if generator not in entry.situations:
         raise TailorError(f"simulator {entry.name!r} has no situation generator {generator!r} "
                           f"(known: {', '.join(entry.situations) or 'none'})")
-    return entry.situations[generator](rng)
+    draw = entry.situations[generator]
+    out = []
+    for index, situation_seed in seeds:
+        problem, objects = draw(np.random.default_rng(situation_seed))
+        if problem not in planned:
+            planned[problem] = planned_job(resolve_task(str(Path(domain_dir) / "domain.pddl"), problem), seed)
+        out.append((planned[problem], index, objects))
+    return out
 
 
 def stream_seed(*words: int) -> int:

@@ -17,7 +17,7 @@ import numpy as np
 
 from tailor.sims import registry
 from tailor.sims.episode import Episode
-from tailor.sims.errors import SimError
+from tailor.errors import SimError
 from tailor.sims.protocol import Scenario
 
 SCHEMA = 2  # version of the .npz episode file (2: named state columns)

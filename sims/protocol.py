@@ -154,7 +154,7 @@ class SimulatorEntry:
         return tuple(dict.fromkeys(q for spec in self.actions.values() for q in spec.quantities))
 
     def action(self, name: str) -> ActionSpec:
-        from tailor.sims.errors import SimError
+        from tailor.errors import SimError
 
         try:
             return self.actions[name]

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from importlib.metadata import entry_points
 
-from tailor.sims.errors import SimError
+from tailor.errors import SimError
 from tailor.sims.protocol import SimulatorEntry
 
 ENTRY_POINT_GROUP = "tailor.simulators"

@@ -18,7 +18,7 @@ from tailor.refinement.models.action_models import (
     write_json_atomic,
 )
 from tailor.refinement.learning.classifiers import tree_arrays
-from tailor.refinement.errors import ModelFileError
+from tailor.errors import ModelFileError
 from tailor.refinement.models.features import compute_features, feature_names
 from tailor.refinement.models.model_tree import ModelTree
 from synthetic_episodes import random_params, synthetic_duration

@@ -11,7 +11,7 @@ import pytest
 from tailor.planner_bridge.abstract_plan import AbstractPlan
 from tailor.refinement.belief import belief_path_for, load_belief
 from tailor.refinement.binding import load_domain_binding
-from tailor.refinement.errors import BeliefError
+from tailor.errors import BeliefError
 from tailor.refinement.instantiate import instantiate
 
 SOCCER = Path(__file__).resolve().parents[1] / "domains" / "soccer"

@@ -11,7 +11,7 @@ import pytest
 from tailor.planner_bridge.bundled import DOMAINS_DIR
 from tailor.refinement.binding import load_domain_binding, parse_binding
 from tailor.refinement.cli.main import main
-from tailor.refinement.errors import BindingError
+from tailor.errors import BindingError
 from tailor.refinement.evaluation.experiments import (
     EvaluationPlan,
     evaluation_plan,

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from tailor.refinement.errors import DataError
+from tailor.errors import DataError
 from tailor.refinement.models.features import (
     FEATURE_SPACES,
     feature_spaces,

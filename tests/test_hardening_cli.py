@@ -75,7 +75,7 @@ def test_a_model_file_of_random_bytes_is_one_line(soccer, capsys):
 @pytest.mark.parametrize("key, value", [("feature_set", ["pose"]), ("feature_names", {"x": 1}), ("n_i", [5]),
                                         ("duration", [1]), ("report", [1])])
 def test_a_model_field_of_the_wrong_type_names_file_and_key(soccer, key, value):
-    from tailor.refinement.errors import ModelFileError
+    from tailor.errors import ModelFileError
     from tailor.refinement.models.action_models import load_action_models
 
     model = soccer / "models" / "approachBall.json"
@@ -88,7 +88,7 @@ def test_a_model_field_of_the_wrong_type_names_file_and_key(soccer, key, value):
 
 
 def test_nan_in_a_model_file_is_not_json(soccer):
-    from tailor.refinement.errors import ModelFileError
+    from tailor.errors import ModelFileError
     from tailor.refinement.models.action_models import load_action_models
 
     model = soccer / "models" / "approachBall.json"
@@ -216,7 +216,7 @@ def test_a_scene_the_simulator_rejects_fails_the_dry_reset():
     """For simulators that declare no scene objects, dispatch's dry reset (run before refining) catches it."""
     from tailor.refinement.action_sequence import ActionSequence, ExecutableAction
     from tailor.refinement.dispatch import check_scene
-    from tailor.sims.errors import SimError
+    from tailor.errors import SimError
 
     action = ExecutableAction(1, "(gotopose p0 p1)", "goToPose", ())
     sequence = ActionSequence("soccer", "score", (action,), {"robot": (0.0, 0.0, 0.0, 0.0), "goalpost": (1.0, 1.0)},
@@ -249,7 +249,7 @@ def test_json_output_is_strict_json():
 
 
 def test_predictions_are_checked_against_the_durations_seen_in_training():
-    from tailor.refinement.errors import ModelFileError
+    from tailor.errors import ModelFileError
     from tailor.refinement.models.action_models import ActionModel
 
     class Tree:

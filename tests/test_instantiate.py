@@ -13,7 +13,7 @@ from tailor.planner_bridge.abstract_plan import AbstractPlan, CausalLink, Step
 from tailor.refinement.action_sequence import ActionSequence, ExecutableAction, Parameter
 from tailor.refinement.belief import load_belief, parse_belief
 from tailor.refinement.binding import load_domain_binding, parse_binding
-from tailor.refinement.errors import BeliefError, BindingError, EmptyRangeError, TailorError
+from tailor.errors import BeliefError, BindingError, EmptyRangeError, TailorError
 from tailor.refinement.instantiate import instantiate
 
 ROOT = Path(__file__).resolve().parents[1]

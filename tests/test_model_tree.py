@@ -11,7 +11,7 @@ from sklearn.ensemble import HistGradientBoostingRegressor
 from sklearn.linear_model import LinearRegression
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
-from tailor.refinement.errors import ModelFileError
+from tailor.errors import ModelFileError
 from tailor.refinement.models.model_tree import ModelTree
 from tailor.refinement.models.model_tree_io import format_linear_model
 

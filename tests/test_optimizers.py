@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from tailor.refinement.errors import EmptyRangeError, TailorError
+from tailor.errors import EmptyRangeError, TailorError
 from tailor.refinement.optimizers import OPTIMIZERS, FreeParameter, Objective, Term, brute_force, optimize
 from tailor.refinement.optimizers.synthetic import random_objective, pose_chain
 

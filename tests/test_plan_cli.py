@@ -4,8 +4,6 @@ tests/golden/plan/ (regenerate them and see the diff with `python tests/regenera
 from __future__ import annotations
 
 import json
-import sys
-from pathlib import Path
 
 import pytest
 

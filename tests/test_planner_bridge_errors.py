@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from tailor.planner_bridge import errors
+from tailor import errors
 from tailor.refinement.cli.main import main
 
 BAD = Path(__file__).parent / "fixtures" / "pddl" / "bad"

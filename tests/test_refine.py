@@ -115,7 +115,7 @@ def test_longer_horizons_fix_one_subgoal_per_window(models):
 
 
 def test_a_missing_model_is_a_one_line_error(models):
-    from tailor.refinement.errors import ModelFileError
+    from tailor.errors import ModelFileError
 
     sequence = _sequence("score_plan.json", SCORE)
     with pytest.raises(ModelFileError, match="no action model for executable action 'dribbleBall'"):

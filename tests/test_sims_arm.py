@@ -15,7 +15,7 @@ from tailor.sims.arm import world as W
 from tailor.sims.arm.letters import LETTERS, PROBLEMS_DIR, STROKE_STEP, letter_points, problem_files
 from tailor.sims.arm.scenarios import letters, run_reach, subgoal_episode
 from tailor.sims.episode import ActionCall
-from tailor.sims.errors import SimError
+from tailor.errors import SimError
 from tailor.sims.experience import episode_seeds, run_episode
 from tailor.sims.protocol import Simulator
 

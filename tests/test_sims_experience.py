@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from tailor.sims.errors import SimError
+from tailor.errors import SimError
 from tailor.sims.experience import SCHEMA, gather, load_episodes, save_episodes
 
 

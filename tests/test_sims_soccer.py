@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from tailor.sims.episode import ActionCall
-from tailor.sims.errors import SimError
+from tailor.errors import SimError
 from tailor.sims.experience import episode_seeds, run_episode
 from tailor.sims.soccer import SIMULATOR, Noise, SoccerSim, simulate_sequence
 from tailor.sims.soccer import world as W

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from tailor.planner_bridge.bundled import DOMAINS_DIR
-from tailor.refinement.errors import TailorError
+from tailor.errors import TailorError
 from tailor.refinement.learning import training
 from tailor.refinement.learning.recipe import load_recipe
 from tailor.refinement.models.action_models import load_action_models

@@ -85,29 +85,6 @@ def _print_text(report: dict) -> None:
                 f"  {','.join(row['methods'])}\n")
 
 
-def _situations(domain_dir, generator: str, count: int, seed: int, jobs_by_problem: dict):
-    """Draw `count` situations (in this process: cheap) and plan each problem they need once."""
-    import numpy as np
-
-    from tailor.refinement.evaluation.experiments import situation_seed
-    from tailor.refinement.pipeline import prepare, resolve_task
-    from tailor.refinement.situations import prepared_job
-
-    entry_draw = None
-    out = []
-    for index in range(count):
-        if entry_draw is None:
-            from tailor.refinement.binding import load_domain_binding
-
-            entry_draw = load_domain_binding(domain_dir).entry.situations[generator]
-        problem, objects = entry_draw(np.random.default_rng(situation_seed(seed, index)))
-        if problem not in jobs_by_problem:
-            jobs_by_problem[problem] = prepared_job(prepare(resolve_task(str(domain_dir / "domain.pddl"), problem)),
-                                                    seed)
-        out.append((jobs_by_problem[problem], index, objects))
-    return out
-
-
 def run(args: argparse.Namespace) -> int:
     from tailor.planner_bridge import resolve_domain_dir
     from tailor.refinement.binding import load_domain_binding
@@ -115,22 +92,32 @@ def run(args: argparse.Namespace) -> int:
         comparison_episode,
         evaluation_plan,
         horizon_episode,
+        situation_seed,
         summarize_comparison,
         summarize_horizons,
     )
+    from tailor.refinement.situations import draw_situations, job_models, situation_sequence
 
     domain_dir = resolve_domain_dir(args.domain)
     binding = load_domain_binding(domain_dir)
     plan = evaluation_plan(binding)
-    jobs_by_problem: dict = {}
-    items = _situations(domain_dir, plan.comparison, args.episodes, args.seed, jobs_by_problem)
+    planned: dict = {}  # each problem the situations need, planned once
+
+    def situations(generator: str, count: int) -> list:
+        seeds = [(index, situation_seed(args.seed, index)) for index in range(count)]
+        return draw_situations(domain_dir, binding, generator, seeds, args.seed, planned)
+
+    items = situations(plan.comparison, args.episodes)
+    if items:  # the models are loaded here once, so a missing or bad model file fails before any work
+        job, _, objects = items[0]
+        job_models(job, situation_sequence(job, objects))
     rows = _run_parallel(comparison_episode, [(job, i, objects, i < args.oracle_episodes, plan.zero_baseline)
                                               for job, i, objects in items], args.jobs, "greedy vs refined")
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
               "comparison": plan.comparison}
     report.update(summarize_comparison(rows))
     if plan.horizons and args.horizon_episodes:
-        items = _situations(domain_dir, plan.horizons, args.horizon_episodes, args.seed, jobs_by_problem)
+        items = situations(plan.horizons, args.horizon_episodes)
         hrows = _run_parallel(horizon_episode, [(job, i, objects, HORIZONS) for job, i, objects in items],
                               args.jobs, "horizons 1..4")
         report["horizon_situations"] = plan.horizons

@@ -143,11 +143,10 @@ def _zero_outcome(prepared, seed: int):
     from tailor.refinement.dispatch import dispatch
     from tailor.refinement.evaluation.experiments import zero_assignment
     from tailor.refinement.pipeline import Outcome
-    from tailor.refinement.refine import RefinedSequence
+    from tailor.refinement.refine import RefinedSequence, predicted_durations
 
     sequence = prepared.sequence.bind(zero_assignment(prepared.sequence))
-    predicted = tuple(float(prepared.models[a.action].predict_duration(a.values()[None, :])[0])
-                      for a in sequence.actions)
+    predicted = predicted_durations(sequence, prepared.models)
     return Outcome(RefinedSequence(sequence, predicted, (), 0), dispatch(sequence, seed=seed))
 
 

@@ -43,7 +43,7 @@ def _positive_ints(text: str) -> tuple[int, ...]:
 def run(args: argparse.Namespace) -> int:
     from tailor.planner_bridge import resolve_domain_dir
     from tailor.refinement.binding import BINDING_FILE
-    from tailor.refinement.errors import BindingError
+    from tailor.errors import BindingError
     from tailor.refinement.learning.protocol import N_I_CANDIDATES
     from tailor.refinement.learning.recipe import load_recipe
     from tailor.refinement.learning.training import train_domain

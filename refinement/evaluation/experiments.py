@@ -25,7 +25,7 @@ import numpy as np
 from tailor.refinement.action_sequence import ActionSequence
 from tailor.refinement.binding import Binding
 from tailor.refinement.dispatch import dispatch
-from tailor.refinement.errors import BindingError
+from tailor.errors import BindingError
 from tailor.refinement.refine import refine
 from tailor.refinement.situations import Job, job_models, situation_sequence, stream_seed
 

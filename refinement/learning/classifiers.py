@@ -22,7 +22,7 @@ from sklearn.tree import DecisionTreeClassifier
 
 from tailor.refinement.models.action_models import CollisionModel
 from tailor.refinement.models.decision_tree import DecisionTree
-from tailor.refinement.errors import DataError
+from tailor.errors import DataError
 from tailor.refinement.models.features import compute_features, feature_names, first_examples
 from tailor.sims.episode import Episode
 

@@ -22,7 +22,7 @@ from sklearn.base import RegressorMixin
 from sklearn.ensemble import HistGradientBoostingRegressor
 
 from tailor.refinement.models.action_models import ActionModel
-from tailor.refinement.errors import DataError
+from tailor.errors import DataError
 from tailor.refinement.models.features import compute_features, feature_names, first_examples, intermediate_examples
 from tailor.refinement.models.model_tree import ModelTree
 from tailor.sims.episode import Episode

@@ -28,7 +28,7 @@ from typing import Any
 
 from tailor.refinement.binding import Binding, load_domain_binding
 from tailor.refinement.binding_domain import did_you_mean
-from tailor.refinement.errors import BindingError
+from tailor.errors import BindingError
 from tailor.refinement.models.features import feature_spaces
 from tailor.sims.protocol import ActionSpec
 

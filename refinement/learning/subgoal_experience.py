@@ -13,27 +13,22 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 from joblib import Parallel, delayed
 from tqdm import tqdm
 
-from tailor.refinement.errors import TailorError
-from tailor.refinement.pipeline import resolve_task
-from tailor.refinement.refine import refine
 from tailor.refinement.binding import load_domain_binding
-from tailor.refinement.situations import Job, job_binding, planned_job, situation_sequence, stream_seed
+from tailor.refinement.refine import refine
+from tailor.refinement.situations import Job, draw_situations, job_binding, situation_sequence, stream_seed
 from tailor.sims.episode import Episode
 
 SUBGOAL_STREAM = 2  # second seed word: apart from the evaluation's situations (SeedSequence([seed, index]))
 CHUNK = 50  # situations a worker refines per task
 
 
-def _episodes(jobs: dict[str, Job], situations: list[tuple[int, str, dict]], models: dict, action: str
-              ) -> tuple[int, list[Episode]]:
-    """(situations, episodes) of the drawn `situations` (index, problem, belief values)."""
+def _episodes(situations: list[tuple[Job, int, dict]], models: dict, action: str) -> tuple[int, list[Episode]]:
+    """(situations, episodes) of the drawn `situations` (job, index, belief values)."""
     out = []
-    for i, problem, objects in situations:
-        job = jobs[problem]
+    for job, i, objects in situations:
         entry = job_binding(job).entry
         seed = stream_seed(job.seed, SUBGOAL_STREAM, i)
         refined = refine(situation_sequence(job, objects), models, horizon=1 + i % 2, method="analytic", seed=seed)
@@ -44,11 +39,6 @@ def _episodes(jobs: dict[str, Job], situations: list[tuple[int, str, dict]], mod
     return len(situations), out
 
 
-def plan_problem(domain_dir: Path, problem: str, seed: int) -> Job:
-    """A problem beside the domain, planned once, whose random situations workers instantiate."""
-    return planned_job(resolve_task(str(Path(domain_dir) / "domain.pddl"), problem), seed)
-
-
 def gather_subgoal_experience(domain_dir: Path, generator: str, action: str, models: dict, situations: int,
                               seed: int, jobs: int = 1, progress: bool = True, first: int = 0,
                               planned: dict[str, Job] | None = None) -> list[Episode]:
@@ -57,22 +47,13 @@ def gather_subgoal_experience(domain_dir: Path, generator: str, action: str, mod
     first + 1, ... of the seed's stream (so successive calls with consecutive ranges never repeat a situation).
     `planned` (problem -> Job) caches the problems planned so far across calls."""
     planned = {} if planned is None else planned
-    binding = load_domain_binding(domain_dir)
-    if generator not in binding.entry.situations:
-        raise TailorError(f"simulator {binding.simulator!r} has no situation generator {generator!r} "
-                          f"(known: {', '.join(binding.entry.situations) or 'none'})")
-    draw = binding.entry.situations[generator]
-    drawn = []
-    for i in range(first, first + situations):
-        problem, objects = draw(np.random.default_rng(stream_seed(seed, SUBGOAL_STREAM, i)))
-        if problem not in planned:
-            planned[problem] = plan_problem(domain_dir, problem, seed)
-        drawn.append((i, problem, objects))
+    seeds = [(i, stream_seed(seed, SUBGOAL_STREAM, i)) for i in range(first, first + situations)]
+    drawn = draw_situations(domain_dir, load_domain_binding(domain_dir), generator, seeds, seed, planned)
     chunks = [drawn[k:k + CHUNK] for k in range(0, len(drawn), CHUNK)]
     out: list[Episode] = []
     with tqdm(total=situations, desc=f"{generator} subgoals ({action})", unit="situation",
               disable=not progress) as bar:
-        calls = (delayed(_episodes)(planned, chunk, models, action) for chunk in chunks)
+        calls = (delayed(_episodes)(chunk, models, action) for chunk in chunks)
         for count, episodes in Parallel(n_jobs=jobs, return_as="generator")(calls):
             out.extend(episodes)
             bar.update(count)

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from tailor.refinement.errors import DataError
+from tailor.errors import DataError
 from tailor.refinement.learning.classifiers import train_collision_model
 from tailor.refinement.learning.protocol import (
     EPISODE_FRACTIONS,

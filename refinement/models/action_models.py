@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from tailor.refinement.models.decision_tree import DecisionTree, LeafBox
-from tailor.refinement.errors import ModelFileError
+from tailor.errors import ModelFileError
 from tailor.refinement.models.features import compute_features, feature_spaces
 from tailor.refinement.models.model_tree import ModelTree
 

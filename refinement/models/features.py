@@ -18,7 +18,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from tailor.refinement.errors import DataError
+from tailor.errors import DataError
 from tailor.sims import registry
 from tailor.sims.episode import Episode
 from tailor.sims.invariances import shift_mirror_axes
@@ -179,12 +179,15 @@ def feature_spaces() -> dict[str, FeatureSpace]:
 
 
 def feature_space(name: str) -> FeatureSpace:
-    if name in FEATURE_SPACES:
-        return FEATURE_SPACES[name]
-    spaces = feature_spaces()
-    if name not in spaces:
-        raise DataError(f"unknown feature space {name!r} (known: {', '.join(sorted(spaces))})")
-    return spaces[name]
+    """The feature space `name`; one a simulator brings is looked up once, then kept with the generic ones
+    (every prediction asks for its space: the optimizers' hot path)."""
+    space = FEATURE_SPACES.get(name)
+    if space is None:
+        spaces = feature_spaces()
+        if name not in spaces:
+            raise DataError(f"unknown feature space {name!r} (known: {', '.join(sorted(spaces))})")
+        space = FEATURE_SPACES.setdefault(name, spaces[name])
+    return space
 
 
 def feature_names(name: str) -> tuple[str, ...]:

@@ -15,7 +15,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from tailor.refinement.errors import ModelFileError
+from tailor.errors import ModelFileError
 from tailor.refinement.models.model_tree_grow import GrowParams, TreeArrays, grow_tree
 from tailor.refinement.models.model_tree_io import export_text, tree_from_json, tree_to_json
 from tailor.refinement.models.rules import Rule, leaf_boxes

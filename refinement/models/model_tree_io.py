@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from tailor.refinement.errors import ModelFileError
+from tailor.errors import ModelFileError
 from tailor.refinement.models.model_tree_grow import TreeArrays
 
 SCHEMA = "tailor.model_tree/1"

@@ -13,7 +13,7 @@ from typing import Callable
 
 import numpy as np
 
-from tailor.refinement.errors import EmptyRangeError, TailorError
+from tailor.errors import EmptyRangeError, TailorError
 from tailor.refinement.optimizers import analytic, genetic, sampling
 from tailor.refinement.optimizers.objective import (
     FreeParameter,

@@ -29,7 +29,7 @@ import pymunk
 from tailor.sims.arm import world as W
 from tailor.sims.arm.profile import synchronize
 from tailor.sims.episode import ActionCall, Episode, SequenceResult, run_in_sequence
-from tailor.sims.errors import SimError
+from tailor.errors import SimError
 
 PHYSICS_HZ = 100  # Hz, fixed physics step
 CONTROL_HZ = 50  # Hz, PID rate (must divide PHYSICS_HZ)

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 
-from tailor.sims.errors import SimError
+from tailor.errors import SimError
 
 # --- links (PowerCube modules and aluminium tubes) --------------------------------------------------------
 LINK_A_LENGTH = 0.45  # m, shoulder axis to elbow axis

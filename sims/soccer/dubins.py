@@ -155,11 +155,7 @@ def word_bounds(start: tuple[float, float, float], word: str, lengths: tuple[flo
     for kind, length in zip(word, lengths):
         k = 1.0 / radius if kind == "L" else -1.0 / radius if kind == "R" else 0.0
         sin_h, cos_h = math.sin(h), math.cos(h)
-        if abs(k) < 1e-12:  # advance(), inlined
-            ex, ey, eh = x + length * cos_h, y + length * sin_h, h
-        else:
-            eh = h + k * length
-            ex, ey = x + (math.sin(eh) - sin_h) / k, y - (math.cos(eh) - cos_h) / k
+        ex, ey, eh = advance((x, y, h), k, length)
         xs.append(ex)
         ys.append(ey)
         if k != 0.0 and length > 0.0:  # the arc's points furthest east, north, west, south it passes
@@ -237,11 +233,7 @@ def word_distance(start: tuple[float, float, float], word: str, lengths: tuple[f
             continue
         k = 1.0 / radius if kind == "L" else -1.0 / radius if kind == "R" else 0.0
         sin_h, cos_h = math.sin(h), math.cos(h)
-        if abs(k) < 1e-12:  # advance(), inlined
-            ex, ey, eh = x + length * cos_h, y + length * sin_h, h
-        else:
-            eh = h + k * length
-            ex, ey = x + (math.sin(eh) - sin_h) / k, y - (math.cos(eh) - cos_h) / k
+        ex, ey, eh = advance((x, y, h), k, length)
         best = min(best, math.hypot(px - ex, py - ey))
         if k == 0.0:
             t = (px - x) * cos_h + (py - y) * sin_h

@@ -26,7 +26,7 @@ import numpy as np
 import pymunk
 
 from tailor.sims.episode import ActionCall, Episode, SequenceResult, run_in_sequence
-from tailor.sims.errors import SimError
+from tailor.errors import SimError
 from tailor.sims.soccer import world as W
 from tailor.sims.soccer.actions import ACTION_FUNCTIONS
 
