@@ -118,3 +118,16 @@ class SimError(TailorError):
     """Invalid simulator input: an unknown action or simulator, a state or parameter outside the world."""
 
     exit_code = 15
+
+
+# --- the Python API -------------------------------------------------------------------------------------
+class ArgumentTypeError(TailorError, TypeError):
+    """An API call got an argument of the wrong type (the message names the argument); also a TypeError."""
+
+    exit_code = 2
+
+
+class ArgumentValueError(TailorError, ValueError):
+    """An API call got an argument of the right type but an impossible value (named); also a ValueError."""
+
+    exit_code = 2

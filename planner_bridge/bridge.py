@@ -52,9 +52,15 @@ def plan_here(
     """
     domain, problem = Path(domain), Path(problem)
     parsed, domain_name = read_problem(domain, problem)
+    return plan_parsed(parsed, domain_name, planner, str(problem), on_search)
+
+
+def plan_parsed(parsed, domain_name: str, planner: str = DEFAULT_PLANNER, file: str | None = None,
+                on_search: Callable[[], None] | None = None) -> AbstractPlan:
+    """Solve, validate and link a unified-planning Problem in this process (`file` names it in errors)."""
     parsed.environment.credits_stream = None  # no engine credits on stdout: `--json` output must be pure JSON
     planner = canonical(planner)
-    found, chain = solve(parsed, planner, str(problem), on_search)
+    found, chain = solve(parsed, planner, file, on_search)
     if hasattr(found, "causal_links"):
         steps, links, orderings = _from_causal_link_plan(parsed, found)
     else:

@@ -14,9 +14,10 @@ Why a child process:
 - no orphans: the child asks the kernel to kill it when its parent dies (Linux: PR_SET_PDEATHSIG; elsewhere a
   thread watches the parent's pid), and the parent kills it on every way out of plan_in_worker.
 
-Protocol: the parent writes one JSON request line on the child's stdin; the child answers on its original
-stdout with JSON lines: {"event": "ready"} when its imports are done (the clock starts), {"event": "searching"}
-when the engine starts, then {"plan": ...} or {"error": ...}.
+Protocol: the child says {"event": "ready"} on its original stdout when its imports are done; then, for each
+JSON request line the parent writes on its stdin (the clock starts), it answers with JSON lines:
+{"event": "searching"} when the engine starts, then {"plan": ...} or {"error": ...}. The CLI's commands
+plan once per child; the Python API keeps one child for many plans (PlannerProcess).
 """
 
 from __future__ import annotations
@@ -105,7 +106,7 @@ def _limit_memory(limit_gb: float | None) -> None:
 
 
 def _child_main() -> int:
-    """The child: plan the request in this process, answer on the original stdout."""
+    """The child: plan each request line in this process, answer on the original stdout, until stdin ends."""
     _die_with_parent()
     answer = os.fdopen(os.dup(1), "w", encoding="utf-8")
     devnull = os.open(os.devnull, os.O_WRONLY)
@@ -123,19 +124,24 @@ def _child_main() -> int:
     from tailor.planner_bridge.solving import oneshot_planners
 
     oneshot_planners()  # imports the installed engines
-    request = json.loads(sys.stdin.readline())
-    limit_gb = request.get("memory_gb")
     send({"event": "ready"})
-    try:
-        _limit_memory(limit_gb)
-        plan = plan_here(request["domain"], request["problem"], request["planner"], lambda: send({"event": "searching"}))
-        send({"plan": plan.to_json(facts=True)})
-    except MemoryError:
-        send({"error": _error_json(errors.PlannerError(out_of_memory(limit_gb), request["problem"]))})
-    except errors.PlannerError as exc:
-        send({"error": _error_json(exc)})
-    except Exception as exc:  # a bug or an engine's surprise: still one line for the user
-        send({"error": _error_json(errors.PlannerError(f"internal error: {type(exc).__name__}: {exc}"))})
+    limited = False
+    for line in sys.stdin:  # one request per line; a reused child (PlannerProcess) gets many
+        request = json.loads(line)
+        limit_gb = request.get("memory_gb")
+        try:
+            if not limited:
+                _limit_memory(limit_gb)
+                limited = True
+            plan = plan_here(request["domain"], request["problem"], request["planner"],
+                             lambda: send({"event": "searching"}))
+            send({"plan": plan.to_json(facts=True)})
+        except MemoryError:
+            send({"error": _error_json(errors.PlannerError(out_of_memory(limit_gb), request["problem"]))})
+        except errors.PlannerError as exc:
+            send({"error": _error_json(exc)})
+        except Exception as exc:  # a bug or an engine's surprise: still one line for the user
+            send({"error": _error_json(errors.PlannerError(f"internal error: {type(exc).__name__}: {exc}"))})
     return 0
 
 
@@ -182,42 +188,101 @@ def _read_message(child: subprocess.Popen, limits: _Limits) -> dict:
             return json.loads(line) if line else {}
 
 
-def plan_in_worker(
-    domain: Path, problem: Path, planner: str, timeout: float | None, memory_gb: float | None = MEMORY_LIMIT_GB
-) -> AbstractPlan:
-    """Plan in a child process with a fixed hash seed; kill it when parsing, compiling and searching together
-    take more than `timeout` seconds, or when it holds more than `memory_gb` of memory (None: no limit)."""
-    env = {**os.environ, "PYTHONHASHSEED": HASH_SEED, PARENT_ENV: str(os.getpid())}
-    request = {"domain": str(domain), "problem": str(problem), "planner": planner, "memory_gb": memory_gb}
-    limits = _Limits(planner, str(problem), timeout, memory_gb)
-    with tempfile.TemporaryFile() as stderr:
+class PlannerProcess:
+    """A planner child process kept for many requests, so its interpreter and imports (about 1.8 s) are paid
+    once: the Python API plans through one. A request that ends in a timeout or the memory limit kills the
+    child; the next request starts a new one. Use it as a context manager, or call close()."""
+
+    def __init__(self, memory_gb: float | None = MEMORY_LIMIT_GB):
+        self.memory_gb = memory_gb
+        self._child: subprocess.Popen | None = None
+        self._stderr = None
+
+    def _start(self) -> subprocess.Popen:
+        env = {**os.environ, "PYTHONHASHSEED": HASH_SEED, PARENT_ENV: str(os.getpid())}
+        self._stderr = tempfile.TemporaryFile()
         child = subprocess.Popen(
             [sys.executable, "-m", "tailor.planner_bridge.worker"],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=stderr, env=env, text=True,
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._stderr, env=env, text=True,
         )
+        self._child = child
+        return child
+
+    def plan(self, domain: Path, problem: Path, planner: str, timeout: float | None) -> AbstractPlan:
+        """Plan in the child; kill it when parsing, compiling and searching together take more than `timeout`
+        seconds, or when it holds more than the memory limit."""
+        request = {"domain": str(domain), "problem": str(problem), "planner": planner, "memory_gb": self.memory_gb}
+        limits = _Limits(planner, str(problem), timeout, self.memory_gb)
+        child = self._child if self._child is not None and self._child.poll() is None else self._start()
+        keep = False
         try:
             child.stdin.write(json.dumps(request) + "\n")
-            child.stdin.close()
-            message = _read_message(child, limits)
-            if message.get("event") == "ready":  # the clock starts before the child reads the files
-                limits.deadline = None if timeout is None else time.monotonic() + timeout
+            child.stdin.flush()
+            if not getattr(child, "ready", False):  # a new child: its imports do not count against the timeout
                 message = _read_message(child, limits)
+                if message.get("event") != "ready":
+                    self._fail(message, problem)
+                child.ready = True
+            limits.deadline = None if timeout is None else time.monotonic() + timeout
+            message = _read_message(child, limits)
             while message.get("event"):
                 message = _read_message(child, limits)
-        finally:  # every way out, KeyboardInterrupt included: the child goes too
+            if "plan" in message:
+                keep = True
+                return AbstractPlan.from_json(message["plan"])
+            if "error" in message:
+                keep = True  # the planner answered: the child is fine for the next request
+                _raise_error(message["error"])
+            self._fail(message, problem)
+        except BrokenPipeError:
+            self._fail({}, problem)
+        finally:  # every way out but an answer, KeyboardInterrupt included: the child goes
+            if not keep:
+                self.close()
+
+    def _fail(self, message: dict, problem: Path) -> None:
+        """The child ended without an answer: say why in one line."""
+        child = self._child
+        if child is not None and child.poll() is None:
+            child.kill()
+        if child is not None:
+            child.wait(KILL_WAIT_S)
+        self._stderr.seek(0)
+        lines = self._stderr.read().decode(errors="replace").strip().splitlines() or ["no message"]
+        if self.memory_gb is not None and any("MemoryError" in line for line in lines[-3:]):
+            raise errors.PlannerError(out_of_memory(self.memory_gb), str(problem))
+        status = child.returncode if child is not None else None
+        raise errors.PlannerError(f"the planner process ended with status {status}: {lines[-1]}", str(problem))
+
+    def close(self) -> None:
+        """End the child (it is killed: nothing it holds needs a clean shutdown)."""
+        child, self._child = self._child, None
+        if child is not None:
             if child.poll() is None:
                 child.kill()
             child.wait(KILL_WAIT_S)
-            child.stdout.close()
-        if "plan" in message:
-            return AbstractPlan.from_json(message["plan"])
-        if "error" in message:
-            _raise_error(message["error"])
-        stderr.seek(0)
-        lines = stderr.read().decode(errors="replace").strip().splitlines() or ["no message"]
-        if memory_gb is not None and any("MemoryError" in line for line in lines[-3:]):
-            raise errors.PlannerError(out_of_memory(memory_gb), str(problem))
-        raise errors.PlannerError(f"the planner process ended with status {child.returncode}: {lines[-1]}", str(problem))
+            for stream in (child.stdin, child.stdout):
+                try:
+                    stream.close()
+                except OSError:  # a pipe to a killed child
+                    pass
+        if self._stderr is not None:
+            self._stderr.close()
+            self._stderr = None
+
+    def __enter__(self) -> "PlannerProcess":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def plan_in_worker(
+    domain: Path, problem: Path, planner: str, timeout: float | None, memory_gb: float | None = MEMORY_LIMIT_GB
+) -> AbstractPlan:
+    """Plan in a new child process with a fixed hash seed (see PlannerProcess), ended afterwards."""
+    with PlannerProcess(memory_gb) as process:
+        return process.plan(domain, problem, planner, timeout)
 
 
 if __name__ == "__main__":

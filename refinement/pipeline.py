@@ -16,11 +16,11 @@ from tailor.refinement.binding import BINDING_FILE, Binding, load_domain_binding
 from tailor.refinement.dispatch import dispatch
 from tailor.errors import BindingError, ModelFileError
 from tailor.refinement.instantiate import instantiate
+from tailor.refinement.model_store import MODELS as MODELS_DIR
 from tailor.refinement.models.action_models import ActionModel, load_action_models
 from tailor.refinement.refine import RefinedSequence, refine
 from tailor.sims.episode import SequenceResult
 
-MODELS_DIR = "models"
 GREEDY_HORIZON = 1
 
 
@@ -31,10 +31,15 @@ class Task:
     domain: Path
     problem: Path
     belief: Path
+    models: Path | None = None  # the model folder (model_store.resolve_models); None: the domain's own
 
     @property
     def domain_dir(self) -> Path:
         return self.domain.parent
+
+    @property
+    def models_dir(self) -> Path:
+        return self.models if self.models is not None else self.domain_dir / MODELS_DIR
 
 
 @dataclass(frozen=True)
@@ -48,9 +53,11 @@ class Prepared:
     binding: Binding
 
 
-def resolve_task(domain_arg: str, problem_arg: str, belief: str | None = None) -> Task:
+def resolve_task(domain_arg: str, problem_arg: str, belief: str | Path | None = None,
+                 models: Path | None = None) -> Task:
+    """The task of a (bundled name or file) pair; `models` is the folder resolved by model_store."""
     domain, problem = resolve_problem(domain_arg, problem_arg)
-    return Task(domain, problem, Path(belief) if belief else belief_path_for(problem))
+    return Task(domain, problem, Path(belief) if belief else belief_path_for(problem), models)
 
 
 def load_binding(task: Task) -> Binding:
@@ -62,7 +69,7 @@ def load_binding(task: Task) -> Binding:
 
 def load_models(task: Task, sequence: ActionSequence) -> dict[str, ActionModel]:
     needed = tuple(sorted({a.action for a in sequence.actions}))
-    models_dir = task.domain_dir / MODELS_DIR
+    models_dir = task.models_dir
     if not models_dir.is_dir():
         raise ModelFileError("no learned action models here (train them with `tailor train`)", file=str(models_dir))
     return load_action_models(models_dir, needed)

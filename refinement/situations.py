@@ -48,7 +48,7 @@ def job_binding(job: Job):
 
 
 def job_models(job: Job, sequence: ActionSequence):
-    key = ("models", str(job.task.domain), tuple(sorted({a.action for a in sequence.actions})))
+    key = ("models", str(job.task.models_dir), tuple(sorted({a.action for a in sequence.actions})))
     if key not in _CACHE:
         _CACHE[key] = load_models(job.task, sequence)
     return _CACHE[key]
@@ -61,10 +61,11 @@ def situation_sequence(job: Job, objects: dict) -> ActionSequence:
 
 
 def draw_situations(domain_dir: Path, binding: Binding, generator: str, seeds: Iterable[tuple[int, int]],
-                    seed: int, planned: dict[str, Job]) -> list[tuple[Job, int, dict]]:
+                    seed: int, planned: dict[str, Job], models: Path | None = None) -> list[tuple[Job, int, dict]]:
     """(job, index, belief values) of each (index, its seed) drawn by the simulator's situation generator
     `generator`, in this process (drawing is cheap); each problem the situations need is planned once, into
-    `planned` (problem -> Job), which callers keep across calls."""
+    `planned` (problem -> Job), which callers keep across calls; `models` is the model folder (None: the
+    domain's own)."""
     entry = binding.entry
     if generator not in entry.situations:
         raise TailorError(f"simulator {entry.name!r} has no situation generator {generator!r} "
@@ -74,7 +75,7 @@ def draw_situations(domain_dir: Path, binding: Binding, generator: str, seeds: I
     for index, situation_seed in seeds:
         problem, objects = draw(np.random.default_rng(situation_seed))
         if problem not in planned:
-            planned[problem] = planned_job(resolve_task(str(Path(domain_dir) / "domain.pddl"), problem), seed)
+            planned[problem] = planned_job(resolve_task(str(Path(domain_dir) / "domain.pddl"), problem, models=models), seed)
         out.append((planned[problem], index, objects))
     return out
 

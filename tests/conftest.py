@@ -6,3 +6,12 @@ from __future__ import annotations
 import os
 
 os.environ.setdefault("MPLBACKEND", "Agg")  # plots are written to files; never open a window
+
+import pytest  # noqa: E402
+
+
+@pytest.fixture(autouse=True)
+def _user_folders(tmp_path_factory, monkeypatch):
+    """No test reads or writes the real user's data folder or follows the user's $TAILOR_MODELS."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path_factory.mktemp("user-data")))
+    monkeypatch.delenv("TAILOR_MODELS", raising=False)

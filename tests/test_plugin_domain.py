@@ -29,7 +29,7 @@ def tailor(*args: str, plugin: bool = True) -> subprocess.CompletedProcess:
 def trained(tmp_path_factory) -> Path:
     domain = tmp_path_factory.mktemp("rail") / "rail"
     shutil.copytree(FIXTURE / "domain", domain)
-    run = tailor("train", str(domain), "--episodes", "200", "--n-i", "1,3", "--seed", "3", "--json")
+    run = tailor("train", str(domain), "--episodes", "200", "--n-i", "1,3", "--seed", "3", "--json", "--out", str(domain))
     assert run.returncode == 0, run.stderr
     report = json.loads(run.stdout)
     assert report["simulator"] == "pointmass" and set(report["models"]) == {"move"}

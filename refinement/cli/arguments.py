@@ -65,3 +65,17 @@ def worker_count(text: str) -> int:
 
 
 worker_count.__name__ = "worker count"
+
+
+def add_models_argument(parser: argparse.ArgumentParser) -> None:
+    """`--models DIR`: the action models to use instead of the domain's bundled ones (see model_store)."""
+    parser.add_argument("--models", metavar="DIR", default=None,
+                        help="action models to use: a folder of <action>.json, or a `tailor train` output folder "
+                             "(default: $TAILOR_MODELS/<domain> where it exists, else the domain's bundled models)")
+
+
+def announce_models(command: str, source) -> None:
+    """The one line that says which models a command uses (stderr: stdout may be JSON)."""
+    import sys
+
+    print(f"tailor {command}: {source.describe()}", file=sys.stderr)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from tailor.refinement.cli.arguments import whole_number, worker_count
+from tailor.refinement.cli.arguments import add_models_argument, announce_models, whole_number, worker_count
 
 HELP = "measure refined vs greedy execution in the simulator over random situations"
 
@@ -23,6 +23,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed of situations and simulator")
     parser.add_argument("--jobs", type=worker_count, default=1, metavar="J",
                         help="worker processes (default 1; at most the number of CPUs)")
+    add_models_argument(parser)
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
 
 
@@ -98,23 +99,27 @@ def run(args: argparse.Namespace) -> int:
     )
     from tailor.refinement.situations import draw_situations, job_models, situation_sequence
 
+    from tailor.refinement.model_store import resolve_models
+
     domain_dir = resolve_domain_dir(args.domain)
     binding = load_domain_binding(domain_dir)
+    source = resolve_models(domain_dir, args.models)
     plan = evaluation_plan(binding)
     planned: dict = {}  # each problem the situations need, planned once
 
     def situations(generator: str, count: int) -> list:
         seeds = [(index, situation_seed(args.seed, index)) for index in range(count)]
-        return draw_situations(domain_dir, binding, generator, seeds, args.seed, planned)
+        return draw_situations(domain_dir, binding, generator, seeds, args.seed, planned, source.path)
 
     items = situations(plan.comparison, args.episodes)
     if items:  # the models are loaded here once, so a missing or bad model file fails before any work
         job, _, objects = items[0]
         job_models(job, situation_sequence(job, objects))
+    announce_models("evaluate", source)
     rows = _run_parallel(comparison_episode, [(job, i, objects, i < args.oracle_episodes, plan.zero_baseline)
                                               for job, i, objects in items], args.jobs, "greedy vs refined")
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
-              "comparison": plan.comparison}
+              "models": str(source.path), "comparison": plan.comparison}
     report.update(summarize_comparison(rows))
     if plan.horizons and args.horizon_episodes:
         items = situations(plan.horizons, args.horizon_episodes)

@@ -10,7 +10,7 @@ import json
 import math
 import sys
 
-from tailor.refinement.cli.arguments import positive_seconds, whole_number
+from tailor.refinement.cli.arguments import add_models_argument, announce_models, positive_seconds, whole_number
 
 HELP = "refine the free parameters of a plan for the fastest predicted execution, optionally simulate it"
 
@@ -27,6 +27,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="actions optimized together (default 2; 1 is greedy)")
     parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed of optimizer and simulator (default 0)")
     parser.add_argument("--belief", metavar="FILE", help="belief state file (default: PROBLEM's stem + .toml)")
+    add_models_argument(parser)
     parser.add_argument("--planner", default="pyperplan", metavar="NAME", help="unified-planning engine, or pocl")
     parser.add_argument("--timeout", type=positive_seconds, default=None, metavar="S", help="planner time limit")
     parser.add_argument("--simulate", action="store_true", help="execute greedy and refined sequences in the simulator")
@@ -72,7 +73,7 @@ def result_json(prepared, method: str, seed: int, outcomes: dict) -> dict:
     greedy_values = {p.id: p.value for a in greedy.sequence.actions for p in a.params}
     data = {
         "domain": prepared.plan.domain, "problem": prepared.plan.problem, "planner": prepared.plan.planner,
-        "optimizer": method, "horizon": refined.horizon, "seed": seed,
+        "optimizer": method, "horizon": refined.horizon, "seed": seed, "models": str(prepared.task.models_dir),
         "plan": prepared.plan.to_json(),
         "free_parameters": [{"id": p.id, "low": p.low, "high": p.high, "value": round(chosen[p.id], 6),
                              "greedy": round(greedy_values[p.id], 6)}
@@ -183,8 +184,13 @@ def run(args: argparse.Namespace) -> int:
         from tailor.refinement.outputs import check_output_file
 
         check_output_file(args.plot, ".png")
-    task = resolve_task(args.domain, args.problem, args.belief)
+    from tailor.planner_bridge import resolve_problem
+    from tailor.refinement.model_store import resolve_models
+
+    source = resolve_models(resolve_problem(args.domain, args.problem)[0].parent, args.models)
+    task = resolve_task(args.domain, args.problem, args.belief, source.path)
     prepared = prepare(task, args.planner, args.timeout)
+    announce_models("refine", source)
     simulate = args.simulate or bool(args.plot)
     if not prepared.sequence.actions:
         return _nothing_to_refine(prepared, args, simulate)

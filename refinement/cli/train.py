@@ -24,7 +24,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--jobs", type=worker_count, default=1, metavar="J",
                         help="simulator worker processes (default 1; at most the number of CPUs)")
     parser.add_argument("--out", type=Path, default=None, metavar="DIR",
-                        help="write DIR/models/*.json and DIR/training/ (default: the domain's folder)")
+                        help="write DIR/models/*.json and DIR/training/ (default: the user's data folder, "
+                             "<user data>/tailor/<domain>; the bundled models are never overwritten)")
     parser.add_argument("--n-i", type=_positive_ints, default=None, metavar="LIST",
                         help="candidate examples per episode n_i, comma-separated (default 1,2,3,5,10,20,30,50)")
     parser.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
@@ -54,7 +55,9 @@ def run(args: argparse.Namespace) -> int:
     if episodes < MIN_EPISODES:  # the domain's own [training] episodes
         raise BindingError(f"[training] episodes must be at least {MIN_EPISODES} (a quarter of them is the test "
                            f"set), got {episodes}", file=str(recipe.domain_dir / BINDING_FILE))
-    out = recipe.domain_dir if args.out is None else args.out
+    from tailor.refinement.model_store import ENVIRONMENT_VARIABLE, default_training_out
+
+    out = default_training_out(recipe.domain_dir) if args.out is None else args.out
     check_output_dir(out)  # before gathering anything: minutes of work must not end in an unwritable folder
     report = train_domain(recipe, episodes, args.seed, out, jobs=args.jobs, fresh_episodes=args.fresh_episodes,
                           n_i_candidates=args.n_i or N_I_CANDIDATES, progress=True)
@@ -64,6 +67,8 @@ def run(args: argparse.Namespace) -> int:
         else:
             print((out / "training" / "report.txt").read_text(encoding="utf-8"), end="")
             print(f"wrote {out / 'models'} and {out / 'training'}")
+            print(f"use them with `tailor refine {args.domain} PROBLEM --models {out}`"
+                  + (f" or {ENVIRONMENT_VARIABLE}={out.parent}" if args.out is None else ""))
     except KeyboardInterrupt:  # the models are written and complete: report what is on disk, not the interrupt
         print(f"tailor train: interrupted while printing the report; the models in {out / 'models'} are complete",
               file=sys.stderr)

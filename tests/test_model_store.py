@@ -1,0 +1,78 @@
+"""Where models are read from and written to: bundled models are never overwritten, `--models` and
+$TAILOR_MODELS choose others, and every command says which it used."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from tailor.errors import ModelFileError
+from tailor.refinement.cli.main import main
+from tailor.refinement.model_store import default_training_out, resolve_models, user_root
+
+DOMAINS = Path(__file__).resolve().parents[1] / "domains"
+
+
+def test_the_default_training_folder_is_the_users_not_the_package(tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path))
+    assert user_root() == tmp_path / "tailor"
+    assert default_training_out(DOMAINS / "soccer") == tmp_path / "tailor" / "soccer"
+
+
+def test_models_are_resolved_from_the_option_then_the_variable_then_the_domain(tmp_path, monkeypatch):
+    trained = tmp_path / "run"
+    (trained / "models").mkdir(parents=True)
+    assert resolve_models(DOMAINS / "soccer", trained).path == trained / "models"  # a training output folder
+    assert resolve_models(DOMAINS / "soccer", trained / "models").origin == "--models"
+    with pytest.raises(ModelFileError, match="no such model folder"):
+        resolve_models(DOMAINS / "soccer", tmp_path / "missing")
+    assert resolve_models(DOMAINS / "soccer").path == DOMAINS / "soccer" / "models"
+    monkeypatch.setenv("TAILOR_MODELS", str(tmp_path))
+    (tmp_path / "soccer" / "models").mkdir(parents=True)
+    chosen = resolve_models(DOMAINS / "soccer")
+    assert (chosen.path, chosen.origin) == (tmp_path / "soccer" / "models", "$TAILOR_MODELS")
+    assert resolve_models(DOMAINS / "arm").origin == "domain folder"  # nothing trained for the arm there
+
+
+def test_refine_uses_the_models_it_is_given_and_says_so(tmp_path, capsys):
+    """Models copied elsewhere and made twice as slow double every prediction; the line names the folder."""
+    models = tmp_path / "slow"
+    shutil.copytree(DOMAINS / "arm" / "models", models)
+    data = json.loads((models / "reach.json").read_text())
+    bundled = main(["refine", "arm", "letter-f", "--json"])
+    assert bundled == 0
+    out, err = capsys.readouterr()
+    assert f"action models: {DOMAINS / 'arm' / 'models'} (domain folder)" in err
+    base = json.loads(out)
+    _scale_model(data, 2.0)
+    (models / "reach.json").write_text(json.dumps(data))
+    assert main(["refine", "arm", "letter-f", "--json", "--models", str(models)]) == 0
+    out, err = capsys.readouterr()
+    assert f"action models: {models} (--models)" in err
+    slow = json.loads(out)
+    assert slow["models"] == str(models)
+    assert slow["greedy"]["predicted_total"] == pytest.approx(2 * base["greedy"]["predicted_total"], rel=1e-3)
+
+
+def test_a_missing_models_folder_is_one_line(tmp_path, capsys):
+    assert main(["refine", "arm", "letter-f", "--models", str(tmp_path / "none")]) == 12
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"tailor refine: error: {tmp_path / 'none'}: no such model folder (--models)"]
+
+
+def _scale_model(data: dict, factor: float) -> None:
+    """Multiply every leaf's linear model (coefficients and intercept) by `factor`, wherever it is stored."""
+    def walk(node):
+        if isinstance(node, dict):
+            for key, value in node.items():
+                if key in ("coef", "intercept", "coefficients", "constant"):
+                    node[key] = [v * factor for v in value] if isinstance(value, list) else value * factor
+                else:
+                    walk(value)
+        elif isinstance(node, list):
+            for item in node:
+                walk(item)
+    walk(data)
