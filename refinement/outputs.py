@@ -76,3 +76,14 @@ def finite(data):
 def json_text(data, indent: int | None = 1) -> str:
     """Strict JSON (never NaN or Infinity) of `data`, non-finite numbers written as null."""
     return json.dumps(finite(data), indent=indent, allow_nan=False)
+
+
+SCHEMA_VERSION = 1
+# the units of every number in the JSON outputs: durations in seconds, the simulators' quantities in SI units
+UNITS = {"durations": "s", "quantities": "SI: m, rad, m/s, rad/s"}
+
+
+def versioned(kind: str, data: dict) -> dict:
+    """A command's JSON output led by its schema (`tailor.<kind>/<version>`) and the units of its numbers
+    (the README's "JSON outputs")."""
+    return {"schema": f"tailor.{kind}/{SCHEMA_VERSION}", "units": UNITS, **data}

@@ -74,10 +74,14 @@ def refine_golden_path(domain: str, problem: str) -> Path:
     return REFINE_GOLDEN_DIR / domain / f"{problem}.json"
 
 
+MACHINE_DEPENDENT = ("seconds", "models")  # wall-clock times; the model folder's absolute path
+
+
 def without_timings(value):
-    """The JSON value without "seconds" entries (wall-clock times are not reproducible)."""
+    """The JSON value without "seconds" entries (wall-clock times are not reproducible) and without the
+    model folder's path (it depends on where tailor is installed)."""
     if isinstance(value, dict):
-        return {k: without_timings(v) for k, v in value.items() if k != "seconds"}
+        return {k: without_timings(v) for k, v in value.items() if k not in MACHINE_DEPENDENT}
     if isinstance(value, list):
         return [without_timings(v) for v in value]
     return value

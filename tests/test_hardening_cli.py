@@ -127,8 +127,8 @@ def test_an_empty_plan_is_done_in_every_mode(soccer, capsys, flags):
     assert captured.err == ""
     if "--json" in flags:
         data = json.loads(captured.out)
-        assert data["actions"] == [] and data["predicted_total"] == 0.0 and data["free_parameters"] == []
-        assert ("succeeded" in data) == ("--simulate" in flags)
+        assert data["refined"]["actions"] == [] and data["refined"]["predicted_total"] == 0.0 and data["free_parameters"] == []
+        assert ("succeeded" in data["refined"]) == ("--simulate" in flags)
     else:
         assert "Nothing to refine" in captured.out
 

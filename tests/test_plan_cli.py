@@ -54,7 +54,8 @@ def test_plan_text_is_the_rendering_of_the_json_plan(capsys):
 
 def test_score_is_the_plan_of_figure_5_6():
     data = json.loads(golden_path("soccer", "score", ".json").read_text(encoding="utf-8"))
-    assert list(data)[:6] == ["domain", "problem", "planner", "steps", "links", "orderings"]
+    assert list(data)[:8] == ["schema", "units", "domain", "problem", "planner", "steps", "links", "orderings"]
+    assert data["schema"] == "tailor.plan/1"
     assert (data["domain"], data["problem"], data["planner"]) == ("soccer", "score", "pyperplan")
     assert data["steps"] == [
         {"id": 1, "action": "approachball", "args": ["pos1", "pos2"]},

@@ -53,10 +53,10 @@ def test_refine_and_simulate_a_plan_of_the_outside_domain(trained):
                  str(trained / "line.png"))
     assert run.returncode == 0, run.stderr
     result = json.loads(run.stdout)
-    assert [a["pddl"] for a in result["actions"]] == ["(move p0 p1)", "(move p1 p2)", "(move p2 p3)"]
+    assert [a["pddl"] for a in result["refined"]["actions"]] == ["(move p0 p1)", "(move p1 p2)", "(move p2 p3)"]
     assert [p["id"] for p in result["free_parameters"]] == ["p1.v", "p2.v"]  # p3 stops: v = [0, 0] binds it
-    assert result["succeeded"] and result["greedy"]["succeeded"]
-    assert result["predicted_total"] <= result["greedy"]["predicted_total"] + 1e-9
+    assert result["refined"]["succeeded"] and result["greedy"]["succeeded"]
+    assert result["refined"]["predicted_total"] <= result["greedy"]["predicted_total"] + 1e-9
     assert (trained / "line.png").stat().st_size > 0
 
 

@@ -29,19 +29,19 @@ def test_refine_json_matches_golden(domain, problem):
 def test_refined_score_is_consistent(capsys):
     assert main(["refine", "soccer", "score", "--json", "--simulate"]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert [a["action"] for a in data["actions"]] == ["approachBall", "dribbleBall"]
+    assert [a["action"] for a in data["refined"]["actions"]] == ["approachBall", "dribbleBall"]
     free = {p["id"]: p for p in data["free_parameters"]}
     assert set(free) == {"pos2.phi", "pos2.v"}
-    approach, dribble = data["actions"]
+    approach, dribble = data["refined"]["actions"]
     # the shared subgoal: approachBall's goal heading and speed are dribbleBall's start
     assert approach["params"]["phig"] == dribble["params"]["phi"] == pytest.approx(free["pos2.phi"]["value"], abs=1e-6)
     assert approach["params"]["vg"] == dribble["params"]["v"] == pytest.approx(free["pos2.v"]["value"], abs=1e-6)
     assert 0.0 <= free["pos2.v"]["value"] <= 0.3
-    for execution in (data, data["greedy"]):
+    for execution in (data["refined"], data["greedy"]):
         assert execution["predicted_total"] == pytest.approx(sum(a["predicted"] for a in execution["actions"]), abs=1e-3)
         assert execution["simulated_total"] == pytest.approx(sum(a["simulated"] for a in execution["actions"]), abs=1e-3)
     # refinement minimizes the summed prediction, greedy only the first action's
-    assert data["predicted_total"] <= data["greedy"]["predicted_total"] + 1e-9
+    assert data["refined"]["predicted_total"] <= data["greedy"]["predicted_total"] + 1e-9
     assert approach["predicted"] >= data["greedy"]["actions"][0]["predicted"] - 1e-9
 
 

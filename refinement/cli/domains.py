@@ -61,8 +61,10 @@ def run(args: argparse.Namespace) -> int:
     domains = [describe(DOMAINS_DIR / name) for name in bundled_domains()]
     domains += [describe(Path(resolve_domain_dir(p))) for p in args.paths]
     if args.json:
-        sys.stdout.write(json.dumps({"simulators": sims, "failed_simulators": registry.failed(),
-                                     "domains": domains}, indent=1) + "\n")
+        from tailor.refinement.outputs import versioned
+
+        sys.stdout.write(json.dumps(versioned("domains", {"simulators": sims, "failed_simulators": registry.failed(),
+                                                          "domains": domains}), indent=1) + "\n")
         return 0
     out = sys.stdout.write
     out("Simulators (entry point group tailor.simulators):\n")

@@ -93,6 +93,8 @@ def run(args: argparse.Namespace) -> int:
         comparison_episode,
         evaluation_plan,
         horizon_episode,
+        horizon_rows,
+        situation_rows,
         situation_seed,
         summarize_comparison,
         summarize_horizons,
@@ -121,16 +123,18 @@ def run(args: argparse.Namespace) -> int:
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
               "models": str(source.path), "comparison": plan.comparison}
     report.update(summarize_comparison(rows))
+    report["situations"] = situation_rows(rows, {i: objects for _, i, objects in items})
     if plan.horizons and args.horizon_episodes:
         items = situations(plan.horizons, args.horizon_episodes)
         hrows = _run_parallel(horizon_episode, [(job, i, objects, HORIZONS) for job, i, objects in items],
                               args.jobs, "horizons 1..4")
         report["horizon_situations"] = plan.horizons
         report["horizons"] = summarize_horizons(hrows, HORIZONS)
+        report["horizons"]["situations"] = horizon_rows(hrows, {i: objects for _, i, objects in items}, HORIZONS)
     if args.json:
-        from tailor.refinement.outputs import json_text
+        from tailor.refinement.outputs import json_text, versioned
 
-        sys.stdout.write(json_text(report) + "\n")
+        sys.stdout.write(json_text(versioned("evaluate", report)) + "\n")
     else:
         _print_text(report)
     return 0

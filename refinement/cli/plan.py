@@ -41,5 +41,10 @@ def run(args: argparse.Namespace) -> int:
 
     domain, problem = resolve_problem(args.domain, args.problem)
     plan = plan_files(domain, problem, planner=args.planner, timeout=args.timeout)
-    sys.stdout.write(format_json(plan.to_json()) if args.json else render_text(plan))
+    if args.json:
+        from tailor.refinement.outputs import versioned
+
+        sys.stdout.write(format_json(versioned("plan", plan.to_json())))
+    else:
+        sys.stdout.write(render_text(plan))
     return 0

@@ -67,6 +67,10 @@ def _execution_json(outcome) -> dict:
 
 
 def result_json(prepared, method: str, seed: int, outcomes: dict) -> dict:
+    """Schema tailor.refine/1: the plan, the free parameters with their ranges and chosen values, and the
+    refined and greedy executions in the same structure."""
+    from tailor.refinement.outputs import versioned
+
     refined = outcomes["refined"].refined
     chosen = {p.id: p.value for a in refined.sequence.actions for p in a.params}
     greedy = outcomes["greedy"].refined
@@ -79,9 +83,9 @@ def result_json(prepared, method: str, seed: int, outcomes: dict) -> dict:
                              "greedy": round(greedy_values[p.id], 6)}
                             for p in prepared.sequence.free_parameters()],
     }
-    data.update(_execution_json(outcomes["refined"]))
+    data["refined"] = _execution_json(outcomes["refined"])
     data["greedy"] = _execution_json(outcomes["greedy"])
-    return data
+    return versioned("refine", data)
 
 
 def _print_text(prepared, method: str, outcomes: dict) -> None:
@@ -163,11 +167,14 @@ def _nothing_to_refine(prepared, args: argparse.Namespace, simulate: bool) -> in
         execution = {"horizon": args.horizon, "actions": [], "predicted_total": 0.0, "optimization": []}
         if simulate:
             execution.update(simulated_total=0.0, succeeded=True)
+        from tailor.refinement.outputs import versioned
+
         plan = prepared.plan
         data = {"domain": plan.domain, "problem": plan.problem, "planner": plan.planner, "optimizer": args.optimizer,
-                "horizon": args.horizon, "seed": args.seed, "plan": plan.to_json(), "free_parameters": [],
-                **execution, "greedy": {**execution, "horizon": 1}, "note": NOTHING_TO_REFINE}
-        sys.stdout.write(json.dumps(data, indent=1, allow_nan=False) + "\n")
+                "horizon": args.horizon, "seed": args.seed, "models": str(prepared.task.models_dir),
+                "plan": plan.to_json(), "free_parameters": [],
+                "refined": execution, "greedy": {**execution, "horizon": 1}, "note": NOTHING_TO_REFINE}
+        sys.stdout.write(json.dumps(versioned("refine", data), indent=1, allow_nan=False) + "\n")
     else:
         from tailor.planner_bridge import render_text
 
@@ -190,7 +197,6 @@ def run(args: argparse.Namespace) -> int:
     source = resolve_models(resolve_problem(args.domain, args.problem)[0].parent, args.models)
     task = resolve_task(args.domain, args.problem, args.belief, source.path)
     prepared = prepare(task, args.planner, args.timeout)
-    announce_models("refine", source)
     simulate = args.simulate or bool(args.plot)
     if not prepared.sequence.actions:
         return _nothing_to_refine(prepared, args, simulate)
@@ -200,6 +206,7 @@ def run(args: argparse.Namespace) -> int:
         check_scene(prepared.sequence, prepared.binding.file)
     outcomes = {"greedy": refine_and_dispatch(prepared, GREEDY_HORIZON, args.optimizer, args.seed, simulate),
                 "refined": refine_and_dispatch(prepared, args.horizon, args.optimizer, args.seed, simulate)}
+    announce_models("refine", source)  # once the models have made their predictions: an error stays one line
     if args.plot:
         from tailor.refinement.refine_plots import draw_refinement
 

@@ -96,6 +96,7 @@ def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: 
     g, r = dispatch(greedy.sequence, seed=seed), dispatch(refined.sequence, seed=seed)
     out = {"index": index, "seed": seed, "problem": job.plan.problem,
            "greedy": g.duration, "refined": r.duration, "greedy_ok": g.succeeded, "refined_ok": r.succeeded,
+           "greedy_outcome": outcome_of(g), "refined_outcome": outcome_of(r),
            "predicted_greedy": greedy.predicted_total, "predicted_refined": refined.predicted_total,
            "analytic_seconds": sum(w.seconds for w in refined.windows),
            "analytic_method": ",".join(w.method for w in refined.windows),
@@ -108,6 +109,39 @@ def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: 
         start = {p.id: p.value for a in refined.sequence.actions for p in a.params}
         out["oracle"], out["oracle_method"] = _oracle(sequence, seed, start)
     return out
+
+
+def outcome_of(result) -> str:
+    """A dispatched sequence's outcome: "success", or the first failing action's outcome (e.g. "timeout")."""
+    return next((r.outcome for r in result.results if r.outcome != "success"), "success" if result.results
+                else "not_started")
+
+
+def situation_rows(rows: list[dict], situations: dict[int, dict]) -> list[dict]:
+    """Per situation, what a re-analysis needs: the situation (belief values per object), and the greedy and
+    refined (and zero-baseline, oracle) predicted and simulated durations (s) with their outcomes."""
+    out = []
+    for r in rows:
+        row = {"index": r["index"], "seed": r["seed"], "problem": r["problem"],
+               "situation": situations.get(r["index"]),
+               "greedy": {"predicted": r["predicted_greedy"], "simulated": r["greedy"],
+                          "outcome": r["greedy_outcome"]},
+               "refined": {"predicted": r["predicted_refined"], "simulated": r["refined"],
+                           "outcome": r["refined_outcome"], "optimizer": r["analytic_method"]}}
+        if "zero" in r:
+            row["zero"] = {"simulated": r["zero"], "outcome": "success" if r["zero_ok"] else "failed"}
+        if r.get("oracle_method"):
+            row["oracle"] = {"simulated": r.get("oracle"), "method": r["oracle_method"]}
+        out.append(row)
+    return out
+
+
+def horizon_rows(rows: list[dict], situations: dict[int, dict], horizons: tuple[int, ...]) -> list[dict]:
+    """Per situation of the horizon experiment: the situation and, per horizon, predicted and simulated (s)."""
+    return [{"index": r["index"], "seed": r["seed"], "problem": r["problem"], "situation": situations.get(r["index"]),
+             "horizons": [{"horizon": h, "predicted": r[f"h{h}_predicted"], "simulated": r[f"h{h}"],
+                           "succeeded": r[f"h{h}_ok"], "optimizer": r[f"h{h}_methods"]} for h in horizons]}
+            for r in rows]
 
 
 def _axis(p) -> np.ndarray:

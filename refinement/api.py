@@ -1,0 +1,228 @@
+"""The Python API, one call per stage: `tailor.plan`, `tailor.refine`, `tailor.dispatch` (exported by `tailor`).
+
+    import tailor
+    plan = tailor.plan("soccer", "score")                      # files, bundled names, or a UP Problem
+    refined = tailor.refine("soccer", "score", horizon=2)      # belief: the problem's file, a dict or a path
+    refined.chosen                                             # {"pos2.phi": 2.356, ...}
+    result = tailor.dispatch(refined, seed=0)                  # what the simulator measured
+
+Files are planned in one planner child process kept for the whole session (fixed hash seed: the same files give
+the same plan on every run; its start-up is paid once); unified-planning Problems are planned in this process.
+Every error is a `tailor.TailorError`; a wrong argument is its ArgumentTypeError (a TypeError) or
+ArgumentValueError (a ValueError), naming the argument.
+"""
+
+from __future__ import annotations
+
+import atexit
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from tailor.errors import ArgumentTypeError, ArgumentValueError, BeliefError
+from tailor.planner_bridge import DEFAULT_PLANNER, AbstractPlan
+from tailor.refinement.action_sequence import ActionSequence
+from tailor.refinement.refine import RefinedSequence
+from tailor.sims.episode import SequenceResult
+
+_PLANNER = None  # the session's planner child process (planner_bridge.worker.PlannerProcess)
+
+
+@dataclass(frozen=True)
+class Refinement:
+    """A plan refined for the fastest predicted execution: what was free, what it was set to, and why."""
+
+    plan: AbstractPlan
+    instantiated: ActionSequence  # after Alg. 3: free parameters as ranges
+    refined: RefinedSequence  # every parameter bound, with its predicted durations
+    models: Path  # the folder the action models came from
+
+    @property
+    def sequence(self) -> ActionSequence:
+        """The executable sequence, every parameter bound (what `dispatch` runs)."""
+        return self.refined.sequence
+
+    @property
+    def free(self) -> dict[str, tuple[float, float]]:
+        """Each free parameter's id with its range (low, high), in plan order."""
+        return {p.id: (p.low, p.high) for p in self.instantiated.free_parameters()}
+
+    @property
+    def chosen(self) -> dict[str, float]:
+        """Each free parameter's id with the value refinement chose: `{"pos2.phi": 2.356, ...}`."""
+        values = {p.id: p.value for a in self.refined.sequence.actions for p in a.params}
+        return {pid: values[pid] for pid in self.free}
+
+    @property
+    def predicted_total(self) -> float:
+        """The predicted duration of the whole sequence, seconds."""
+        return self.refined.predicted_total
+
+    def to_json(self) -> dict:
+        return {"plan": self.plan.to_json(), "models": str(self.models), "horizon": self.refined.horizon,
+                "free_parameters": [{"id": pid, "low": low, "high": high, "value": self.chosen[pid]}
+                                    for pid, (low, high) in self.free.items()],
+                "sequence": self.sequence.to_json(), "predicted_s": list(self.refined.predicted),
+                "predicted_total_s": self.predicted_total}
+
+
+def plan(domain, problem=None, *, planner: str = DEFAULT_PLANNER, timeout: float | None = None) -> AbstractPlan:
+    """A validated partial-order plan with causal links, for a PDDL pair (paths or bundled names) or for a
+    unified-planning Problem (given alone, as `domain`, or as `problem`)."""
+    _check(planner, str, "planner")
+    up_problem = _up_problem(domain if problem is None else problem)
+    if up_problem is not None:
+        from tailor.planner_bridge.up_interop import plan_problem
+
+        return plan_problem(up_problem, planner)
+    if problem is None:
+        raise ArgumentValueError("problem is missing: give a PDDL problem (path or name) or a unified-planning "
+                                 "Problem")
+    return _plan_files(domain, problem, planner, timeout)
+
+
+def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 2, optimizer: str = "analytic",
+           seed: int = 0, models: str | Path | None = None, planner: str = DEFAULT_PLANNER,
+           timeout: float | None = None) -> Refinement:
+    """Plan (unless `plan` is given: ours, or a SequentialPlan / PartialOrderPlan of any UP engine),
+    instantiate (Alg. 3) and refine over `horizon` actions (Sec. 5.4; 1 is greedy).
+
+    `domain` is a bundled name, a domain folder or its domain.pddl (the binding `actions.toml` beside it says
+    how its actions execute); `problem` a PDDL file, a problem name or a unified-planning Problem; `belief`
+    the continuous values `{object: {quantity: value}}`, a belief file, or None for the problem's own file.
+    `models` is a model folder (default: as the CLI, see model_store)."""
+    from tailor.planner_bridge import resolve_domain_dir, resolve_problem
+    from tailor.refinement.belief import belief_path_for, load_belief, parse_belief
+    from tailor.refinement.binding import load_domain_binding
+    from tailor.refinement.instantiate import instantiate
+    from tailor.refinement.model_store import resolve_models
+    from tailor.refinement.models.action_models import load_action_models
+    from tailor.refinement.optimizers import OPTIMIZERS
+    from tailor.refinement.refine import refine as refine_sequence
+
+    _check(domain, (str, Path), "domain")
+    _check(seed, int, "seed")
+    _check(horizon, int, "horizon")
+    if horizon < 1:
+        raise ArgumentValueError(f"horizon must be at least 1, not {horizon}")
+    if optimizer not in OPTIMIZERS:
+        raise ArgumentValueError(f"optimizer must be one of {', '.join(sorted(OPTIMIZERS))}, not {optimizer!r}")
+    domain_dir = resolve_domain_dir(domain)
+    binding = load_domain_binding(domain_dir)
+    up_problem = _up_problem(problem)
+    problem_file = None
+    if up_problem is None:
+        _check(problem, (str, Path), "problem")
+        domain_file, problem_file = resolve_problem(domain, problem)
+    abstract = _given_plan(plan, up_problem, domain_dir)
+    if abstract is None:
+        if up_problem is not None:
+            from tailor.planner_bridge.up_interop import plan_problem
+
+            abstract = plan_problem(up_problem, planner)
+        else:
+            abstract = _plan_files(domain_file, problem_file, planner, timeout)
+    objects = [name for name, _ in abstract.objects] or None
+    if belief is None:
+        if problem_file is None:
+            raise ArgumentValueError("belief is missing: a unified-planning Problem has no belief file beside it; "
+                                     "give the values as {object: {quantity: value}} or a belief file")
+        belief_state = load_belief(belief_path_for(problem_file), objects, binding.quantities)
+    elif isinstance(belief, Mapping):
+        belief_state = parse_belief(_belief_table(belief), "<belief argument>", objects, binding.quantities)
+    elif isinstance(belief, (str, Path)):
+        belief_state = load_belief(Path(belief), objects, binding.quantities)
+    else:
+        raise ArgumentTypeError(f"belief must be a mapping {{object: {{quantity: value}}}}, a path or None, "
+                                f"not {type(belief).__name__}")
+    sequence = instantiate(abstract, binding, belief_state)
+    source = resolve_models(domain_dir, models)
+    action_models = load_action_models(source.path, tuple(sorted({a.action for a in sequence.actions})))
+    refined = refine_sequence(sequence, action_models, horizon=horizon, method=optimizer, seed=seed)
+    return Refinement(abstract, sequence, refined, source.path)
+
+
+def dispatch(refined, seed: int = 0) -> SequenceResult:
+    """Execute a refined (fully bound) sequence in its simulator: durations, outcomes and the trajectory."""
+    from tailor.refinement.dispatch import dispatch as dispatch_sequence
+
+    _check(seed, int, "seed")
+    sequence = refined.sequence if isinstance(refined, (Refinement, RefinedSequence)) else refined
+    if not isinstance(sequence, ActionSequence):
+        raise ArgumentTypeError(f"refined must be a Refinement, RefinedSequence or ActionSequence, "
+                                f"not {type(refined).__name__}")
+    if sequence.free_parameters():
+        raise ArgumentValueError("refined has free parameters left: "
+                                 + ", ".join(p.id for p in sequence.free_parameters()) + " (refine it first)")
+    return dispatch_sequence(sequence, seed=seed)
+
+
+def _check(value, types, name: str) -> None:
+    if isinstance(value, bool) or not isinstance(value, types):
+        names = " or ".join(t.__name__ for t in (types if isinstance(types, tuple) else (types,)))
+        raise ArgumentTypeError(f"{name} must be {names}, not {type(value).__name__}")
+
+
+def _up_problem(value):
+    """`value` if it is a unified-planning Problem, else None (without importing unified-planning for paths)."""
+    if isinstance(value, (str, Path)) or value is None:
+        return None
+    from unified_planning.model import Problem
+
+    if isinstance(value, Problem):
+        return value
+    raise ArgumentTypeError(f"problem must be a path, a problem name or a unified_planning Problem, "
+                            f"not {type(value).__name__}")
+
+
+def _given_plan(given, up_problem, domain_dir: Path) -> AbstractPlan | None:
+    """The caller's plan as ours: an AbstractPlan as it is, a UP plan linked against the problem."""
+    if given is None or isinstance(given, AbstractPlan):
+        return given
+    if up_problem is None:
+        raise ArgumentValueError("plan: a unified-planning plan needs the unified-planning Problem it solves "
+                                 "(pass problem=Problem)")
+    from tailor.planner_bridge.up_interop import link_plan
+
+    return link_plan(up_problem, given, domain=domain_dir.name)
+
+
+def _belief_table(belief: Mapping) -> dict:
+    """A belief given in Python as the TOML file's `objects` table (values checked by parse_belief)."""
+    table = {}
+    for name, values in belief.items():
+        if not isinstance(name, str) or not isinstance(values, Mapping):
+            raise ArgumentTypeError("belief must map object names to {quantity: value} mappings, "
+                                    f"got {name!r}: {type(values).__name__}")
+        table[name] = dict(values)
+        for quantity, value in values.items():
+            if isinstance(value, (int, float)) and not isinstance(value, bool) and not math.isfinite(value):
+                raise BeliefError(f"[objects.{name}] {quantity} = {value!r} is not a finite number",
+                                  file="<belief argument>")
+    return {"objects": table}
+
+
+def _plan_files(domain, problem, planner: str, timeout: float | None) -> AbstractPlan:
+    """Plan a PDDL pair in the session's planner process (started on first use, ended at exit)."""
+    global _PLANNER
+    from tailor.planner_bridge import resolve_problem
+    from tailor.planner_bridge.reading import check_files
+    from tailor.planner_bridge.solving import canonical
+    from tailor.planner_bridge.worker import PlannerProcess
+
+    _check(domain, (str, Path), "domain")
+    _check(problem, (str, Path), "problem")
+    if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, (int, float))):
+        raise ArgumentTypeError(f"timeout must be a number of seconds or None, not {type(timeout).__name__}")
+    if timeout is not None and not (timeout > 0 and math.isfinite(timeout)):
+        raise ArgumentValueError(f"timeout must be positive and finite (None for no limit), not {timeout}")
+    domain_file, problem_file = resolve_problem(domain, problem)
+    check_files(domain_file, problem_file)  # bad files fail here, before the planner process is asked
+    if _PLANNER is None:
+        _PLANNER = PlannerProcess()
+        atexit.register(_PLANNER.close)
+    return _PLANNER.plan(domain_file, problem_file, canonical(planner), timeout)
+
+
+__all__ = ["Refinement", "plan", "refine", "dispatch"]
