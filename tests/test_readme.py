@@ -17,9 +17,11 @@ def test_readme_python_example_runs():
     with contextlib.redirect_stdout(out):
         exec(compile(blocks[0], str(README), "exec"), {"__name__": "readme_example"})
     lines = out.getvalue().splitlines()
-    assert lines[0] == "['pos2.phi', 'pos2.v']"
+    assert lines[0] == "[('approachball', ('pos1', 'pos2')), ('dribbleball', ('pos2', 'pos3'))]"
     greedy, refined = (float(re.search(r"predicted ([\d.]+) s", line).group(1)) for line in lines[1:3])
+    assert lines[1].startswith("1 {'pos2.phi': ") and lines[2].startswith("2 {'pos2.phi': ")
     assert refined <= greedy  # horizon 2 minimizes the summed prediction that greedy minimizes action by action
+    assert lines[3].startswith("{'pos2.phi': (-3.14")
 
 
 def test_readme_opens_with_the_two_setup_commands():

@@ -48,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     from tailor.refinement.learning.protocol import N_I_CANDIDATES
     from tailor.refinement.learning.recipe import load_recipe
     from tailor.refinement.learning.training import train_domain
-    from tailor.refinement.outputs import check_output_dir, json_text, versioned
+    from tailor.refinement.outputs import check_output_dir, json_text
 
     recipe = load_recipe(resolve_domain_dir(args.domain))
     episodes = recipe.episodes if args.episodes is None else args.episodes
@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
                           n_i_candidates=args.n_i or N_I_CANDIDATES, progress=True)
     try:
         if args.json:
-            sys.stdout.write(json_text(versioned("train", report)) + "\n")
+            sys.stdout.write(json_text(report) + "\n")  # the report, led by its own schema
         else:
             print((out / "training" / "report.txt").read_text(encoding="utf-8"), end="")
             print(f"wrote {out / 'models'} and {out / 'training'}")
