@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import atexit
 import math
+import threading
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +28,7 @@ from tailor.refinement.refine import RefinedSequence
 from tailor.sims.episode import SequenceResult
 
 _PLANNER = None  # the session's planner child process (planner_bridge.worker.PlannerProcess)
+_PLANNER_LOCK = threading.Lock()  # one request at a time: the child answers them in turn
 
 
 @dataclass(frozen=True)
@@ -219,10 +221,11 @@ def _plan_files(domain, problem, planner: str, timeout: float | None) -> Abstrac
         raise ArgumentValueError(f"timeout must be positive and finite (None for no limit), not {timeout}")
     domain_file, problem_file = resolve_problem(domain, problem)
     check_files(domain_file, problem_file)  # bad files fail here, before the planner process is asked
-    if _PLANNER is None:
-        _PLANNER = PlannerProcess()
-        atexit.register(_PLANNER.close)
-    return _PLANNER.plan(domain_file, problem_file, canonical(planner), timeout)
+    with _PLANNER_LOCK:
+        if _PLANNER is None:
+            _PLANNER = PlannerProcess()
+            atexit.register(_PLANNER.close)
+        return _PLANNER.plan(domain_file, problem_file, canonical(planner), timeout)
 
 
 __all__ = ["Refinement", "plan", "refine", "dispatch"]
