@@ -16,6 +16,7 @@ import heapq
 import itertools
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from tailor.planner_bridge.pocl_ground import GroundTask
@@ -38,6 +39,10 @@ class PartialPlan:
 
     def precedes(self, first: int, second: int) -> bool:
         return bool(self.before[second] >> first & 1)
+
+    def ordered_pairs(self) -> int:
+        """How many pairs of steps the orderings relate (the initial state and the goal left out)."""
+        return sum((b >> 2).bit_count() for b in self.before[2:])
 
     def key(self) -> tuple:
         """Equal for plans with the same steps, orderings, causal links and open conditions (duplicates)."""
@@ -167,26 +172,47 @@ class Planner:
             return math.inf
         return self.heuristic(plan, self.costs, lambda step, literal: self.achieves(plan, step, literal))
 
-    def search(self, timeout: float | None = None, node_limit: int | None = None) -> SearchResult:
-        """Weighted A* over partial plans; the first plan without flaws is returned."""
+    def search(self, timeout: float | None = None, node_limit: int | None = None, alternatives: int = 0,
+               improve: Callable[[PartialPlan], tuple[tuple, PartialPlan]] | None = None) -> SearchResult:
+        """Weighted A* over partial plans. Without `improve` the first plan without flaws is returned. With it,
+        the search goes on for up to `alternatives` more expansions (or the time left) while the frontier may
+        still hold a plan of no more steps than the first; each such plan goes through `improve` (a plan ->
+        (score, improved plan); the least score wins, the earliest plan on ties). Among plans of equal length
+        the search's own tie-break already prefers fewer ordered pairs."""
         start = time.monotonic()
         root = self.initial_plan()
         if self.h(root) == math.inf:
             return SearchResult("unsolvable", None, 0, 1)
         serial = itertools.count()
-        frontier = [(self.weight * self.h(root), 0.0, next(serial), root)]
+        frontier = [(self.weight * self.h(root), 0.0, 0, next(serial), root)]
         seen = {root.key()}
         self.expanded, self.generated = 0, 1
+        best, bound, stop, solutions = None, math.inf, math.inf, 0
         while frontier:
+            if frontier[0][0] > bound or self.expanded >= stop:
+                break  # no plan of no more steps than the first is left within the budget
             if timeout is not None and self.expanded % 64 == 0 and time.monotonic() - start > timeout:
+                if best is not None:
+                    break
                 return SearchResult("timeout", None, self.expanded, self.generated)
             if node_limit is not None and self.generated > node_limit:
+                if best is not None:
+                    break
                 return SearchResult("limit", None, self.expanded, self.generated)
             *_, plan = heapq.heappop(frontier)
             self.expanded += 1
             flaw = self.select(self, plan)
             if flaw is None:
-                return SearchResult("solved", plan, self.expanded, self.generated)
+                if improve is None:
+                    return SearchResult("solved", plan, self.expanded, self.generated, 1)
+                if len(plan.steps) - 2 <= bound:
+                    solutions += 1
+                    scored = improve(plan)
+                    if best is None or scored[0] < best[0]:
+                        best = scored
+                    if bound == math.inf:
+                        bound, stop = len(plan.steps) - 2, self.expanded + alternatives
+                continue
             kind, index = flaw
             for child in self.close(plan, index) if kind == "open" else self.resolve(plan, index):
                 key = child.key()
@@ -198,7 +224,9 @@ class Planner:
                     continue
                 self.generated += 1
                 g = len(child.steps) - 2
-                heapq.heappush(frontier, (g + self.weight * h, h, next(serial), child))
+                heapq.heappush(frontier, (g + self.weight * h, h, child.ordered_pairs(), next(serial), child))
+        if best is not None:
+            return SearchResult("solved", best[1], self.expanded, self.generated, solutions)
         return SearchResult("unsolvable", None, self.expanded, self.generated)
 
 
@@ -210,6 +238,7 @@ class SearchResult:
     plan: PartialPlan | None
     expanded: int
     generated: int
+    solutions: int = 0  # flawless plans the search met (more than 1 only when it looked for alternatives)
 
 
 def least_cost_flaw_repair(planner: Planner, plan: PartialPlan):
