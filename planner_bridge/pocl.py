@@ -7,6 +7,9 @@ and resolve a threat by demotion (threat before the producer) or promotion (thre
 Best-first search (weighted A*: f = steps + w * h) with the additive heuristic orders the partial plans;
 a flaw selection strategy picks the one flaw refined at each node. Pruned: plans whose orderings would be
 cyclic (never generated), plans with an open condition no step can ever achieve, and duplicate plans.
+Least commitment: ties of f go to the plan with fewer ordered pairs, and the engine (pocl_engine) lets the
+search look on past its first plan for others of no more steps, each put through the post-pass of
+planner_bridge.pocl_order, and keeps the least ordered.
 Every step id is a number: 0 is the initial state, 1 the goal, steps are 2, 3, ... in order of addition.
 """
 
@@ -174,11 +177,11 @@ class Planner:
 
     def search(self, timeout: float | None = None, node_limit: int | None = None, alternatives: int = 0,
                improve: Callable[[PartialPlan], tuple[tuple, PartialPlan]] | None = None) -> SearchResult:
-        """Weighted A* over partial plans. Without `improve` the first plan without flaws is returned. With it,
-        the search goes on for up to `alternatives` more expansions (or the time left) while the frontier may
-        still hold a plan of no more steps than the first; each such plan goes through `improve` (a plan ->
-        (score, improved plan); the least score wins, the earliest plan on ties). Among plans of equal length
-        the search's own tie-break already prefers fewer ordered pairs."""
+        """Weighted A* over partial plans (ties: the lower h, then the fewer ordered pairs of steps). Without
+        `improve` the first plan without flaws is returned. With it, the search goes on for `alternatives` more
+        expansions (fewer if the time or node limit comes first), and every flawless plan of no more steps than
+        the first goes through `improve` (a plan -> (score, improved plan)): the least score wins, the earliest
+        plan on ties. The first plan's length is no bound on the others' f, as the heuristic is inadmissible."""
         start = time.monotonic()
         root = self.initial_plan()
         if self.h(root) == math.inf:
@@ -187,9 +190,9 @@ class Planner:
         frontier = [(self.weight * self.h(root), 0.0, 0, next(serial), root)]
         seen = {root.key()}
         self.expanded, self.generated = 0, 1
-        best, bound, stop, solutions = None, math.inf, math.inf, 0
+        best, bound, stop, solutions = None, math.inf, math.inf, 0  # bound: the first plan's steps
         while frontier:
-            if frontier[0][0] > bound or self.expanded >= stop:
+            if self.expanded >= stop:
                 break  # no plan of no more steps than the first is left within the budget
             if timeout is not None and self.expanded % 64 == 0 and time.monotonic() - start > timeout:
                 if best is not None:
