@@ -10,7 +10,8 @@ the goal left out): `ord` is the size of its transitive reduction (the fewest or
 `pairs` the size of the closure (the ordered pairs of steps), `width` the most steps no ordering relates (the
 longest antichain): fewer orderings and pairs, more width, is less commitment. The `+post-pass` columns put
 the second planner's sequence through the POCL planner's least-commitment post-pass (planner_bridge.pocl_order),
-to show how much of the difference is the search and how much the post-pass ("-": not typed STRIPS).
+to show how much of the difference is the search and how much the post-pass ("-": not typed STRIPS; "~": the
+post-pass hit its node limit, so its result is not proven the least ordered for those steps).
 Time is the best of `--repeat` runs, after one warm-up run per planner (imports are not planning time).
 """
 
@@ -133,12 +134,14 @@ def post_passed(domain: Path, problem: Path, plan: AbstractPlan) -> dict | None:
     number = {(action.name, action.args): k for k, action in enumerate(task.actions)}
     if any((step.action, step.args) not in number for step in plan.steps):
         return None
-    better = least_commitment(task, sequence_plan(task, [number[(s.action, s.args)] for s in plan.steps]))
+    stats: dict = {}
+    better = least_commitment(task, sequence_plan(task, [number[(s.action, s.args)] for s in plan.steps]),
+                              stats=stats)
     order = linearization(better)
     ids = {step: k for k, step in enumerate(order, start=1)}
     pairs = {(ids[a], ids[b]) for a in order for b in order if a != INIT and better.precedes(a, b)}
     steps = tuple(plan.steps[0].__class__(k, "", ()) for k in ids.values())
-    return counts(AbstractPlan("", "", "", steps, (), tuple(sorted(pairs))))
+    return counts(AbstractPlan("", "", "", steps, (), tuple(sorted(pairs)))) | {"exact": stats["exact"]}
 
 
 def compare(pairs: list[tuple[Path, Path]], planners: tuple[str, str] = ("pocl", "pyperplan"), repeat: int = 1,
@@ -161,7 +164,8 @@ def _cells(row: dict | None, timed: bool) -> str:
         return f"{'-':>5} {'-':>4} {'-':>5} {'-':>5}" + (f" {'':>7}" if timed else "")
     if "error" in row:
         return f"{row['error'][:27]:<27}" + (f" {row['seconds']:>7.2f}" if timed else "")
-    text = f"{row['steps']:>5} {row['orderings']:>4} {row['pairs']:>5} {row['width']:>5}"
+    mark = "" if row.get("exact", True) else "~"  # the post-pass hit its node limit: not proven least ordered
+    text = f"{row['steps']:>5} {row['orderings']:>4} {row['pairs']:>5} {str(row['width']) + mark:>5}"
     return text + (f" {row['seconds']:>7.2f}" if timed else "")
 
 

@@ -7,9 +7,8 @@ and resolve a threat by demotion (threat before the producer) or promotion (thre
 Best-first search (weighted A*: f = steps + w * h) with the additive heuristic orders the partial plans;
 a flaw selection strategy picks the one flaw refined at each node. Pruned: plans whose orderings would be
 cyclic (never generated), plans with an open condition no step can ever achieve, and duplicate plans.
-Least commitment: ties of f go to the plan with fewer ordered pairs, and the engine (pocl_engine) lets the
-search look on past its first plan for others of no more steps, each put through the post-pass of
-planner_bridge.pocl_order, and keeps the least ordered.
+Least commitment: the engine (pocl_engine) lets the search look on past its first plan for others of no more
+steps, puts each through the post-pass of planner_bridge.pocl_order and keeps the least ordered.
 Every step id is a number: 0 is the initial state, 1 the goal, steps are 2, 3, ... in order of addition.
 """
 
@@ -42,10 +41,6 @@ class PartialPlan:
 
     def precedes(self, first: int, second: int) -> bool:
         return bool(self.before[second] >> first & 1)
-
-    def ordered_pairs(self) -> int:
-        """How many pairs of steps the orderings relate (the initial state and the goal left out)."""
-        return sum((b >> 2).bit_count() for b in self.before[2:])
 
     def key(self) -> tuple:
         """Equal for plans with the same steps, orderings, causal links and open conditions (duplicates)."""
@@ -177,7 +172,7 @@ class Planner:
 
     def search(self, timeout: float | None = None, node_limit: int | None = None, alternatives: int = 0,
                improve: Callable[[PartialPlan], tuple[tuple, PartialPlan]] | None = None) -> SearchResult:
-        """Weighted A* over partial plans (ties: the lower h, then the fewer ordered pairs of steps). Without
+        """Weighted A* over partial plans (ties: the lower h, then the older plan). Without
         `improve` the first plan without flaws is returned. With it, the search goes on for `alternatives` more
         expansions (fewer if the time or node limit comes first), and every flawless plan of no more steps than
         the first goes through `improve` (a plan -> (score, improved plan)): the least score wins, the earliest
@@ -187,7 +182,7 @@ class Planner:
         if self.h(root) == math.inf:
             return SearchResult("unsolvable", None, 0, 1)
         serial = itertools.count()
-        frontier = [(self.weight * self.h(root), 0.0, 0, next(serial), root)]
+        frontier = [(self.weight * self.h(root), 0.0, next(serial), root)]
         seen = {root.key()}
         self.expanded, self.generated = 0, 1
         best, bound, stop, solutions = None, math.inf, math.inf, 0  # bound: the first plan's steps
@@ -227,7 +222,7 @@ class Planner:
                     continue
                 self.generated += 1
                 g = len(child.steps) - 2
-                heapq.heappush(frontier, (g + self.weight * h, h, child.ordered_pairs(), next(serial), child))
+                heapq.heappush(frontier, (g + self.weight * h, h, next(serial), child))
         if best is not None:
             return SearchResult("solved", best[1], self.expanded, self.generated, solutions)
         return SearchResult("unsolvable", None, self.expanded, self.generated)

@@ -123,7 +123,7 @@ class POCLEngine(Engine, OneshotPlannerMixin):
         planner = Planner(task, **self._options)
         remaining = None if timeout is None else max(0.0, timeout - (time.monotonic() - start))
         if self._least_commitment:
-            result = planner.search(remaining, self._node_limit, ALTERNATIVES, lambda plan: _scored(task, plan))
+            result = planner.search(remaining, self._node_limit, ALTERNATIVES, lambda plan: scored(task, plan))
         else:
             result = planner.search(remaining, self._node_limit)
         metrics = {"expanded": str(result.expanded), "generated": str(result.generated),
@@ -139,7 +139,7 @@ class POCLEngine(Engine, OneshotPlannerMixin):
                                     metrics=metrics)
 
 
-def _scored(task, plan):
+def scored(task, plan):
     """The plan after the least-commitment post-pass, scored: fewer steps, then fewer ordered pairs, then
     fewer orderings after transitive reduction."""
     better = least_commitment(task, plan)

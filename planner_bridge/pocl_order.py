@@ -176,22 +176,36 @@ class _Reorder:
             self.run(child, grown, pending)
 
 
-def least_commitment(task: GroundTask, plan: PartialPlan, node_limit: int = NODE_LIMIT) -> PartialPlan:
-    """The plan with its causal links and threat sides chosen again for the fewest ordered pairs of steps,
-    and without the steps that then support nothing; never more ordered than `plan` (its choices are the
-    first incumbent)."""
+def reorder(task: GroundTask, plan: PartialPlan, node_limit: int = NODE_LIMIT, stats: dict | None = None) -> PartialPlan:
+    """The plan's steps with every causal link's producer and every threat's side chosen again for the fewest
+    ordered pairs of steps (then the fewest reduced orderings); `plan`'s own choices are the first incumbent,
+    so the result is never more ordered (and is `plan`'s links and orderings when nothing is less ordered).
+    `stats`, if given, receives the nodes searched and whether the search finished (the result is optimal)."""
+    search = _Reorder(task, plan.steps, node_limit)
+    by_need = {(literal, consumer): producer for producer, literal, consumer in plan.links}
+    search.offer(plan.before, tuple(by_need[need] for need in search.needs))
+    search.run(search.base(), (-1,) * len(search.needs), ())
+    if stats is not None:
+        stats.update(nodes=search.nodes, exact=search.nodes <= node_limit)
+    _, _, before, links = search.best
+    return PartialPlan(plan.steps, before, links, (), ())
+
+
+def least_commitment(task: GroundTask, plan: PartialPlan, node_limit: int = NODE_LIMIT,
+                     stats: dict | None = None) -> PartialPlan:
+    """`reorder`, then without the steps that support no causal link, repeated until every step does;
+    `stats` as for reorder (nodes summed over the passes, exact when every pass finished)."""
+    if stats is not None:
+        stats.update(nodes=0, exact=True)
     while True:
-        search = _Reorder(task, plan.steps, node_limit)
-        by_need = {(literal, consumer): producer for producer, literal, consumer in plan.links}
-        search.offer(plan.before, tuple(by_need[need] for need in search.needs))
-        count = len(plan.steps)
-        search.run(search.base(), (-1,) * len(search.needs), ())
-        _, _, before, links = search.best
-        useless = [s for s in range(2, count) if not any(producer == s for producer, _, _ in links)]
-        plan = PartialPlan(plan.steps, before, links, (), ())
+        one: dict = {}
+        plan = reorder(task, plan, node_limit, one)
+        if stats is not None:
+            stats.update(nodes=stats["nodes"] + one["nodes"], exact=stats["exact"] and one["exact"])
+        useless = {s for s in range(2, len(plan.steps)) if not any(link[0] == s for link in plan.links)}
         if not useless:
             return plan
-        plan = _without(plan, set(useless))
+        plan = _without(plan, useless)
 
 
 def _without(plan: PartialPlan, dropped: set[int]) -> PartialPlan:
