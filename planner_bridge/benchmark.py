@@ -23,7 +23,7 @@ import sys
 import time
 from pathlib import Path
 
-from tailor.planner_bridge.abstract_plan import AbstractPlan
+from tailor.planner_bridge.abstract_plan import AbstractPlan, Step
 from tailor.errors import PlannerError, PlannerTimeoutError
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -125,7 +125,7 @@ def counts(plan: AbstractPlan) -> dict:
 def post_passed(domain: Path, problem: Path, plan: AbstractPlan) -> dict | None:
     """Counts of `plan`'s sequence after the POCL planner's least-commitment post-pass; None when the problem
     is not typed STRIPS (the POCL grounder refuses it) or a step is not one of its ground actions."""
-    from tailor.planner_bridge.pocl import INIT, linearization
+    from tailor.planner_bridge.pocl import linearization
     from tailor.planner_bridge.pocl_ground import UnsupportedCondition, ground
     from tailor.planner_bridge.pocl_order import least_commitment, sequence_plan
     from tailor.planner_bridge.reading import read_problem
@@ -142,9 +142,10 @@ def post_passed(domain: Path, problem: Path, plan: AbstractPlan) -> dict | None:
                               POST_PASS_NODES, stats)
     order = linearization(better)
     ids = {step: k for k, step in enumerate(order, start=1)}
-    pairs = {(ids[a], ids[b]) for a in order for b in order if a != INIT and better.precedes(a, b)}
-    steps = tuple(plan.steps[0].__class__(k, "", ()) for k in ids.values())
-    return counts(AbstractPlan("", "", "", steps, (), tuple(sorted(pairs)))) | {"exact": stats["exact"]}
+    actions = [task.actions[better.steps[step]] for step in order]
+    steps = tuple(Step(k, action.name, action.args) for k, action in enumerate(actions, start=1))
+    pairs = tuple(sorted((ids[a], ids[b]) for a in order for b in order if better.precedes(a, b)))
+    return counts(AbstractPlan(plan.domain, plan.problem, plan.planner, steps, (), pairs)) | {"exact": stats["exact"]}
 
 
 def compare(pairs: list[tuple[Path, Path]], planners: tuple[str, str] = ("pocl", "pyperplan"), repeat: int = 1,
