@@ -293,9 +293,26 @@ def test_post_pass_drops_steps_that_support_nothing(tmp_path):
 
 
 def test_benchmark_table_compares_side_by_side():
-    rows = compare([parallel("blocks3", "p02"), files("gripper", "p02")])
-    assert [(r["first"]["steps"], r["first"]["width"], r["second"]["steps"]) for r in rows] == [(3, 3, 3), (9, 2, 11)]
-    text = render(rows)
-    assert "blocks3/p02" in text and "gripper/p02" in text
-    assert "2 problems with parallel structure (width >= 2 in either plan): orderings 0 fewer, 2 same, 0 more; " \
-           "pairs 1 fewer, 1 same, 0 more; width 1 wider, 1 same, 0 narrower" in text
+    row = compare([bundled("soccer", "score")])[0]
+    assert row["name"] == "soccer/score" and row["first"]["plan"].planner == "tailor-pocl"
+    for key in ("first", "second", "post"):  # pocl, pyperplan deordered, pyperplan + post-pass
+        assert {k: row[key][k] for k in ("steps", "orderings", "pairs", "width")} == \
+            {"steps": 2, "orderings": 1, "pairs": 1, "width": 1}
+
+    def counts(steps, orderings, pairs, width):
+        return {"steps": steps, "orderings": orderings, "pairs": pairs, "width": width, "seconds": 0.5}
+
+    rows = [{"name": "a/p1", "first": counts(9, 10, 34, 2), "second": counts(11, 10, 55, 1), "post": None},
+            {"name": "a/p2", "first": counts(4, 3, 6, 1), "second": counts(4, 3, 6, 1), "post": None},
+            {"name": "a/p3", "first": counts(5, 2, 2, 3), "second": counts(5, 3, 4, 2), "post": None},
+            {"name": "a/p4", "first": {"error": "no plan within 30 s", "seconds": 30.0}, "second": counts(2, 1, 1, 1),
+             "post": None}]
+    lines = render(rows).splitlines()
+    assert [line.rsplit("|", 1)[1].strip() for line in lines[2:6]] == ["same", "same", "fewer", "-"]
+    assert lines[7:] == [
+        "pocl vs pyperplan, 2 problems with parallel structure (width >= 2 in either plan): orderings 1 fewer, "
+        "1 same, 0 more; pairs 2 fewer, 0 same, 0 more; width 2 wider, 0 same, 0 narrower",
+        "pocl vs pyperplan, 3 problems all: orderings 1 fewer, 2 same, 0 more; pairs 2 fewer, 1 same, 0 more; "
+        "width 2 wider, 1 same, 0 narrower",
+        "not solved by both: a/p4",
+    ]
