@@ -23,8 +23,8 @@ import sys
 import time
 from pathlib import Path
 
-from tailor.planner_bridge.abstract_plan import AbstractPlan, Step
 from tailor.errors import PlannerError, PlannerTimeoutError
+from tailor.planner_bridge.abstract_plan import AbstractPlan, Step
 
 ROOT = Path(__file__).resolve().parent.parent
 FIXTURES = ROOT / "tests" / "fixtures" / "pddl"
@@ -180,6 +180,15 @@ def _verdict(first: dict, second: dict) -> str:
                                                  - (first["orderings"] < second["orderings"])]
 
 
+def _tally(group: list[dict], key: str, more_is_better: bool = False) -> str:
+    """How many rows have the first planner better, equal and worse on `key`."""
+    sign = -1 if more_is_better else 1
+    better = sum(sign * r["first"][key] < sign * r["second"][key] for r in group)
+    worse = sum(sign * r["first"][key] > sign * r["second"][key] for r in group)
+    words = ("wider", "narrower") if more_is_better else ("fewer", "more")
+    return f"{better} {words[0]}, {len(group) - better - worse} same, {worse} {words[1]}"
+
+
 def summary(rows: list[dict], planners: tuple[str, str]) -> list[str]:
     """Counts of fewer / as many / more orderings (and pairs, width), over the problems with parallel
     structure (some plan of it has width 2 or more) and over all problems."""
@@ -187,15 +196,8 @@ def summary(rows: list[dict], planners: tuple[str, str]) -> list[str]:
     solved = [r for r in rows if "error" not in r["first"] and "error" not in r["second"]]
     parallel = [r for r in solved if max(r["first"]["width"], r["second"]["width"]) >= 2]
     for label, group in (("with parallel structure (width >= 2 in either plan)", parallel), ("all", solved)):
-        def tally(key: str, more_is_better: bool = False) -> str:
-            sign = -1 if more_is_better else 1
-            better = sum(sign * r["first"][key] < sign * r["second"][key] for r in group)
-            worse = sum(sign * r["first"][key] > sign * r["second"][key] for r in group)
-            return f"{better} {'wider' if more_is_better else 'fewer'}, {len(group) - better - worse} same, " \
-                   f"{worse} {'narrower' if more_is_better else 'more'}"
-
-        lines.append(f"{planners[0]} vs {planners[1]}, {len(group)} problems {label}: orderings {tally('orderings')}; "
-                     f"pairs {tally('pairs')}; width {tally('width', True)}")
+        lines.append(f"{planners[0]} vs {planners[1]}, {len(group)} problems {label}: orderings "
+                     f"{_tally(group, 'orderings')}; pairs {_tally(group, 'pairs')}; width {_tally(group, 'width', True)}")
     failed = [r["name"] for r in rows if "error" in r["first"] or "error" in r["second"]]
     if failed:
         lines.append(f"not solved by both: {', '.join(failed)}")

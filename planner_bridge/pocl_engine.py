@@ -12,11 +12,6 @@ from collections.abc import Callable
 from typing import IO
 
 import unified_planning as up
-from unified_planning.engines import Engine, PlanGenerationResult, PlanGenerationResultStatus
-from unified_planning.engines.mixins import OneshotPlannerMixin
-from unified_planning.model import ProblemKind
-from unified_planning.plans import ActionInstance, PartialOrderPlan
-
 from tailor.planner_bridge.abstract_plan import GOAL, INITIAL, CausalLink
 from tailor.planner_bridge.causal import transitive_reduction
 from tailor.planner_bridge.pocl import GOAL as POCL_GOAL
@@ -24,6 +19,10 @@ from tailor.planner_bridge.pocl import INIT as POCL_INIT
 from tailor.planner_bridge.pocl import Planner, flaws_of, linearization
 from tailor.planner_bridge.pocl_ground import UnsupportedCondition, ground
 from tailor.planner_bridge.pocl_order import least_commitment, pairs, reduced_orderings
+from unified_planning.engines import Engine, PlanGenerationResult, PlanGenerationResultStatus
+from unified_planning.engines.mixins import OneshotPlannerMixin
+from unified_planning.model import ProblemKind
+from unified_planning.plans import ActionInstance, PartialOrderPlan
 
 ENGINE_NAME = "tailor-pocl"
 # With least commitment on: expansions after the first plan, looking for other plans of no more steps that the
@@ -84,12 +83,14 @@ class POCLEngine(Engine, OneshotPlannerMixin):
     plan as found)."""
 
     def __init__(self, heuristic: str = "addr", flaw_selection: str = "lcfr", weight: float = 1.0,
-                 node_limit: int | None = None, least_commitment: bool = True, **kwargs):
+                 node_limit: int | None = None, least_commitment: bool = True, alternatives: int = ALTERNATIVES,
+                 **kwargs):
         Engine.__init__(self)
         OneshotPlannerMixin.__init__(self)
         self._options = {"heuristic": heuristic, "strategy": flaw_selection, "weight": weight}
         self._node_limit = node_limit
         self._least_commitment = least_commitment
+        self._alternatives = alternatives
 
     @property
     def name(self) -> str:
@@ -123,7 +124,7 @@ class POCLEngine(Engine, OneshotPlannerMixin):
         planner = Planner(task, **self._options)
         remaining = None if timeout is None else max(0.0, timeout - (time.monotonic() - start))
         if self._least_commitment:
-            result = planner.search(remaining, self._node_limit, ALTERNATIVES, lambda plan: scored(task, plan))
+            result = planner.search(remaining, self._node_limit, self._alternatives, lambda plan: scored(task, plan))
         else:
             result = planner.search(remaining, self._node_limit)
         metrics = {"expanded": str(result.expanded), "generated": str(result.generated),

@@ -11,8 +11,6 @@ from pathlib import Path
 
 import pytest
 from regenerate_golden import bundled_pairs, pocl_golden_path
-from test_planner_bridge import check_plan, files, read
-
 from tailor.planner_bridge import NoPlanError, PlannerTimeoutError, plan_files, plan_here, render_text
 from tailor.planner_bridge.benchmark import closure, compare, orderings, render, width
 from tailor.planner_bridge.pocl import GOAL, INIT, Planner, flaws_of, linearization
@@ -20,6 +18,7 @@ from tailor.planner_bridge.pocl_engine import ALTERNATIVES, scored
 from tailor.planner_bridge.pocl_ground import ground
 from tailor.planner_bridge.pocl_order import least_commitment, pairs, reorder, sequence_plan
 from tailor.planner_bridge.reading import read_problem
+from test_planner_bridge import check_plan, files, read
 
 ROOT = Path(__file__).resolve().parent.parent
 CLASSIC = [("gripper", "p01"), ("gripper", "p02"), ("blocks", "p01"), ("blocks", "p02"), ("logistics", "p01"),
@@ -95,11 +94,10 @@ def test_briefcase_solves_through_the_compilers():
 
 @pytest.mark.parametrize("domain, problem", CLASSIC + [("briefcase", "p01")])
 def test_engine_returns_a_partial_order_plan_whose_linearizations_are_all_valid(domain, problem):
+    from tailor.planner_bridge.pocl_engine import register
     from unified_planning.engines import CompilationKind
     from unified_planning.plans import PartialOrderPlan
     from unified_planning.shortcuts import Compiler, OneshotPlanner
-
-    from tailor.planner_bridge.pocl_engine import register
 
     register()
     original = read(domain, problem)
@@ -192,9 +190,8 @@ def test_cli_refine_with_pocl(capsys):
 
 def engine_plan(paths: tuple[Path, Path], **params):
     """The engine's CausalLinkPlan of a typed STRIPS problem (no compilation needed) and the parsed problem."""
-    from unified_planning.shortcuts import OneshotPlanner
-
     from tailor.planner_bridge.pocl_engine import register
+    from unified_planning.shortcuts import OneshotPlanner
 
     register()
     problem = read_problem(*paths)[0]
@@ -249,10 +246,10 @@ def brute_force_least_pairs(task, steps: tuple[int, ...]) -> int:
             later = {s: set() for s in range(2, count)}
             for first, second in edges | set(sides):
                 later[first].add(second)
-            for middle in later:  # Warshall
-                for first in later:
-                    if middle in later[first]:
-                        later[first] |= later[middle]
+            for middle, beyond in later.items():  # Warshall
+                for after in later.values():
+                    if middle in after:
+                        after |= beyond
             if any(s in later[s] for s in later):
                 continue  # cyclic
             total = sum(len(after) for after in later.values())
@@ -310,9 +307,9 @@ def test_benchmark_table_compares_side_by_side():
     lines = render(rows).splitlines()
     assert [line.rsplit("|", 1)[1].strip() for line in lines[2:6]] == ["same", "same", "fewer", "-"]
     assert lines[7:] == [
-        "pocl vs pyperplan, 2 problems with parallel structure (width >= 2 in either plan): orderings 1 fewer, "
-        "1 same, 0 more; pairs 2 fewer, 0 same, 0 more; width 2 wider, 0 same, 0 narrower",
-        "pocl vs pyperplan, 3 problems all: orderings 1 fewer, 2 same, 0 more; pairs 2 fewer, 1 same, 0 more; "
-        "width 2 wider, 1 same, 0 narrower",
+        ("pocl vs pyperplan, 2 problems with parallel structure (width >= 2 in either plan): orderings 1 fewer, "
+         "1 same, 0 more; pairs 2 fewer, 0 same, 0 more; width 2 wider, 0 same, 0 narrower"),
+        ("pocl vs pyperplan, 3 problems all: orderings 1 fewer, 2 same, 0 more; pairs 2 fewer, 1 same, 0 more; "
+         "width 2 wider, 1 same, 0 narrower"),
         "not solved by both: a/p4",
     ]

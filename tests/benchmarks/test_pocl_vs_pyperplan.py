@@ -2,15 +2,9 @@
 tests/benchmarks/pocl): time, plan length, ordering constraints and width side by side, one table (also
 `python -m tailor.planner_bridge.benchmark`); every POCL plan checked as the deordered ones are."""
 
-import sys
-from pathlib import Path
-
 import pytest
-
 from tailor.planner_bridge.benchmark import LIMIT_S, default_problems, measure, table
-
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # the test helpers beside tests/
-from test_planner_bridge import check_plan  # noqa: E402
+from test_planner_bridge import check_plan  # beside tests/conftest.py, which pytest puts on the import path
 
 
 @pytest.mark.benchmark
