@@ -43,7 +43,8 @@ def default_problems() -> list[tuple[Path, Path]]:
     for name in CLASSIC:
         pairs += [(FIXTURES / name / "domain.pddl", p) for p in sorted((FIXTURES / name).glob("p*.pddl"))]
     for folder in sorted(p for p in PARALLEL.glob("*") if p.is_dir()):
-        domain = folder / "domain.pddl" if (folder / "domain.pddl").exists() else FIXTURES / folder.name / "domain.pddl"
+        own = folder / "domain.pddl"
+        domain = own if own.exists() else FIXTURES / folder.name / "domain.pddl"
         pairs += [(domain, p) for p in sorted(folder.glob("p*.pddl"))]
     return pairs
 
@@ -145,7 +146,8 @@ def post_passed(domain: Path, problem: Path, plan: AbstractPlan) -> dict | None:
     actions = [task.actions[better.steps[step]] for step in order]
     steps = tuple(Step(k, action.name, action.args) for k, action in enumerate(actions, start=1))
     pairs = tuple(sorted((ids[a], ids[b]) for a in order for b in order if better.precedes(a, b)))
-    return counts(AbstractPlan(plan.domain, plan.problem, plan.planner, steps, (), pairs)) | {"exact": stats["exact"]}
+    post = AbstractPlan(plan.domain, plan.problem, plan.planner, steps, (), pairs)
+    return counts(post) | {"exact": stats["exact"]}
 
 
 def compare(pairs: list[tuple[Path, Path]], planners: tuple[str, str] = ("pocl", "pyperplan"), repeat: int = 1,

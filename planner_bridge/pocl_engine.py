@@ -12,6 +12,11 @@ from collections.abc import Callable
 from typing import IO
 
 import unified_planning as up
+from unified_planning.engines import Engine, PlanGenerationResult, PlanGenerationResultStatus
+from unified_planning.engines.mixins import OneshotPlannerMixin
+from unified_planning.model import ProblemKind
+from unified_planning.plans import ActionInstance, PartialOrderPlan
+
 from tailor.planner_bridge.abstract_plan import GOAL, INITIAL, CausalLink
 from tailor.planner_bridge.causal import transitive_reduction
 from tailor.planner_bridge.pocl import GOAL as POCL_GOAL
@@ -19,10 +24,6 @@ from tailor.planner_bridge.pocl import INIT as POCL_INIT
 from tailor.planner_bridge.pocl import Planner, flaws_of, linearization
 from tailor.planner_bridge.pocl_ground import UnsupportedCondition, ground
 from tailor.planner_bridge.pocl_order import least_commitment, pairs, reduced_orderings
-from unified_planning.engines import Engine, PlanGenerationResult, PlanGenerationResultStatus
-from unified_planning.engines.mixins import OneshotPlannerMixin
-from unified_planning.model import ProblemKind
-from unified_planning.plans import ActionInstance, PartialOrderPlan
 
 ENGINE_NAME = "tailor-pocl"
 # With least commitment on: expansions after the first plan, looking for other plans of no more steps that the

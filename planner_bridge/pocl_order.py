@@ -176,7 +176,8 @@ class _Reorder:
             self.run(child, grown, pending)
 
 
-def reorder(task: GroundTask, plan: PartialPlan, node_limit: int = NODE_LIMIT, stats: dict | None = None) -> PartialPlan:
+def reorder(task: GroundTask, plan: PartialPlan, node_limit: int = NODE_LIMIT,
+            stats: dict | None = None) -> PartialPlan:
     """The plan's steps with every causal link's producer and every threat's side chosen again for the fewest
     ordered pairs of steps (then the fewest reduced orderings); `plan`'s own choices are the first incumbent,
     so the result is never more ordered (and is `plan`'s links and orderings when nothing is less ordered).

@@ -11,6 +11,8 @@ from pathlib import Path
 
 import pytest
 from regenerate_golden import bundled_pairs, pocl_golden_path
+from test_planner_bridge import check_plan, files, read
+
 from tailor.planner_bridge import NoPlanError, PlannerTimeoutError, plan_files, plan_here, render_text
 from tailor.planner_bridge.benchmark import closure, compare, orderings, render, width
 from tailor.planner_bridge.pocl import GOAL, INIT, Planner, flaws_of, linearization
@@ -18,7 +20,6 @@ from tailor.planner_bridge.pocl_engine import ALTERNATIVES, scored
 from tailor.planner_bridge.pocl_ground import ground
 from tailor.planner_bridge.pocl_order import least_commitment, pairs, reorder, sequence_plan
 from tailor.planner_bridge.reading import read_problem
-from test_planner_bridge import check_plan, files, read
 
 ROOT = Path(__file__).resolve().parent.parent
 CLASSIC = [("gripper", "p01"), ("gripper", "p02"), ("blocks", "p01"), ("blocks", "p02"), ("logistics", "p01"),
@@ -94,10 +95,11 @@ def test_briefcase_solves_through_the_compilers():
 
 @pytest.mark.parametrize("domain, problem", CLASSIC + [("briefcase", "p01")])
 def test_engine_returns_a_partial_order_plan_whose_linearizations_are_all_valid(domain, problem):
-    from tailor.planner_bridge.pocl_engine import register
     from unified_planning.engines import CompilationKind
     from unified_planning.plans import PartialOrderPlan
     from unified_planning.shortcuts import Compiler, OneshotPlanner
+
+    from tailor.planner_bridge.pocl_engine import register
 
     register()
     original = read(domain, problem)
@@ -190,8 +192,9 @@ def test_cli_refine_with_pocl(capsys):
 
 def engine_plan(paths: tuple[Path, Path], **params):
     """The engine's CausalLinkPlan of a typed STRIPS problem (no compilation needed) and the parsed problem."""
-    from tailor.planner_bridge.pocl_engine import register
     from unified_planning.shortcuts import OneshotPlanner
+
+    from tailor.planner_bridge.pocl_engine import register
 
     register()
     problem = read_problem(*paths)[0]

@@ -3,8 +3,9 @@ tests/benchmarks/pocl): time, plan length, ordering constraints and width side b
 `python -m tailor.planner_bridge.benchmark`); every POCL plan checked as the deordered ones are."""
 
 import pytest
-from tailor.planner_bridge.benchmark import LIMIT_S, default_problems, measure, table
 from test_planner_bridge import check_plan  # beside tests/conftest.py, which pytest puts on the import path
+
+from tailor.planner_bridge.benchmark import LIMIT_S, default_problems, measure, table
 
 
 @pytest.mark.benchmark
