@@ -8,7 +8,9 @@ planner that finds no causal links (pyperplan) the sequence is deordered (planne
 are counted the same way, from the transitive closure of their orderings between steps (the initial state and
 the goal left out): `ord` is the size of its transitive reduction (the fewest orderings that say the same),
 `pairs` the size of the closure (the ordered pairs of steps), `width` the most steps no ordering relates (the
-longest antichain): fewer orderings and pairs, more width, is less commitment. The `+post-pass` columns put
+longest antichain): fewer orderings and pairs, more width, is less commitment. `first plan` is the POCL search's
+first plan, what the engine returns with least commitment off (pocl_engine, least_commitment=False), from which
+the search for alternatives and the post-pass start. The `+post-pass` columns put
 the second planner's sequence through the POCL planner's least-commitment post-pass (planner_bridge.pocl_order),
 to show how much of the difference is the search and how much the post-pass ("-": not typed STRIPS; "~": the
 post-pass hit its node limit, so its result is not proven the least ordered for those steps).
@@ -123,17 +125,50 @@ def counts(plan: AbstractPlan) -> dict:
     return {"steps": len(plan.steps), "orderings": orderings(plan), "pairs": len(closure(plan)), "width": width(plan)}
 
 
-def post_passed(domain: Path, problem: Path, plan: AbstractPlan) -> dict | None:
-    """Counts of `plan`'s sequence after the POCL planner's least-commitment post-pass; None when the problem
-    is not typed STRIPS (the POCL grounder refuses it) or a step is not one of its ground actions."""
-    from tailor.planner_bridge.pocl import linearization
+def _task(domain: Path, problem: Path):
+    """The POCL planner's ground task of the problem; None when it is not typed STRIPS."""
     from tailor.planner_bridge.pocl_ground import UnsupportedCondition, ground
-    from tailor.planner_bridge.pocl_order import least_commitment, sequence_plan
     from tailor.planner_bridge.reading import read_problem
 
     try:
-        task = ground(read_problem(domain, problem)[0])
+        return ground(read_problem(domain, problem)[0])
     except UnsupportedCondition:
+        return None
+
+
+def _as_abstract(task, partial) -> AbstractPlan:
+    """A POCL PartialPlan as an AbstractPlan with steps and orderings only (enough to count them)."""
+    from tailor.planner_bridge.pocl import linearization
+
+    order = linearization(partial)
+    ids = {step: k for k, step in enumerate(order, start=1)}
+    actions = [task.actions[partial.steps[step]] for step in order]
+    steps = tuple(Step(k, action.name, action.args) for k, action in enumerate(actions, start=1))
+    pairs = tuple(sorted((ids[a], ids[b]) for a in order for b in order if partial.precedes(a, b)))
+    return AbstractPlan("", "", "", steps, (), pairs)
+
+
+def first_plan(domain: Path, problem: Path) -> dict | None:
+    """Counts of the POCL search's first plan, what the engine returns with least commitment off (the
+    search for alternatives and the post-pass start from it); None when the problem is not typed STRIPS."""
+    from tailor.planner_bridge.pocl import Planner
+
+    task = _task(domain, problem)
+    if task is None:
+        return None
+    result = Planner(task).search(LIMIT_S)
+    if result.plan is None:
+        return {"error": f"no plan ({result.status})", "seconds": LIMIT_S}
+    return counts(_as_abstract(task, result.plan))
+
+
+def post_passed(domain: Path, problem: Path, plan: AbstractPlan) -> dict | None:
+    """Counts of `plan`'s sequence after the POCL planner's least-commitment post-pass; None when the problem
+    is not typed STRIPS (the POCL grounder refuses it) or a step is not one of its ground actions."""
+    from tailor.planner_bridge.pocl_order import least_commitment, sequence_plan
+
+    task = _task(domain, problem)
+    if task is None:
         return None
     number = {(action.name, action.args): k for k, action in enumerate(task.actions)}
     if any((step.action, step.args) not in number for step in plan.steps):
@@ -141,25 +176,24 @@ def post_passed(domain: Path, problem: Path, plan: AbstractPlan) -> dict | None:
     stats: dict = {}
     better = least_commitment(task, sequence_plan(task, [number[(s.action, s.args)] for s in plan.steps]),
                               POST_PASS_NODES, stats)
-    order = linearization(better)
-    ids = {step: k for k, step in enumerate(order, start=1)}
-    actions = [task.actions[better.steps[step]] for step in order]
-    steps = tuple(Step(k, action.name, action.args) for k, action in enumerate(actions, start=1))
-    pairs = tuple(sorted((ids[a], ids[b]) for a in order for b in order if better.precedes(a, b)))
-    post = AbstractPlan(plan.domain, plan.problem, plan.planner, steps, (), pairs)
-    return counts(post) | {"exact": stats["exact"]}
+    return counts(_as_abstract(task, better)) | {"exact": stats["exact"]}
 
 
 def compare(pairs: list[tuple[Path, Path]], planners: tuple[str, str] = ("pocl", "pyperplan"), repeat: int = 1,
             progress=None) -> list[dict]:
-    """One row per problem: {"name", first planner's counts, second planner's counts, "post" (see post_passed)}."""
+    """One row per problem: {"name", "first" and "second": the planners' counts, "search": the POCL search's
+    first plan when the first planner is pocl (see first_plan), "post": see post_passed}."""
+    from tailor.planner_bridge.solving import canonical
+
     for planner in planners:  # warm-up: imports and engine registration are not the planner's time
         measure(*pairs[0], planner)
     rows = []
     for domain, problem in pairs:
         first, second = (measure(domain, problem, planner, repeat) for planner in planners)
+        search = first_plan(domain, problem) if canonical(planners[0]) == "tailor-pocl" else None
         post = post_passed(domain, problem, second["plan"]) if "plan" in second else None
-        rows.append({"name": f"{domain.parent.name}/{problem.stem}", "first": first, "second": second, "post": post})
+        rows.append({"name": f"{domain.parent.name}/{problem.stem}", "first": first, "search": search,
+                     "second": second, "post": post})
         if progress is not None:
             progress.update()
     return rows
@@ -169,7 +203,8 @@ def _cells(row: dict | None, timed: bool) -> str:
     if row is None:
         return f"{'-':>5} {'-':>4} {'-':>5} {'-':>5}" + (f" {'':>7}" if timed else "")
     if "error" in row:
-        return f"{row['error'][:27]:<27}" + (f" {row['seconds']:>7.2f}" if timed else "")
+        room = 27 if timed else 23
+        return f"{row['error'][:room]:<{room}}" + (f" {row['seconds']:>7.2f}" if timed else "")
     mark = "" if row.get("exact", True) else "~"  # the post-pass hit its node limit: not proven least ordered
     text = f"{row['steps']:>5} {row['orderings']:>4} {row['pairs']:>5} {str(row['width']) + mark:>5}"
     return text + (f" {row['seconds']:>7.2f}" if timed else "")
@@ -210,12 +245,14 @@ def render(rows: list[dict], planners: tuple[str, str] = ("pocl", "pyperplan")) 
     """The side-by-side table and its summary."""
     first, second = planners
     head = f"{'steps':>5} {'ord':>4} {'pairs':>5} {'width':>5}"
-    lines = [f"{'':<20} | {first:<31} | {second + ' (deordered)':<31} | {second + ' +post-pass':<23} |",
-             f"{'problem':<20} | {head} {'time s':>7} | {head} {'time s':>7} | {head} | {first} orderings"]
+    lines = [(f"{'':<20} | {first:<31} | {first + ' first plan':<23} | {second + ' (deordered)':<31} | "
+              f"{second + ' +post-pass':<23} |"),
+             f"{'problem':<20} | {head} {'time s':>7} | {head} | {head} {'time s':>7} | {head} | {first} orderings"]
     for row in rows:
-        lines.append(f"{row['name']:<20} | {_cells(row['first'], True)} | {_cells(row['second'], True)} | "
-                     f"{_cells(row['post'], False)} | {_verdict(row['first'], row['second'])}")
-    return "\n".join(lines + [""] + summary(rows, planners)) + "\n"
+        lines.append(f"{row['name']:<20} | {_cells(row['first'], True)} | {_cells(row.get('search'), False)} | "
+                     f"{_cells(row['second'], True)} | {_cells(row['post'], False)} | "
+                     f"{_verdict(row['first'], row['second'])}")
+    return "\n".join([*lines, "", *summary(rows, planners)]) + "\n"
 
 
 def table(pairs: list[tuple[Path, Path]], planners=("pocl", "pyperplan"), repeat: int = 1) -> str:
