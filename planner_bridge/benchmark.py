@@ -1,12 +1,19 @@
-"""Compare planners on PDDL problems: time, plan length, ordering constraints and width of the partial order.
+"""Compare two planners on PDDL problems, side by side: time, plan length, ordering constraints and width.
 
-    python -m tailor.planner_bridge.benchmark                      # bundled domains and the test fixtures
+    python -m tailor.planner_bridge.benchmark                      # bundled, test and parallel problems
     python -m tailor.planner_bridge.benchmark --planners pocl pyperplan DOMAIN.pddl:PROBLEM.pddl ...
 
 Each plan is made in this process by plan_here (parse, compile, search, validate, causal links); for a
-planner that finds no causal links (pyperplan) the sequence is deordered. `orderings` counts the transitively
-reduced ordering constraints, `pairs` the ordered pairs of steps (its closure), `width` the most steps no
-ordering relates (the longest antichain): more width and fewer pairs is less commitment.
+planner that finds no causal links (pyperplan) the sequence is deordered (planner_bridge.causal). Both plans
+are counted the same way, from the transitive closure of their orderings between steps (the initial state and
+the goal left out): `ord` is the size of its transitive reduction (the fewest orderings that say the same),
+`pairs` the size of the closure (the ordered pairs of steps), `width` the most steps no ordering relates (the
+longest antichain): fewer orderings and pairs, more width, is less commitment. `first plan` is the POCL search's
+first plan, what the engine returns with least commitment off (pocl_engine, least_commitment=False), from which
+the search for alternatives and the post-pass start. The `+post-pass` columns put
+the second planner's sequence through the POCL planner's least-commitment post-pass (planner_bridge.pocl_order),
+to show how much of the difference is the search and how much the post-pass ("-": not typed STRIPS; "~": the
+post-pass hit its node limit, so its result is not proven the least ordered for those steps).
 Time is the best of `--repeat` runs, after one warm-up run per planner (imports are not planning time).
 """
 
@@ -18,24 +25,34 @@ import sys
 import time
 from pathlib import Path
 
-from tailor.planner_bridge.abstract_plan import AbstractPlan
 from tailor.errors import PlannerError, PlannerTimeoutError
+from tailor.planner_bridge.abstract_plan import AbstractPlan, Step
 
 ROOT = Path(__file__).resolve().parent.parent
 FIXTURES = ROOT / "tests" / "fixtures" / "pddl"
+PARALLEL = ROOT / "tests" / "benchmarks" / "pocl"
 CLASSIC = ("gripper", "blocks", "logistics", "briefcase")
 LIMIT_S = 30
+# Branch-and-bound nodes for the post-pass of the second planner's sequences: more than the engine's own
+# (pocl_order.NODE_LIMIT), so that the column proves what it shows (gripper/p01's 15 steps take about 98 000).
+POST_PASS_NODES = 200_000
 
 
 def default_problems() -> list[tuple[Path, Path]]:
-    """Every bundled problem, then the problems of the classic test domains (when the tests are at hand)."""
+    """Every bundled problem, the problems of the classic test domains, then the problems with parallel
+    structure of tests/benchmarks/pocl (the last two when the tests are at hand)."""
     pairs = [(p.parent.parent / "domain.pddl", p) for p in sorted(ROOT.glob("domains/*/problems/*.pddl"))]
     for name in CLASSIC:
         pairs += [(FIXTURES / name / "domain.pddl", p) for p in sorted((FIXTURES / name).glob("p*.pddl"))]
+    for folder in sorted(p for p in PARALLEL.glob("*") if p.is_dir()):
+        own = folder / "domain.pddl"
+        domain = own if own.exists() else FIXTURES / folder.name / "domain.pddl"
+        pairs += [(domain, p) for p in sorted(folder.glob("p*.pddl"))]
     return pairs
 
 
 def closure(plan: AbstractPlan) -> set[tuple[int, int]]:
+    """The ordered pairs of steps: the transitive closure of the plan's orderings."""
     after: dict[int, set[int]] = {s.id: set() for s in plan.steps}
     for first, second in plan.orderings:
         after[first].add(second)
@@ -48,6 +65,13 @@ def closure(plan: AbstractPlan) -> set[tuple[int, int]]:
                 pairs.add((start, step))
                 todo.extend(after[step])
     return pairs
+
+
+def orderings(plan: AbstractPlan) -> int:
+    """How many orderings the transitive reduction of the plan's closure has (whatever the planner returned)."""
+    from tailor.planner_bridge.causal import transitive_reduction
+
+    return len(transitive_reduction(closure(plan)))
 
 
 def width(plan: AbstractPlan) -> int:
@@ -74,7 +98,8 @@ def _alarm(signum, frame):
 
 
 def measure(domain: Path, problem: Path, planner: str, repeat: int = 1) -> dict:
-    """One planner on one problem: best seconds of `repeat` runs, steps, orderings, ordered pairs and width."""
+    """One planner on one problem: best seconds of `repeat` runs, steps, orderings, ordered pairs and width
+    (and the AbstractPlan under "plan")."""
     runs = [_run(domain, problem, planner) for _ in range(repeat)]
     return min(runs, key=lambda row: row["seconds"]) | {"seconds": min(row["seconds"] for row in runs)}
 
@@ -92,35 +117,167 @@ def _run(domain: Path, problem: Path, planner: str) -> dict:
     finally:
         signal.alarm(0)
         signal.signal(signal.SIGALRM, previous)
-    return {"seconds": time.perf_counter() - start, "steps": len(plan.steps), "orderings": len(plan.orderings),
-            "pairs": len(closure(plan)), "width": width(plan)}
+    return {"seconds": time.perf_counter() - start} | counts(plan) | {"plan": plan}
 
 
-def table(pairs: list[tuple[Path, Path]], planners: list[str], repeat: int = 1) -> str:
-    """One line per problem and planner."""
+def counts(plan: AbstractPlan) -> dict:
+    """Steps, orderings (transitively reduced), ordered pairs (the closure) and width of a plan."""
+    return {"steps": len(plan.steps), "orderings": orderings(plan), "pairs": len(closure(plan)), "width": width(plan)}
+
+
+def _task(domain: Path, problem: Path):
+    """The POCL planner's ground task of the problem; None when it is not typed STRIPS."""
+    from tailor.planner_bridge.pocl_ground import UnsupportedCondition, ground
+    from tailor.planner_bridge.reading import read_problem
+
+    try:
+        return ground(read_problem(domain, problem)[0])
+    except UnsupportedCondition:
+        return None
+
+
+def _as_abstract(task, partial) -> AbstractPlan:
+    """A POCL PartialPlan as an AbstractPlan with steps and orderings only (enough to count them)."""
+    from tailor.planner_bridge.pocl import linearization
+
+    order = linearization(partial)
+    ids = {step: k for k, step in enumerate(order, start=1)}
+    actions = [task.actions[partial.steps[step]] for step in order]
+    steps = tuple(Step(k, action.name, action.args) for k, action in enumerate(actions, start=1))
+    pairs = tuple(sorted((ids[a], ids[b]) for a in order for b in order if partial.precedes(a, b)))
+    return AbstractPlan("", "", "", steps, (), pairs)
+
+
+def first_plan(domain: Path, problem: Path) -> dict | None:
+    """Counts of the POCL search's first plan, what the engine returns with least commitment off (the
+    search for alternatives and the post-pass start from it); None when the problem is not typed STRIPS."""
+    from tailor.planner_bridge.pocl import Planner
+
+    task = _task(domain, problem)
+    if task is None:
+        return None
+    result = Planner(task).search(LIMIT_S)
+    if result.plan is None:
+        return {"error": f"no plan ({result.status})", "seconds": LIMIT_S}
+    return counts(_as_abstract(task, result.plan))
+
+
+def post_passed(domain: Path, problem: Path, plan: AbstractPlan) -> dict | None:
+    """Counts of `plan`'s sequence after the POCL planner's least-commitment post-pass; None when the problem
+    is not typed STRIPS (the POCL grounder refuses it) or a step is not one of its ground actions."""
+    from tailor.planner_bridge.pocl_order import least_commitment, sequence_plan
+
+    task = _task(domain, problem)
+    if task is None:
+        return None
+    number = {(action.name, action.args): k for k, action in enumerate(task.actions)}
+    if any((step.action, step.args) not in number for step in plan.steps):
+        return None
+    stats: dict = {}
+    better = least_commitment(task, sequence_plan(task, [number[(s.action, s.args)] for s in plan.steps]),
+                              POST_PASS_NODES, stats)
+    return counts(_as_abstract(task, better)) | {"exact": stats["exact"]}
+
+
+def compare(pairs: list[tuple[Path, Path]], planners: tuple[str, str] = ("pocl", "pyperplan"), repeat: int = 1,
+            progress=None) -> list[dict]:
+    """One row per problem: {"name", "first" and "second": the planners' counts, "search": the POCL search's
+    first plan when the first planner is pocl (see first_plan), "post": see post_passed}."""
+    from tailor.planner_bridge.solving import canonical
+
     for planner in planners:  # warm-up: imports and engine registration are not the planner's time
         measure(*pairs[0], planner)
-    lines = [f"{'problem':<24} {'planner':<10} {'time s':>7} {'steps':>5} {'orderings':>9} {'pairs':>5} {'width':>5}"]
+    rows = []
     for domain, problem in pairs:
-        name = f"{domain.parent.name}/{problem.stem}"
-        for planner in planners:
-            row = measure(domain, problem, planner, repeat)
-            if "error" in row:
-                lines.append(f"{name:<24} {planner:<10} {row['seconds']:>7.2f}  {row['error']}")
-            else:
-                lines.append(f"{name:<24} {planner:<10} {row['seconds']:>7.2f} {row['steps']:>5} {row['orderings']:>9} "
-                             f"{row['pairs']:>5} {row['width']:>5}")
-    return "\n".join(lines) + "\n"
+        first, second = (measure(domain, problem, planner, repeat) for planner in planners)
+        search = first_plan(domain, problem) if canonical(planners[0]) == "tailor-pocl" else None
+        post = post_passed(domain, problem, second["plan"]) if "plan" in second else None
+        rows.append({"name": f"{domain.parent.name}/{problem.stem}", "first": first, "search": search,
+                     "second": second, "post": post})
+        if progress is not None:
+            progress.update()
+    return rows
+
+
+def _cells(row: dict | None, timed: bool) -> str:
+    if row is None:
+        return f"{'-':>5} {'-':>4} {'-':>5} {'-':>5}" + (f" {'':>7}" if timed else "")
+    if "error" in row:
+        room = 27 if timed else 23
+        return f"{row['error'][:room]:<{room}}" + (f" {row['seconds']:>7.2f}" if timed else "")
+    mark = "" if row.get("exact", True) else "~"  # the post-pass hit its node limit: not proven least ordered
+    text = f"{row['steps']:>5} {row['orderings']:>4} {row['pairs']:>5} {str(row['width']) + mark:>5}"
+    return text + (f" {row['seconds']:>7.2f}" if timed else "")
+
+
+def _verdict(first: dict, second: dict) -> str:
+    if "error" in first or "error" in second:
+        return "-"
+    return {-1: "fewer", 0: "same", 1: "MORE"}[(first["orderings"] > second["orderings"])
+                                                 - (first["orderings"] < second["orderings"])]
+
+
+def _tally(group: list[dict], key: str, more_is_better: bool = False) -> str:
+    """How many rows have the first planner better, equal and worse on `key`."""
+    sign = -1 if more_is_better else 1
+    better = sum(sign * r["first"][key] < sign * r["second"][key] for r in group)
+    worse = sum(sign * r["first"][key] > sign * r["second"][key] for r in group)
+    words = ("wider", "narrower") if more_is_better else ("fewer", "more")
+    return f"{better} {words[0]}, {len(group) - better - worse} same, {worse} {words[1]}"
+
+
+def summary(rows: list[dict], planners: tuple[str, str]) -> list[str]:
+    """Counts of fewer / as many / more orderings (and pairs, width), over the problems with parallel
+    structure (some plan of it has width 2 or more) and over all problems."""
+    lines = []
+    solved = [r for r in rows if "error" not in r["first"] and "error" not in r["second"]]
+    parallel = [r for r in solved if max(r["first"]["width"], r["second"]["width"]) >= 2]
+    for label, group in (("with parallel structure (width >= 2 in either plan)", parallel), ("all", solved)):
+        lines.append(f"{planners[0]} vs {planners[1]}, {len(group)} problems {label}: orderings "
+                     f"{_tally(group, 'orderings')}; pairs {_tally(group, 'pairs')}; width {_tally(group, 'width', True)}")
+    failed = [r["name"] for r in rows if "error" in r["first"] or "error" in r["second"]]
+    if failed:
+        lines.append(f"not solved by both: {', '.join(failed)}")
+    return lines
+
+
+def render(rows: list[dict], planners: tuple[str, str] = ("pocl", "pyperplan")) -> str:
+    """The side-by-side table and its summary."""
+    first, second = planners
+    head = f"{'steps':>5} {'ord':>4} {'pairs':>5} {'width':>5}"
+    lines = [(f"{'':<20} | {first:<31} | {first + ' first plan':<23} | {second + ' (deordered)':<31} | "
+              f"{second + ' +post-pass':<23} |"),
+             f"{'problem':<20} | {head} {'time s':>7} | {head} | {head} {'time s':>7} | {head} | {first} orderings"]
+    for row in rows:
+        lines.append(f"{row['name']:<20} | {_cells(row['first'], True)} | {_cells(row.get('search'), False)} | "
+                     f"{_cells(row['second'], True)} | {_cells(row['post'], False)} | "
+                     f"{_verdict(row['first'], row['second'])}")
+    return "\n".join([*lines, "", *summary(rows, planners)]) + "\n"
+
+
+def table(pairs: list[tuple[Path, Path]], planners=("pocl", "pyperplan"), repeat: int = 1) -> str:
+    """The side-by-side table of `compare` (with a progress bar on stderr)."""
+    from tqdm import tqdm
+
+    with tqdm(total=len(pairs), desc="problems", unit="problem", file=sys.stderr, leave=False) as bar:
+        return render(compare(pairs, tuple(planners), repeat, bar), tuple(planners))
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--planners", nargs="+", default=["pocl", "pyperplan"], metavar="NAME")
+    parser.add_argument("--planners", nargs=2, default=["pocl", "pyperplan"], metavar="NAME",
+                        help="the two planners compared (default: pocl pyperplan)")
     parser.add_argument("--repeat", type=int, default=3, metavar="N", help="runs per problem and planner")
     parser.add_argument("problems", nargs="*", metavar="DOMAIN:PROBLEM", help="pairs of PDDL files (default: all)")
     args = parser.parse_args(argv)
+    if args.repeat < 1:
+        parser.error("--repeat must be at least 1")
     pairs = [tuple(Path(p) for p in arg.split(":", 1)) for arg in args.problems] or default_problems()
-    sys.stdout.write(table(pairs, args.planners, args.repeat))
+    try:
+        sys.stdout.write(table(pairs, tuple(args.planners), args.repeat))
+    except KeyboardInterrupt:
+        sys.stderr.write("benchmark: interrupted\n")
+        return 130
     return 0
 
 

@@ -7,6 +7,8 @@ and resolve a threat by demotion (threat before the producer) or promotion (thre
 Best-first search (weighted A*: f = steps + w * h) with the additive heuristic orders the partial plans;
 a flaw selection strategy picks the one flaw refined at each node. Pruned: plans whose orderings would be
 cyclic (never generated), plans with an open condition no step can ever achieve, and duplicate plans.
+Least commitment: the engine (pocl_engine) lets the search look on past its first plan for others of no more
+steps, puts each through the post-pass of planner_bridge.pocl_order and keeps the least ordered.
 Every step id is a number: 0 is the initial state, 1 the goal, steps are 2, 3, ... in order of addition.
 """
 
@@ -16,6 +18,7 @@ import heapq
 import itertools
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from tailor.planner_bridge.pocl_ground import GroundTask
@@ -167,8 +170,13 @@ class Planner:
             return math.inf
         return self.heuristic(plan, self.costs, lambda step, literal: self.achieves(plan, step, literal))
 
-    def search(self, timeout: float | None = None, node_limit: int | None = None) -> SearchResult:
-        """Weighted A* over partial plans; the first plan without flaws is returned."""
+    def search(self, timeout: float | None = None, node_limit: int | None = None, alternatives: int = 0,
+               improve: Callable[[PartialPlan], tuple[tuple, PartialPlan]] | None = None) -> SearchResult:
+        """Weighted A* over partial plans (ties: the lower h, then the older plan). Without
+        `improve` the first plan without flaws is returned. With it, the search goes on for `alternatives` more
+        expansions (fewer if the time or node limit comes first), and every flawless plan of no more steps than
+        the first goes through `improve` (a plan -> (score, improved plan)): the least score wins, the earliest
+        plan on ties. The first plan's length is no bound on the others' f, as the heuristic is inadmissible."""
         start = time.monotonic()
         root = self.initial_plan()
         if self.h(root) == math.inf:
@@ -177,16 +185,32 @@ class Planner:
         frontier = [(self.weight * self.h(root), 0.0, next(serial), root)]
         seen = {root.key()}
         self.expanded, self.generated = 0, 1
+        best, bound, stop, solutions = None, math.inf, math.inf, 0  # bound: the first plan's steps
         while frontier:
+            if self.expanded >= stop:
+                break  # no plan of no more steps than the first is left within the budget
             if timeout is not None and self.expanded % 64 == 0 and time.monotonic() - start > timeout:
+                if best is not None:
+                    break
                 return SearchResult("timeout", None, self.expanded, self.generated)
             if node_limit is not None and self.generated > node_limit:
+                if best is not None:
+                    break
                 return SearchResult("limit", None, self.expanded, self.generated)
             *_, plan = heapq.heappop(frontier)
             self.expanded += 1
             flaw = self.select(self, plan)
             if flaw is None:
-                return SearchResult("solved", plan, self.expanded, self.generated)
+                if improve is None:
+                    return SearchResult("solved", plan, self.expanded, self.generated, 1)
+                if len(plan.steps) - 2 <= bound:
+                    solutions += 1
+                    scored = improve(plan)
+                    if best is None or scored[0] < best[0]:
+                        best = scored
+                    if bound == math.inf:
+                        bound, stop = len(plan.steps) - 2, self.expanded + alternatives
+                continue
             kind, index = flaw
             for child in self.close(plan, index) if kind == "open" else self.resolve(plan, index):
                 key = child.key()
@@ -199,6 +223,8 @@ class Planner:
                 self.generated += 1
                 g = len(child.steps) - 2
                 heapq.heappush(frontier, (g + self.weight * h, h, next(serial), child))
+        if best is not None:
+            return SearchResult("solved", best[1], self.expanded, self.generated, solutions)
         return SearchResult("unsolvable", None, self.expanded, self.generated)
 
 
@@ -210,6 +236,7 @@ class SearchResult:
     plan: PartialPlan | None
     expanded: int
     generated: int
+    solutions: int = 0  # flawless plans the search met (more than 1 only when it looked for alternatives)
 
 
 def least_cost_flaw_repair(planner: Planner, plan: PartialPlan):

@@ -23,8 +23,12 @@ from tailor.planner_bridge.pocl import GOAL as POCL_GOAL
 from tailor.planner_bridge.pocl import INIT as POCL_INIT
 from tailor.planner_bridge.pocl import Planner, flaws_of, linearization
 from tailor.planner_bridge.pocl_ground import UnsupportedCondition, ground
+from tailor.planner_bridge.pocl_order import least_commitment, pairs, reduced_orderings
 
 ENGINE_NAME = "tailor-pocl"
+# With least commitment on: expansions after the first plan, looking for other plans of no more steps that the
+# post-pass can leave less ordered (a node budget, not a clock: the same problem gives the same plan).
+ALTERNATIVES = 1000
 ALIASES = {"pocl": ENGINE_NAME}
 STATUS = {
     "solved": PlanGenerationResultStatus.SOLVED_SATISFICING,
@@ -75,14 +79,19 @@ def _closure(orderings) -> set[tuple[int, int]]:
 
 
 class POCLEngine(Engine, OneshotPlannerMixin):
-    """Partial-order causal-link planning (VHPOP's approach): ADDR heuristic, LCFR flaw selection, A*."""
+    """Partial-order causal-link planning (VHPOP's approach): ADDR heuristic, LCFR flaw selection, A*, then
+    the least-commitment post-pass (planner_bridge.pocl_order; `least_commitment=False` returns the search's
+    plan as found)."""
 
     def __init__(self, heuristic: str = "addr", flaw_selection: str = "lcfr", weight: float = 1.0,
-                 node_limit: int | None = None, **kwargs):
+                 node_limit: int | None = None, least_commitment: bool = True, alternatives: int = ALTERNATIVES,
+                 **kwargs):
         Engine.__init__(self)
         OneshotPlannerMixin.__init__(self)
         self._options = {"heuristic": heuristic, "strategy": flaw_selection, "weight": weight}
         self._node_limit = node_limit
+        self._least_commitment = least_commitment
+        self._alternatives = alternatives
 
     @property
     def name(self) -> str:
@@ -115,17 +124,28 @@ class POCLEngine(Engine, OneshotPlannerMixin):
             return PlanGenerationResult(PlanGenerationResultStatus.UNSUPPORTED_PROBLEM, None, self.name)
         planner = Planner(task, **self._options)
         remaining = None if timeout is None else max(0.0, timeout - (time.monotonic() - start))
-        result = planner.search(remaining, self._node_limit)
+        if self._least_commitment:
+            result = planner.search(remaining, self._node_limit, self._alternatives, lambda plan: scored(task, plan))
+        else:
+            result = planner.search(remaining, self._node_limit)
         metrics = {"expanded": str(result.expanded), "generated": str(result.generated),
-                   "engine_internal_time": f"{time.monotonic() - start:.6f}"}
+                   "solutions": str(result.solutions), "engine_internal_time": f"{time.monotonic() - start:.6f}"}
         if result.plan is None:
             return PlanGenerationResult(STATUS[result.status], None, self.name, metrics=metrics)
-        problems = flaws_of(task, result.plan)
+        plan = result.plan
+        problems = flaws_of(task, plan)
         if problems:
             return PlanGenerationResult(PlanGenerationResultStatus.INTERNAL_ERROR, None, self.name, metrics=metrics,
                                         log_messages=[up.engines.LogMessage(up.engines.LogLevel.ERROR, problems[0])])
-        return PlanGenerationResult(STATUS["solved"], causal_link_plan(problem, task, result.plan), self.name,
+        return PlanGenerationResult(STATUS["solved"], causal_link_plan(problem, task, plan), self.name,
                                     metrics=metrics)
+
+
+def scored(task, plan):
+    """The plan after the least-commitment post-pass, scored: fewer steps, then fewer ordered pairs, then
+    fewer orderings after transitive reduction."""
+    better = least_commitment(task, plan)
+    return (len(better.steps), pairs(better.before), reduced_orderings(better.before)), better
 
 
 def causal_link_plan(problem, task, plan) -> CausalLinkPlan:

@@ -14,18 +14,28 @@ from regenerate_golden import bundled_pairs, pocl_golden_path
 from test_planner_bridge import check_plan, files, read
 
 from tailor.planner_bridge import NoPlanError, PlannerTimeoutError, plan_files, plan_here, render_text
-from tailor.planner_bridge.benchmark import width
-from tailor.planner_bridge.pocl import Planner, flaws_of, linearization
+from tailor.planner_bridge.benchmark import closure, compare, orderings, render, width
+from tailor.planner_bridge.pocl import GOAL, INIT, Planner, flaws_of, linearization
+from tailor.planner_bridge.pocl_engine import ALTERNATIVES, scored
 from tailor.planner_bridge.pocl_ground import ground
+from tailor.planner_bridge.pocl_order import least_commitment, pairs, reorder, sequence_plan
+from tailor.planner_bridge.reading import read_problem
 
 ROOT = Path(__file__).resolve().parent.parent
 CLASSIC = [("gripper", "p01"), ("gripper", "p02"), ("blocks", "p01"), ("blocks", "p02"), ("logistics", "p01"),
            ("logistics", "p02")]
+PARALLEL = ROOT / "tests" / "benchmarks" / "pocl"  # problems with parallel structure (the benchmark's)
 MAX_LINEARIZATIONS = 120  # per plan, enumerated in unified-planning's order; all of them for most plans
 
 
 def bundled(domain: str, problem: str) -> tuple[Path, Path]:
     return ROOT / "domains" / domain / "domain.pddl", ROOT / "domains" / domain / "problems" / f"{problem}.pddl"
+
+
+def parallel(domain: str, problem: str) -> tuple[Path, Path]:
+    folder = PARALLEL / domain
+    own = folder / "domain.pddl"
+    return own if own.exists() else files(domain, problem)[0], folder / f"{problem}.pddl"
 
 
 def search(domain: str, problem: str, **options):
@@ -174,4 +184,139 @@ def test_cli_refine_with_pocl(capsys):
     assert main(["refine", "soccer", "score", "--planner", "pocl", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["planner"] == "tailor-pocl"
+<<<<<<< HEAD
     assert [a["action"] for a in data["refined"]["actions"]] == ["approachBall", "dribbleBall"]
+=======
+    assert [a["action"] for a in data["actions"]] == ["approachBall", "dribbleBall"]
+
+
+# --- least commitment (planner_bridge.pocl_order and the engine's search for alternatives) ---------------------
+
+
+def engine_plan(paths: tuple[Path, Path], **params):
+    """The engine's CausalLinkPlan of a typed STRIPS problem (no compilation needed) and the parsed problem."""
+    from unified_planning.shortcuts import OneshotPlanner
+
+    from tailor.planner_bridge.pocl_engine import register
+
+    register()
+    problem = read_problem(*paths)[0]
+    with OneshotPlanner(name="tailor-pocl", params=params) as engine:
+        result = engine.solve(problem)
+    assert result.status.name == "SOLVED_SATISFICING"
+    return problem, result.plan
+
+
+def test_two_towers_are_rebuilt_in_parallel_only_with_least_commitment():
+    # two towers of the three-operator blocks world, each reversed: two independent goals. The search's first
+    # plan puts c onto d, which ties the towers into one chain; the least-commitment search keeps them apart
+    paths = parallel("blocks3", "p01")
+    plan = plan_here(*paths, planner="pocl")
+    assert (len(plan.steps), orderings(plan), len(closure(plan)), width(plan)) == (6, 4, 6, 2)
+    assert plan.orderings == ((1, 2), (2, 3), (4, 5), (5, 6))
+    towers = [{a for step in plan.steps[k:k + 3] for a in step.args} for k in (0, 3)]
+    assert towers == [{"a", "b", "c"}, {"d", "e", "f"}]
+    problem, off = engine_plan(paths, least_commitment=False)  # switched off: the search's first plan
+    assert len(off.orderings) == 5 and len(off.steps) == 6  # one chain of six steps: width 1
+    assert any({p.object().name for p in step.actual_parameters} >= {"c", "d"} for step in off.steps)
+    assert all_linearizations_valid(problem, engine_plan(paths)[1]) == 20  # 6! / (3! 3!): every interleaving
+
+
+@pytest.mark.parametrize("domain, problem", [("blocks3", "p01"), ("blocks3", "p02"), ("blocks3", "p03"),
+                                             ("logistics", "p04")])
+def test_parallel_problems_give_sound_plans(domain, problem):
+    paths = parallel(domain, problem)
+    check_plan(read_problem(*paths)[0], plan_here(*paths, planner="pocl"))
+
+
+def brute_force_least_pairs(task, steps: tuple[int, ...]) -> int:
+    """The fewest ordered pairs of steps over every choice of producers and threat sides (an independent
+    enumeration: plain edge sets and a reachability closure, not the post-pass's bit masks)."""
+    count = len(steps)
+    needs = [(literal, GOAL) for literal in task.goal]
+    needs += [(literal, s) for s in range(2, count) for literal in task.actions[steps[s]].preconditions]
+    producers = [([INIT] if task.initially(literal) else [])
+                 + [s for s in range(2, count) if s != consumer and literal in task.actions[steps[s]].effects]
+                 for literal, consumer in needs]
+    best = None
+    for choice in itertools.product(*producers):
+        edges, threats = set(), []
+        for (literal, consumer), producer in zip(needs, choice):
+            if producer != INIT and consumer != GOAL:
+                edges.add((producer, consumer))
+            for step in range(2, count):
+                if step not in (producer, consumer) and literal ^ 1 in task.actions[steps[step]].effects:
+                    threats.append(([(step, producer)] if producer != INIT else [])
+                                   + ([(consumer, step)] if consumer != GOAL else []))
+        for sides in itertools.product(*threats):
+            later = {s: set() for s in range(2, count)}
+            for first, second in edges | set(sides):
+                later[first].add(second)
+            for middle, beyond in later.items():  # Warshall
+                for after in later.values():
+                    if middle in after:
+                        after |= beyond
+            if any(s in later[s] for s in later):
+                continue  # cyclic
+            total = sum(len(after) for after in later.values())
+            best = total if best is None else min(best, total)
+    return best
+
+
+@pytest.mark.parametrize("domain, problem", [("blocks3", "p01"), ("blocks3", "p03"), ("logistics", "p04")])
+def test_post_pass_deorders_a_total_order_as_far_as_brute_force_can(domain, problem):
+    # the least-committed plan's steps, totally ordered and linked from the latest achievers (what a
+    # sequential planner gives): the post-pass must reach the fewest ordered pairs any choice of producers
+    # and threat sides allows, found by enumerating them all
+    paths = parallel(domain, problem)
+    task = ground(read_problem(*paths)[0])
+    found = Planner(task).search(20, None, ALTERNATIVES, lambda plan: scored(task, plan)).plan
+    steps = [found.steps[s] for s in linearization(found)]
+    total = sequence_plan(task, steps)
+    assert flaws_of(task, total) == [] and pairs(total.before) == len(steps) * (len(steps) - 1) // 2
+    stats: dict = {}
+    better = reorder(task, total, stats=stats)
+    assert flaws_of(task, better) == [] and stats["exact"]
+    assert pairs(better.before) == brute_force_least_pairs(task, total.steps) < pairs(total.before)
+
+
+def test_post_pass_drops_steps_that_support_nothing(tmp_path):
+    # e onto f and back again supports nothing the goal needs: the post-pass drops both (the second first)
+    problem = tmp_path / "p.pddl"
+    problem.write_text("(define (problem detour) (:domain blocks3) (:objects a b e f - block)\n"
+                       " (:init (ontable a) (ontable b) (ontable e) (ontable f) (clear a) (clear b) (clear e) (clear f))\n"
+                       " (:goal (on a b)))\n", encoding="utf-8")
+    task = ground(read_problem(PARALLEL / "blocks3" / "domain.pddl", problem)[0])
+    number = {(action.name, action.args): k for k, action in enumerate(task.actions)}
+    detour = [number[("move-t-to-b", ("e", "f"))], number[("move-b-to-t", ("e", "f"))],
+              number[("move-t-to-b", ("a", "b"))]]
+    plan = least_commitment(task, sequence_plan(task, detour))
+    assert plan.steps[2:] == (number[("move-t-to-b", ("a", "b"))],) and flaws_of(task, plan) == []
+    assert len(reorder(task, sequence_plan(task, detour)).steps) == 5  # reorder alone keeps every step
+
+
+def test_benchmark_table_compares_side_by_side():
+    row = compare([bundled("soccer", "score")])[0]
+    assert row["name"] == "soccer/score" and row["first"]["plan"].planner == "tailor-pocl"
+    for key in ("first", "search", "second", "post"):  # pocl, its first plan, pyperplan, pyperplan + post-pass
+        assert {k: row[key][k] for k in ("steps", "orderings", "pairs", "width")} == \
+            {"steps": 2, "orderings": 1, "pairs": 1, "width": 1}
+
+    def counts(steps, orderings, pairs, width):
+        return {"steps": steps, "orderings": orderings, "pairs": pairs, "width": width, "seconds": 0.5}
+
+    rows = [{"name": "a/p1", "first": counts(9, 10, 34, 2), "second": counts(11, 10, 55, 1), "post": None},
+            {"name": "a/p2", "first": counts(4, 3, 6, 1), "second": counts(4, 3, 6, 1), "post": None},
+            {"name": "a/p3", "first": counts(5, 2, 2, 3), "second": counts(5, 3, 4, 2), "post": None},
+            {"name": "a/p4", "first": {"error": "no plan within 30 s", "seconds": 30.0}, "second": counts(2, 1, 1, 1),
+             "post": None}]
+    lines = render(rows).splitlines()
+    assert [line.rsplit("|", 1)[1].strip() for line in lines[2:6]] == ["same", "same", "fewer", "-"]
+    assert lines[7:] == [
+        ("pocl vs pyperplan, 2 problems with parallel structure (width >= 2 in either plan): orderings 1 fewer, "
+         "1 same, 0 more; pairs 2 fewer, 0 same, 0 more; width 2 wider, 0 same, 0 narrower"),
+        ("pocl vs pyperplan, 3 problems all: orderings 1 fewer, 2 same, 0 more; pairs 2 fewer, 1 same, 0 more; "
+         "width 2 wider, 1 same, 0 narrower"),
+        "not solved by both: a/p4",
+    ]
+>>>>>>> pocl2
