@@ -184,10 +184,7 @@ def test_cli_refine_with_pocl(capsys):
     assert main(["refine", "soccer", "score", "--planner", "pocl", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["planner"] == "tailor-pocl"
-<<<<<<< HEAD
     assert [a["action"] for a in data["refined"]["actions"]] == ["approachBall", "dribbleBall"]
-=======
-    assert [a["action"] for a in data["actions"]] == ["approachBall", "dribbleBall"]
 
 
 # --- least commitment (planner_bridge.pocl_order and the engine's search for alternatives) ---------------------
@@ -319,4 +316,3 @@ def test_benchmark_table_compares_side_by_side():
          "width 2 wider, 1 same, 0 narrower"),
         "not solved by both: a/p4",
     ]
->>>>>>> pocl2
