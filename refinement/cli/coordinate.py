@@ -15,7 +15,7 @@ import time
 from tailor.refinement.cli.arguments import whole_number, worker_count
 
 HELP = "measure implicit coordination of a robot team with learned action models (Ch. 7)"
-DEFAULT_EPISODES = 100
+DEFAULT_EPISODES = 200
 MAX_ROBOTS = 8
 
 

@@ -96,6 +96,8 @@ def fuse(estimates: list[tuple[np.ndarray, np.ndarray]], heading: int | None = N
             s = (weights * np.sin(safe[..., heading])).sum(axis=0)
             c = (weights * np.cos(safe[..., heading])).sum(axis=0)
             out[..., heading] = np.arctan2(s, c)
+    single = (weights > 0).sum(axis=0) == 1  # one estimate known: itself, exactly (no rounding)
+    out[single] = np.where(weights[..., None] > 0, safe, 0.0).sum(axis=0)[single]
     out[total == 0] = np.nan
     return out
 
