@@ -149,6 +149,7 @@ def _print_text(report: dict) -> None:
         f"        {_pct(s['agreement_distance'])}\n")
     out(f"  Q2/Q3 chose the quickest robot (static)             {_pct(s['chose_quickest'])}"
         f"        {_pct(s['chose_quickest_distance'])}\n")
+    out(f"     ... where some robot knew the target             {_pct(s['chose_quickest_target_known'])}\n")
     out(f"     ... from the true states (the models alone)      {_pct(s['chose_quickest_true_states'])}\n")
     out(f"  predicted vs measured approach time: MAE {s['prediction_mae']:.2f} s (mean {s['mean_time']:.2f} s)\n"
         if s["prediction_mae"] is not None else "")
@@ -168,7 +169,8 @@ def _print_text(report: dict) -> None:
             f"{_pct(tree['failure_share']).strip()})\n")
         for line in tree["rules"]:
             out(f"  {line}\n")
-        out(f"  accuracy {_pct(tree['accuracy']).strip()} (always 'success': {_pct(tree['majority_accuracy']).strip()}); "
+        out(f"  accuracy {_pct(tree['accuracy']).strip()} (always 'success': {_pct(tree['majority_accuracy']).strip()}; "
+            f"balanced {_pct(tree['balanced_accuracy']).strip()}); "
             f"failures predicted {_pct(tree['failures_predicted']).strip()}, successes "
             f"{_pct(tree['successes_predicted']).strip()}\n")
     grid = d["communication_fov"]

@@ -291,4 +291,6 @@ def learn_failure_tree(features: np.ndarray, success: np.ndarray, train: np.ndar
         "failures_predicted": float(np.mean(predicted[failures] == 0)) if failures.any() else None,
         "successes_predicted": float(np.mean(predicted[~failures] == 1)) if (~failures).any() else None,
     }
+    caught = [report["failures_predicted"], report["successes_predicted"]]
+    report["balanced_accuracy"] = float(np.mean(caught)) if None not in caught else None
     return FailureTree(tree, report)

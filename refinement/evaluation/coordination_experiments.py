@@ -120,6 +120,8 @@ def summarize_static(rows: list[dict]) -> dict:
         return _share(agreed(chosen)), _share(chosen == quickest[:, None])
 
     agreement, quick = stats("chosen")
+    known = np.array([not all(c == NOBODY for c in r["chosen"]) for r in usable], dtype=bool)
+    chosen = np.array([r["chosen"] for r in usable]).reshape(len(usable), -1)
     agreement_distance, quick_distance = stats("chosen_distance")
     predicted = np.array([r["predicted"] for r in usable]).reshape(len(usable), -1)
     ok = np.isfinite(measured)
@@ -130,6 +132,7 @@ def summarize_static(rows: list[dict]) -> dict:
         "target_unknown": sum(all(c == NOBODY for c in r["chosen"]) for r in rows),
         "agreement": agreement, "chose_quickest": quick,
         "agreement_distance": agreement_distance, "chose_quickest_distance": quick_distance,
+        "chose_quickest_target_known": _share((chosen == quickest[:, None])[known]),
         "chose_quickest_true_states": _share([r["chosen_true_states"] for r in usable] == quickest),
         "prediction_mae": _share(np.abs(predicted[ok] - measured[ok])),
         "mean_time": _share(measured[ok]),
