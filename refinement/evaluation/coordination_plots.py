@@ -25,8 +25,9 @@ def plot_noise(report: dict, path: Path) -> None:
     labels = [f"{r['sigma']:.2f}" for r in rows]
     fig, ax = plt.subplots(figsize=(6.5, 4))
     bottom = np.zeros(len(rows))
-    colors = plt.cm.RdYlGn_r(np.linspace(0.0, 1.0, shares.shape[1]))
-    colors[1] = (0.2, 0.6, 0.2, 1.0)
+    # nobody going is grey, exactly one (success) green, more than one from orange to red
+    colors = [(0.6, 0.6, 0.6, 1.0), (0.2, 0.6, 0.2, 1.0)]
+    colors += list(plt.cm.autumn_r(np.linspace(0.4, 1.0, max(1, shares.shape[1] - 2))))
     for k in range(shares.shape[1]):
         ax.bar(labels, 100 * shares[:, k], bottom=100 * bottom, color=colors[k], label=f"{k} go")
         bottom += shares[:, k]
