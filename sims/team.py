@@ -87,10 +87,12 @@ class Observations:
 @dataclass(frozen=True)
 class StaticSituation:
     """Fig. 7.7: the team's course to its waiting poses (the last tick is when they decide) and the time each
-    robot then took to approach the target from there, alone (None where its approach failed)."""
+    robot then took to approach the target from there, alone (None where its approach failed); `repeated`: the
+    same approaches under other noise (how certain "the quickest" is in the simulator itself)."""
 
     log: TeamLog
     measured: tuple[float | None, ...]
+    repeated: tuple[float | None, ...] = ()
 
 
 @runtime_checkable

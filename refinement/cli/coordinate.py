@@ -151,6 +151,7 @@ def _print_text(report: dict) -> None:
         f"        {_pct(s['chose_quickest_distance'])}\n")
     out(f"     ... where some robot knew the target             {_pct(s['chose_quickest_target_known'])}\n")
     out(f"     ... from the true states (the models alone)      {_pct(s['chose_quickest_true_states'])}\n")
+    out(f"     the same robot is quickest under other noise     {_pct(s['quickest_repeatable'])}\n")
     out(f"  predicted vs measured approach time: MAE {s['prediction_mae']:.2f} s (mean {s['mean_time']:.2f} s)\n"
         if s["prediction_mae"] is not None else "")
     out("\nQ1 by strategy (dynamic): agreement / exactly one robot goes\n")

@@ -101,7 +101,8 @@ def static_situation(scene: TeamScene, predictor: Predictor, setup: Setup, index
             "chosen_distance": choices(view.utilities("distance", predictor))[-1].tolist(),
             "chosen_true_states": int(np.argmin(truth)),
             "predicted": truth.tolist(),
-            "measured": [None if t is None else float(t) for t in situation.measured]}
+            "measured": [None if t is None else float(t) for t in situation.measured],
+            "repeated": [None if t is None else float(t) for t in situation.repeated]}
 
 
 def _share(values) -> float | None:
@@ -124,6 +125,9 @@ def summarize_static(rows: list[dict]) -> dict:
     chosen = np.array([r["chosen"] for r in usable]).reshape(len(usable), -1)
     agreement_distance, quick_distance = stats("chosen_distance")
     predicted = np.array([r["predicted"] for r in usable]).reshape(len(usable), -1)
+    repeated = [r for r in usable if r["repeated"] and any(t is not None for t in r["repeated"])]
+    again = [int(np.argmin([np.inf if t is None else t for t in r["repeated"]])) ==
+             int(np.argmin([np.inf if t is None else t for t in r["measured"]])) for r in repeated]
     ok = np.isfinite(measured)
     return {
         "situations": len(rows), "usable": len(usable),
@@ -133,6 +137,7 @@ def summarize_static(rows: list[dict]) -> dict:
         "agreement": agreement, "chose_quickest": quick,
         "agreement_distance": agreement_distance, "chose_quickest_distance": quick_distance,
         "chose_quickest_target_known": _share((chosen == quickest[:, None])[known]),
+        "quickest_repeatable": _share(again),
         "chose_quickest_true_states": _share([r["chosen_true_states"] for r in usable] == quickest),
         "prediction_mae": _share(np.abs(predicted[ok] - measured[ok])),
         "mean_time": _share(measured[ok]),

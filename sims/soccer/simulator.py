@@ -293,8 +293,12 @@ class SoccerSim:
         """One control period of `action` toward `goal` from the believed state: how a team scene steps several
         robots side by side (each in its own simulator) instead of running one action to its end."""
         belief = self.believed_state()
+        self.motor_tick(*ACTION_FUNCTIONS[action](belief[0], belief[1], belief[2], belief[3], *goal))
+
+    def motor_tick(self, v_cmd: float, w_cmd: float) -> None:
+        """One control period of the motor command [v, phidot] (e.g. turning on the spot to look around)."""
         try:
-            self.command(*ACTION_FUNCTIONS[action](belief[0], belief[1], belief[2], belief[3], *goal))
+            self.command(v_cmd, w_cmd)
             self._advance(STEPS_PER_CONTROL)
             self._keep_inside()
         finally:

@@ -35,7 +35,8 @@ ARRIVED = 0.15  # m, a navigating robot within this of its goal position gets a 
 NAVIGATION_TIMEOUT = 20.0  # s, ... as does one that has not arrived after this long
 NAVIGATION_SPEEDS = (0.0, 0.3)  # m/s, speed at a random way-point of the dynamic experiment
 SETTLE_TIMEOUT = 30.0  # s, in the static experiment robots stop where they are after this long
-WAIT = 1.0  # s, the robots stand still at their waiting poses before deciding
+LOOK_RATE = 1.5  # rad/s, a waiting robot turns once on the spot at this rate to look around ...
+WAIT = 1.0  # s, ... then stands still before the team decides
 
 
 @dataclass(frozen=True)
@@ -137,6 +138,7 @@ class SoccerTeam:
         return p[0], p[1], float(rng.uniform(-math.pi, math.pi)), vg
 
     def static(self, kinds: tuple[str, ...], seed: int) -> StaticSituation:
+        """Drive to random waiting poses, look around once, stand WAIT; then each approaches alone (Fig. 7.7)."""
         rng = np.random.default_rng(_seed(seed, 1))
         ball = _point(rng)
         waiting = _separated(rng, len(kinds), [ball])
@@ -162,14 +164,23 @@ class SoccerTeam:
                         continue
                     sim.control_tick(KINDS[kind].navigate, goals[k])
             t += PERIOD
+        # every robot looks around once where it waits (a full turn on the spot, as a robot searching for the
+        # ball does), so that the team's belief does not hinge on where its camera happened to point
+        look = int(math.ceil(2 * math.pi / LOOK_RATE / PERIOD))
+        for tick in range(look + int(round(1.0 / PERIOD))):  # the turn, then a second to come to rest
+            rate = LOOK_RATE if tick < look else 0.0
+            for _ in range(CONTROLS_PER_TICK):
+                for sim in sims:
+                    sim.motor_tick(0.0, rate)
+            rows.append(np.array([sim.true_state()[:4] for sim in sims]))
         final = rows[-1].copy()
         final[:, 3] = 0.0
         rows += [final] * int(round(WAIT / PERIOD))
         states = np.array(rows)
         log = TeamLog(PERIOD, states, np.tile(ball, (len(states), 1)), tuple(kinds))
-        measured = tuple(self.approach_time(kind, tuple(final[k]), ball, _seed(seed, 3, k))
-                         for k, kind in enumerate(kinds))
-        return StaticSituation(log, measured)
+        measured, repeated = (tuple(self.approach_time(kind, tuple(final[k]), ball, _seed(seed, stream, k))
+                                    for k, kind in enumerate(kinds)) for stream in (3, 4))
+        return StaticSituation(log, measured, repeated)
 
     @staticmethod
     def approach_time(kind: str, robot: tuple[float, float, float, float], ball: tuple[float, float],
