@@ -227,16 +227,10 @@ def agreed(chosen: np.ndarray) -> np.ndarray:
 
 
 def chose_quickest(chosen: np.ndarray, measured: np.ndarray) -> np.ndarray:
-    """(S, N) whether robot i chose the robot that really was quickest (Q2), per situation (measured (S, N):
-    the times each robot took, inf where it failed; a situation where all failed counts for none)."""
+    """(S, N) whether robot i chose the robot that really was quickest (Q2), per situation; measured (S, N): the
+    times each robot took, inf where it failed (leave out situations where every approach failed)."""
     quickest = np.argmin(measured, axis=-1)
     return chosen == quickest[:, None]
-
-
-def going_shares(counts: np.ndarray, robots: int) -> list[float]:
-    """Share of ticks on which 0, 1, ..., N robots intend to go (Fig. 7.9)."""
-    histogram = np.bincount(np.asarray(counts, dtype=int), minlength=robots + 1)[:robots + 1]
-    return (histogram / max(1, histogram.sum())).tolist()
 
 
 # --- Q5: when does coordination fail? -----------------------------------------------------------------------

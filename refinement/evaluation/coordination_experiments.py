@@ -21,10 +21,10 @@ from tailor.refinement.evaluation.coordination import (
     STRATEGIES,
     Predictor,
     agreed,
+    chose_quickest,
     choices,
     failure_features,
     going,
-    going_shares,
     learn_failure_tree,
     team_view,
 )
@@ -118,7 +118,7 @@ def summarize_static(rows: list[dict]) -> dict:
 
     def stats(key: str) -> tuple[float | None, float | None]:
         chosen = np.array([r[key] for r in usable]).reshape(len(usable), -1)
-        return _share(agreed(chosen)), _share(chosen == quickest[:, None])
+        return _share(agreed(chosen)), _share(chose_quickest(chosen, measured))
 
     agreement, quick = stats("chosen")
     known = np.array([not all(c == NOBODY for c in r["chosen"]) for r in usable], dtype=bool)
@@ -136,7 +136,7 @@ def summarize_static(rows: list[dict]) -> dict:
         "target_unknown": sum(all(c == NOBODY for c in r["chosen"]) for r in rows),
         "agreement": agreement, "chose_quickest": quick,
         "agreement_distance": agreement_distance, "chose_quickest_distance": quick_distance,
-        "chose_quickest_target_known": _share((chosen == quickest[:, None])[known]),
+        "chose_quickest_target_known": _share(chose_quickest(chosen, measured)[known]),
         "quickest_repeatable": _share(again),
         "chose_quickest_true_states": _share([r["chosen_true_states"] for r in usable] == quickest),
         "prediction_mae": _share(np.abs(predicted[ok] - measured[ok])),
