@@ -154,9 +154,9 @@ class Team:
         return states
 
     def beliefs(self, strategy: str, extra_noise: float = 0.0, rng: np.random.Generator | None = None) -> Beliefs:
-        """The beliefs perspective taking uses: `implicit` (own perception only) or `shared` (fused with what
-        was communicated); `extra_noise` (m, and rad on headings) is added to every estimate of a teammate
-        (Q4)."""
+        """The beliefs perspective taking uses: `implicit` (own perception only) or `shared` (a teammate as the
+        more certain of perceived and communicated, the target fused from all observations); `extra_noise` (m,
+        and rad on headings) is added to every estimate of a teammate (Q4)."""
         if strategy == "implicit":
             others, target = self.perceived[0], self.own_target[0]
         elif strategy in ("shared", "distance"):
