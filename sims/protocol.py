@@ -135,6 +135,7 @@ class SimulatorEntry:
     scene_objects: tuple[str, ...] = ()  # the objects reset(scene) places; () = not declared (not checked)
     description: str = ""
     extras: Mapping[str, Any] = field(default_factory=dict)
+    team: Any = None  # a tailor.sims.team.TeamScene for the coordination experiments (Ch. 7), or None
 
     def __post_init__(self) -> None:
         for key, spec in self.actions.items():

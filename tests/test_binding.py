@@ -135,7 +135,7 @@ SOCCER_SIM = 'simulator = "soccer"\n'  # top-level key every binding needs; prep
 BAD_BINDINGS = [
     ('[actions.go]\nexecutable = "fly"\nobserved = 0\ninternal = 1\n',
      r"\[actions.go\] executable = 'fly' is not an executable action of simulator 'soccer' "
-     r"\(known: goToPose, approachBall, dribbleBall\)"),
+     r"\(known: goToPose, approachBall, dribbleBall, goToPosition\)"),
     (VALID_ACTION + "observd = 0\n",
      r"\[actions.go\]: unknown key 'observd' \(expected one of executable, internal, observed\)"),
     ('[actions.go]\nexecutable = "goToPose"\nobserved = 0\n',

@@ -69,8 +69,18 @@ def test_pose_features_by_hand():
 
 
 def test_the_pose_spaces_are_registered():
-    assert POSE_SPACES == ["pose", "pose_delta"]
+    assert POSE_SPACES == ["pose", "pose_delta", "position"]
     assert FEATURE_SPACES["pose_delta"].names == feature_names("pose") + ("delta_angle",)
+    assert feature_names("position") == ("v", "dist", "angle_to")  # Table 4.1's goToPosition row
+
+
+def test_the_position_space_ignores_the_goal_heading_and_speed():
+    params = random_params(50, seed=4)
+    other = params.copy()
+    other[:, 6:] = np.random.default_rng(5).uniform(-3, 3, (50, 2))
+    pose = compute_features("pose", params)
+    np.testing.assert_array_equal(compute_features("position", params), pose[:, [0, 2, 3]])
+    np.testing.assert_array_equal(compute_features("position", other), compute_features("position", params))
 
 
 @pytest.mark.parametrize("feature_set", POSE_SPACES)

@@ -15,6 +15,7 @@ from synthetic_episodes import random_params
 
 EXPECTED_FILES = {
     "models/goToPose.json", "models/approachBall.json", "models/dribbleBall.json", "models/goToPose.collision.json",
+    "models/goToPosition.json",
     "training/report.json", "training/report.txt", "training/mae_vs_n_i.png", "training/mae_vs_episodes.png",
     "training/angle_at_polar.png", "training/goToPose.success_region.png",
 }
@@ -28,7 +29,7 @@ def check_outputs(out, report: dict, episodes: int, fresh: int) -> None:
     assert files_under(out) == EXPECTED_FILES
     assert json.loads((out / "training" / "report.json").read_text()) == report
     models = load_action_models(out / "models")
-    assert sorted(models) == ["approachBall", "dribbleBall", "goToPose"]
+    assert sorted(models) == ["approachBall", "dribbleBall", "goToPose", "goToPosition"]
     params = random_params(20, seed=1)
     for action, model in models.items():
         row = report["models"][action]
@@ -82,6 +83,21 @@ def test_train_is_reproducible_and_prints_the_table(tmp_path, monkeypatch, capsy
         assert (tmp_path / "a" / "models" / name).read_text() == (tmp_path / "b" / "models" / name).read_text()
     model = load_action_models(tmp_path / "a" / "models")["goToPose"]
     assert model.duration.predict(compute_features("pose", random_params(5, 2))).shape == (5,)
+
+
+def test_only_learns_the_named_models(tmp_path, monkeypatch, capsys):
+    """--only trains a model new to a domain without retraining (or touching) the others."""
+    monkeypatch.setattr("tailor.sims.experience.gather", synthetic_episodes.gather)
+    assert main(["train", "soccer", "--only", "goToPosition", "--episodes", "24", "--n-i", "1", "--json",
+                 "--out", str(tmp_path)]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert list(report["models"]) == ["goToPosition"] and report["classifiers"] == {}
+    assert report["subgoal_experience"] == []
+    assert {p for p in files_under(tmp_path) if p.startswith("models/")} == {"models/goToPosition.json"}
+    assert main(["train", "soccer", "--only", "goToPositon", "--out", str(tmp_path / "x")]) == 11
+    err = capsys.readouterr().err.strip()
+    assert err.endswith("did you mean 'goToPosition'?") and len(err.splitlines()) == 1
+    assert not (tmp_path / "x").exists()
 
 
 def test_unknown_domain_is_one_line(capsys, tmp_path):

@@ -21,6 +21,7 @@ COMMANDS = {
     "train": "tailor.refinement.cli.train",
     "refine": "tailor.refinement.cli.refine",
     "evaluate": "tailor.refinement.cli.evaluate",
+    "coordinate": "tailor.refinement.cli.coordinate",
     "domains": "tailor.refinement.cli.domains",
 }
 

@@ -28,6 +28,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "<user data>/tailor/<domain>; the bundled models are never overwritten)")
     parser.add_argument("--n-i", type=_positive_ints, default=None, metavar="LIST",
                         help="candidate examples per episode n_i, comma-separated (default 1,2,3,5,10,20,30,50)")
+    parser.add_argument("--only", type=_names, default=None, metavar="ACTIONS",
+                        help="learn only these models of the recipe (comma-separated actions), e.g. a model new to "
+                             "the domain, leaving the others alone (use with --out: the report covers only them)")
     parser.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
 
 
@@ -41,6 +44,32 @@ def _positive_ints(text: str) -> tuple[int, ...]:
     return values
 
 
+def _names(text: str) -> tuple[str, ...]:
+    names = tuple(part.strip() for part in text.split(",") if part.strip())
+    if not names:
+        raise argparse.ArgumentTypeError(f"expected comma-separated action names, got {text!r}")
+    return names
+
+
+def _only(recipe, actions: tuple[str, ...]):
+    """The recipe cut down to the models and classifiers of `actions` (and their subgoal experience)."""
+    from dataclasses import replace
+
+    from tailor.errors import BindingError
+    from tailor.refinement.binding import BINDING_FILE
+    from tailor.refinement.binding_domain import did_you_mean
+
+    known = {m.action for m in (*recipe.models, *recipe.classifiers)}
+    for action in actions:
+        if action not in known:
+            raise BindingError(f"--only {action}: the [training] table learns no model of it (it learns "
+                               f"{', '.join(sorted(known))}){did_you_mean(action, known)}",
+                               file=str(recipe.domain_dir / BINDING_FILE))
+    return replace(recipe, models=tuple(m for m in recipe.models if m.action in actions),
+                   classifiers=tuple(c for c in recipe.classifiers if c.action in actions),
+                   subgoal_experience=tuple(c for c in recipe.subgoal_experience if c.action in actions))
+
+
 def run(args: argparse.Namespace) -> int:
     from tailor.planner_bridge import resolve_domain_dir
     from tailor.refinement.binding import BINDING_FILE
@@ -51,6 +80,8 @@ def run(args: argparse.Namespace) -> int:
     from tailor.refinement.outputs import check_output_dir, json_text
 
     recipe = load_recipe(resolve_domain_dir(args.domain))
+    if args.only:
+        recipe = _only(recipe, args.only)
     episodes = recipe.episodes if args.episodes is None else args.episodes
     if episodes < MIN_EPISODES:  # the domain's own [training] episodes
         raise BindingError(f"[training] episodes must be at least {MIN_EPISODES} (a quarter of them is the test "

@@ -80,6 +80,7 @@ def _rigid_motion(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
 
 POSE = ("v", "vg", "dist", "angle_to", "angle_at")
 POSE_DELTA = POSE + ("delta_angle",)
+POSITION = ("v", "dist", "angle_to")  # Table 4.1's goToPosition row: no goal heading, arrival speed fixed
 
 
 # --- joints: a reach in joint space (theta_a, omega_a, theta_b, omega_b -> the same at the goal) ----------
@@ -158,6 +159,8 @@ for _space in (
     FeatureSpace("pose", POSE_PARAMETERS, POSE, _pose_selection(POSE),
                  "translation, rotation and mirroring of the scene", _rigid_motion),
     FeatureSpace("pose_delta", POSE_PARAMETERS, POSE_DELTA, _pose_selection(POSE_DELTA),
+                 "translation, rotation and mirroring of the scene", _rigid_motion),
+    FeatureSpace("position", POSE_PARAMETERS, POSITION, _pose_selection(POSITION),
                  "translation, rotation and mirroring of the scene", _rigid_motion),
     FeatureSpace("reach", JOINT_PARAMETERS, ("dist", "angle_to", "angle_at", "speed", "speed_g"), _reach,
                  "translation and rotation of joint space (Table 4.1)", _joint_rotation),

@@ -1,4 +1,5 @@
-"""The soccer simulator (pymunk): field, Pioneer-like robot with a ball guide, ball, and its actions.
+"""The soccer simulator (pymunk): field, Pioneer-like robot with a ball guide, ball, and its actions; a team
+of them for the coordination experiments (sims.soccer.team).
 
 `SIMULATOR` is what the package registers (entry point `tailor.simulators: soccer`): the three actions with
 their pose parameters (Table 2.1), the simulator factory, the experience scenarios and the random situations.
@@ -8,6 +9,7 @@ from tailor.sims.protocol import ActionSpec, Scenario, SimulatorEntry
 from tailor.sims.soccer.actions import ACTION_FUNCTIONS, approachBall, dribbleBall, goToPose
 from tailor.sims.soccer.scenarios import RANGES, SITUATIONS, subgoal_episode
 from tailor.sims.soccer.simulator import Noise, SoccerSim, simulate_sequence
+from tailor.sims.soccer.team import TEAM
 
 _POSE = dict(observed=("x", "y", "phi", "v"), internal=("xg", "yg", "phig", "vg"),
              observed_quantities=("x", "y", "phi", "v"), internal_quantities=("x", "y", "phi", "v"))
@@ -25,6 +27,7 @@ SIMULATOR = SimulatorEntry(
     situations=SITUATIONS,
     scene_objects=("robot", "ball"),
     subgoal_episode=subgoal_episode,
+    team=TEAM,
     description="RoboCup mid-size field, Pioneer-like robot with a ball guide, a ball (pymunk)",
 )
 

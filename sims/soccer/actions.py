@@ -9,6 +9,8 @@ the simulator (or a real robot) may call them at any rate.
   learns when it bumps one lying at its goal.
 - approachBall (sims.soccer.approach): a Dubins path round the ball to a pre-pose behind it, then straight in.
 - dribbleBall (sims.soccer.dribble): a Dubins path with a tight turning radius and slow arcs, ball in the guide.
+- goToPosition (sims.soccer.position): turn and go to a position, no goal heading (App. A.2): the action of
+  the other robot kind of a mixed team (Sec. 7.3), sized for its slower dynamics (world.SPARROW).
 """
 
 from __future__ import annotations
@@ -18,10 +20,12 @@ from collections.abc import Callable
 from tailor.sims.soccer.approach import approachBall
 from tailor.sims.soccer.dribble import dribbleBall
 from tailor.sims.soccer.goto import goToPose
+from tailor.sims.soccer.position import goToPosition
 
 Command = tuple[float, float]
 Action = Callable[[float, float, float, float, float, float, float, float], Command]
 
 ACTION_FUNCTIONS: dict[str, Action] = {
-    "goToPose": goToPose, "approachBall": approachBall, "dribbleBall": dribbleBall,
+    "goToPose": goToPose, "approachBall": approachBall, "dribbleBall": dribbleBall, "goToPosition": goToPosition,
 }
+HEADING_FREE = frozenset({"goToPosition"})  # actions whose goal heading is ignored (and not judged)

@@ -15,7 +15,7 @@ import numpy as np
 
 from tailor.sims.episode import ActionCall, Episode
 from tailor.sims.soccer.simulator import Noise, SoccerSim, simulate_sequence
-from tailor.sims.soccer.world import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, V_MAX
+from tailor.sims.soccer.world import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, PIONEER, SPARROW, V_MAX, Dynamics
 
 FIELD_MARGIN = 0.5  # m, start and goal positions keep this distance to the field lines
 BALL_CLEARANCE = 0.8  # m, minimum start distance of the ball point to a ball lying at the goal
@@ -31,6 +31,7 @@ class Ranges:
 
     ball: "none" (no ball in the scene), "goal" (at rest at the goal position), "guide" (at rest in the
     robot's guide at the start). Speeds in m/s, distances in m; headings are uniform in [-pi, pi).
+    dynamics: the kind of robot that runs the action (world.PIONEER or world.SPARROW).
     """
 
     name: str
@@ -39,6 +40,7 @@ class Ranges:
     v_range: tuple[float, float]
     vg_range: tuple[float, float]
     dist_range: tuple[float, float]
+    dynamics: Dynamics = PIONEER
 
     def ball_at(self, start: tuple[float, float], goal: tuple[float, float]) -> tuple[float, float] | None:
         """Where the ball lies at the start of an episode from position `start` to `goal` (None: no ball)."""
@@ -47,7 +49,7 @@ class Ranges:
     def run(self, seed: int, noise: Noise | None = None) -> Episode:
         """One episode; the task and the simulator's noise both follow from `seed`."""
         robot, ball, call = sample_task(self, np.random.default_rng((seed, SAMPLING_STREAM)))
-        sim = SoccerSim(seed, Noise() if noise is None else noise)
+        sim = SoccerSim(seed, Noise() if noise is None else noise, self.dynamics)
         sim.place(robot, ball)
         return sim.run(call)
 
@@ -63,6 +65,9 @@ RANGES: dict[str, Ranges] = {
     # plain (ball-unaware) goToPose to a ball at the goal: the data of the collision classifier (Sec. 4.2.2)
     "goToPoseAtBall": Ranges("goToPoseAtBall", "goToPose", "goal", (0.0, 0.6), (0.0, 0.3),
                              (BALL_CLEARANCE, FIELD_DIAGONAL)),
+    # the other robot kind (Sec. 7.3) driving to a position (its ball approach): no ball, stop there
+    "goToPosition": Ranges("goToPosition", "goToPosition", "none", (0.0, SPARROW.v_max), (0.0, 0.0),
+                           (BALL_CLEARANCE, FIELD_DIAGONAL), SPARROW),
 }
 
 

@@ -7,7 +7,7 @@ model of the wheel axle); pymunk resolves its contacts with the ball.
 
 An action ends (Episode.outcome) on
 - "success": ball point within POS_TOL of the goal, heading within HEADING_TOL, speed within SPEED_TOL of
-  vg; for approachBall the untouched ball also lies within POS_TOL of the ball point, for dribbleBall the
+  vg (goToPosition: no heading); for approachBall the untouched ball also lies within POS_TOL of the ball point, for dribbleBall the
   ball sits in the guide (within BALL_HELD_DISTANCE of the ball point);
 - "collision": a ball is in the scene, the action does not dribble, and the ball moved (by more than
   BUMP_DISTANCE) before the goal pose was reached;
@@ -28,7 +28,7 @@ import pymunk
 from tailor.sims.episode import ActionCall, Episode, SequenceResult, run_in_sequence
 from tailor.errors import SimError
 from tailor.sims.soccer import world as W
-from tailor.sims.soccer.actions import ACTION_FUNCTIONS
+from tailor.sims.soccer.actions import ACTION_FUNCTIONS, HEADING_FREE
 
 PHYSICS_HZ = 100  # Hz, fixed physics step
 CONTROL_HZ = 20  # Hz, controller rate (must divide PHYSICS_HZ)
@@ -121,8 +121,11 @@ class SoccerSim:
 
     state_columns = STATE_COLUMNS
 
-    def __init__(self, seed: int, noise: Noise = Noise()):
+    def __init__(self, seed: int, noise: Noise = Noise(), dynamics: W.Dynamics = W.PIONEER):
         self.noise = noise
+        self.dynamics = dynamics
+        self._a_step = _A_STEP if dynamics == W.PIONEER else dynamics.a_max * DT
+        self._alpha_step = _ALPHA_STEP if dynamics == W.PIONEER else dynamics.alpha_max * DT
         self.rng = np.random.default_rng(seed)
         self.seed = int(seed)
         self.space = pymunk.Space()
@@ -172,8 +175,9 @@ class SoccerSim:
     def place(self, robot: tuple[float, float, float, float], ball: tuple[float, float] | None = None) -> None:
         """Place the robot (ball point x, y, heading phi, speed v) and the ball (at rest) or no ball."""
         x, y, phi, v = (float(q) for q in robot)
-        if not all(math.isfinite(q) for q in (x, y, phi, v)) or abs(v) > W.V_MAX + 1e-9:
-            raise SimError(f"invalid robot state {robot}: finite values and |v| <= {W.V_MAX} m/s required")
+        v_max = self.dynamics.v_max
+        if not all(math.isfinite(q) for q in (x, y, phi, v)) or abs(v) > v_max + 1e-9:
+            raise SimError(f"invalid robot state {robot}: finite values and |v| <= {v_max} m/s required")
         self.phi, self.v, self.w = phi, v, 0.0
         self.v_cmd, self.w_cmd = v, 0.0
         self.robot.angle = phi
@@ -215,8 +219,9 @@ class SoccerSim:
         e = self.rng.standard_normal(2).tolist() if self.noise.motor > 0.0 else (0.0, 0.0)
         v_cmd *= 1.0 + self.noise.motor * e[0]
         w_cmd *= 1.0 + self.noise.motor * e[1]
-        self.v_cmd = max(-W.V_MAX, min(W.V_MAX, v_cmd))
-        self.w_cmd = max(-W.W_MAX, min(W.W_MAX, w_cmd))
+        d = self.dynamics
+        self.v_cmd = max(-d.v_max, min(d.v_max, v_cmd))
+        self.w_cmd = max(-d.w_max, min(d.w_max, w_cmd))
 
     def step(self) -> None:
         """One physics step: accelerate toward the command within the limits, move, resolve contacts."""
@@ -242,7 +247,7 @@ class SoccerSim:
         """
         robot, space, ball = self.robot, self.space, self.ball
         v, w, phi, time = self.v, self.w, self.phi, self.time
-        v_cmd, w_cmd, a, alpha = self.v_cmd, self.w_cmd, _A_STEP, _ALPHA_STEP
+        v_cmd, w_cmd, a, alpha = self.v_cmd, self.w_cmd, self._a_step, self._alpha_step
         v_sent = phi_sent = w_sent = None  # what pymunk holds (None: send it again)
         has_ball, callback, damping_sent = self.has_ball, self._friction_callback, self._damping
         try:
@@ -283,6 +288,21 @@ class SoccerSim:
         if self._damping != 1.0:
             _set_damping(self.space, 1.0)
             self._damping = 1.0
+
+    def control_tick(self, action: str, goal: tuple[float, float, float, float]) -> None:
+        """One control period of `action` toward `goal` from the believed state: how a team scene steps several
+        robots side by side (each in its own simulator) instead of running one action to its end."""
+        belief = self.believed_state()
+        self.motor_tick(*ACTION_FUNCTIONS[action](belief[0], belief[1], belief[2], belief[3], *goal))
+
+    def motor_tick(self, v_cmd: float, w_cmd: float) -> None:
+        """One control period of the motor command [v, phidot] (e.g. turning on the spot to look around)."""
+        try:
+            self.command(v_cmd, w_cmd)
+            self._advance(STEPS_PER_CONTROL)
+            self._keep_inside()
+        finally:
+            self._restore_friction()
 
     # --- actions ----------------------------------------------------------------------------------------
     def run(self, call: ActionCall) -> Episode:
@@ -345,8 +365,8 @@ class SoccerSim:
         ball_gap = math.hypot(bx - x, by - y) if self.has_ball else math.nan
         if dribbling and ball_gap > BALL_LOST_DISTANCE:
             return "ball_lost"
-        at_goal = (math.hypot(x - xg, y - yg) <= POS_TOL and abs(W.wrap(phi - phig)) <= HEADING_TOL
-                   and abs(v - vg) <= SPEED_TOL)
+        at_goal = (math.hypot(x - xg, y - yg) <= POS_TOL and abs(v - vg) <= SPEED_TOL
+                   and (action in HEADING_FREE or abs(W.wrap(phi - phig)) <= HEADING_TOL))
         bumped = (ball_start is not None and not dribbling
                   and math.hypot(bx - ball_start[0], by - ball_start[1]) > BUMP_DISTANCE)
         if bumped:

@@ -22,6 +22,7 @@ constant rolling-friction deceleration mu_r * g, so it stops after v0^2 / (2 mu_
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 # --- field (m) -------------------------------------------------------------------------------------------
 FIELD_HALF_LENGTH = 4.0  # m, playing area x in [-4, 4]
@@ -34,6 +35,23 @@ V_MAX = 1.0  # m/s, translational velocity limit (forward and backward)
 W_MAX = 3.0  # rad/s, rotational velocity limit
 A_MAX = 1.0  # m/s^2, translational acceleration limit (speeding up and braking)
 ALPHA_MAX = 6.0  # rad/s^2, rotational acceleration limit
+
+
+@dataclass(frozen=True)
+class Dynamics:
+    """The motor limits of a robot kind: |v| <= v_max (m/s), |phidot| <= w_max (rad/s), changed no faster
+    than a_max (m/s^2) and alpha_max (rad/s^2)."""
+
+    v_max: float
+    w_max: float
+    a_max: float
+    alpha_max: float
+
+
+PIONEER = Dynamics(V_MAX, W_MAX, A_MAX, ALPHA_MAX)  # the robot every soccer action was designed for
+# Another kind (Sec. 7.3, App. A.2): slower and less agile; its only navigation action is goToPosition.
+SPARROW = Dynamics(v_max=0.6, w_max=2.0, a_max=0.5, alpha_max=3.0)
+
 ROBOT_HALF_LENGTH = 0.2  # m, body: 0.4 x 0.4 m square centred on the wheel axle
 ROBOT_HALF_WIDTH = 0.2  # m
 
