@@ -12,7 +12,7 @@ import argparse
 import sys
 import time
 
-from tailor.refinement.cli.arguments import whole_number, worker_count
+from tailor.refinement.cli.arguments import add_models_argument, announce_models, whole_number, worker_count
 
 HELP = "measure implicit coordination of a robot team with learned action models (Ch. 7)"
 DEFAULT_EPISODES = 200
@@ -29,6 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed of situations, noise and channel")
     parser.add_argument("--jobs", type=worker_count, default=1, metavar="J",
                         help="worker processes (default 1; at most the number of CPUs)")
+    add_models_argument(parser)
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
     parser.add_argument("--plot", metavar="DIR", default=None, help="draw Figs. 7.9-7.12 as PNG files in DIR")
 
@@ -69,11 +70,11 @@ def _scene(binding):
     return scene
 
 
-def _load_models(domain_dir, scene, kinds):
+def _load_models(models_dir, scene, kinds):
     from tailor.refinement.models.action_models import load_action_models
 
     actions = tuple(dict.fromkeys(scene.kinds[kind] for kind in kinds))
-    return load_action_models(domain_dir / "models", actions)
+    return load_action_models(models_dir, actions)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -97,7 +98,11 @@ def run(args: argparse.Namespace) -> int:
     if args.plot is not None:
         check_output_dir(args.plot)  # before minutes of work
     kinds = scene.team(args.robots, args.heterogeneous)
-    predictor = Predictor(scene, _load_models(domain_dir, scene, kinds))
+    from tailor.refinement.model_store import resolve_models
+
+    source = resolve_models(domain_dir, args.models)
+    predictor = Predictor(scene, _load_models(source.path, scene, kinds))
+    announce_models("coordinate", source)
     setup = Setup(kinds, args.seed)
     static_rows = _run_parallel(static_situation, [(scene, predictor, setup, i) for i in range(args.episodes)],
                                 args.jobs, "static situations")
@@ -124,7 +129,9 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         from tailor.refinement.outputs import json_text
 
-        sys.stdout.write(json_text(report) + "\n")
+        from tailor.refinement.outputs import versioned
+
+        sys.stdout.write(json_text(versioned("coordinate", {**report, "models": str(source.path)})) + "\n")
     else:
         _print_text(report)
     print(f"tailor coordinate: {time.perf_counter() - started:.0f} s", file=sys.stderr)
