@@ -74,8 +74,19 @@ def backend_session(backend: str = "loky", jobs: int = 1, scheduler: str | None 
             _session = previous
 
 
+def _quiet(stack: contextlib.ExitStack, loggers: tuple[str, ...]) -> None:
+    """Silence a cluster's client-side loggers until the session ends (after the cluster is stopped): a Ctrl-C
+    makes them log the connections it closed as tracebacks, where the command prints one line."""
+    for name in loggers:
+        logger = logging.getLogger(name)
+        stack.callback(logger.setLevel, logger.level)
+        logger.setLevel(logging.CRITICAL)
+
+
 def _start_dask(stack: contextlib.ExitStack, jobs: int, scheduler: str | None) -> None:
     from distributed import Client, LocalCluster
+
+    _quiet(stack, ("distributed", "distributed.client", "tornado", "tornado.application", "asyncio"))
 
     if scheduler:
         try:
