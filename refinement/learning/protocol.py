@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from sklearn.base import RegressorMixin
 from sklearn.ensemble import HistGradientBoostingRegressor
+from threadpoolctl import threadpool_limits
 
 from tailor.refinement.models.action_models import ActionModel
 from tailor.errors import DataError
@@ -35,6 +36,10 @@ DEFAULT_MIN_SAMPLES_LEAF = 10  # the leaf size while n_i is chosen
 LEAF_TOLERANCE = 0.03  # a larger leaf size is taken if its validation MAE is at most 3% above the best
 MIN_EPISODES = 8  # fewer successful episodes cannot be split into train / validation / test
 
+# Each fit runs on one thread (OpenMP, BLAS): the cores are used by fitting in --jobs workers. Left to itself,
+# HistGradientBoostingRegressor starts an OpenMP thread per CPU; on a busy machine its threads wait for one
+# another: a fit of 200 examples took 31 s with 2 threads under load, 0.14 s with one.
+ONE_THREAD = 1
 RegressorFactory = Callable[[int, int], RegressorMixin]  # (seed, min_samples_leaf) -> unfitted regressor
 
 
@@ -188,7 +193,8 @@ def train_duration_model(
     evaluated = points[-1]
 
     step(f"{action}: final model")
-    final = fit_on_episodes(used, feature_set, n_i, make_model(seed, leaf), observed)
+    with threadpool_limits(limits=ONE_THREAD):
+        final = fit_on_episodes(used, feature_set, n_i, make_model(seed, leaf), observed)
     durations = np.array([e.duration for e in used])
     report = {
         "action": action,
@@ -226,8 +232,9 @@ def _first_example_features(episodes: list[Episode], feature_set: str) -> tuple[
 def _fit_and_test(factory: RegressorFactory, seed: int, leaf: int, features: np.ndarray, targets: np.ndarray,
                   test_features: np.ndarray, test_durations: np.ndarray) -> tuple[float, int | None]:
     """(held-out MAE, leaves) of a regressor of `factory` fitted on the examples: one fit, run in a worker."""
-    regressor = factory(seed, leaf).fit(features, targets)
-    return float(np.mean(np.abs(regressor.predict(test_features) - test_durations))), _leaves(regressor)
+    with threadpool_limits(limits=ONE_THREAD):  # the parallelism is the workers'; see ONE_THREAD
+        regressor = factory(seed, leaf).fit(features, targets)
+        return float(np.mean(np.abs(regressor.predict(test_features) - test_durations))), _leaves(regressor)
 
 
 def _results(function: Callable, calls: list[tuple], jobs: int):
