@@ -10,9 +10,9 @@ clipped to the ranges. The loop stops when the best cost has not improved for 50
 
 DEAP's operators draw from the `random` module: for the run, their modules' `random` (and this module's `rng`)
 is a private `random.Random(seed)`, so refinement is seeded by its argument only, even where other threads
-draw from the global generator meanwhile (a Dask worker's event loop does), and the caller's state is untouched. The fitness and individual types
-are plain classes defined once here, not written into `deap.creator`. A generation is evaluated with one
-vectorized call of the objective.
+draw from the global generator meanwhile (a Dask worker's event loop does), and the caller's state is
+untouched. The fitness and individual types are plain classes defined once here, not written into
+`deap.creator`. A generation is evaluated with one vectorized call of the objective.
 """
 
 from __future__ import annotations
