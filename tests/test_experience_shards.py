@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 import importlib.util
 import json
+import os
 
 import numpy as np
 import pytest
@@ -225,3 +226,31 @@ def test_a_missing_backend_is_named(monkeypatch):
     with pytest.raises(BackendError, match=r"backend 'ray' needs ray: pip install 'tailor\[ray\]'"):
         with backend_session("ray", jobs=1):
             pass
+
+
+def test_ctrl_c_in_a_gather_with_workers_leaves_complete_shards_only(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    process = subprocess.Popen([sys.executable, "-m", "tailor.refinement.cli", "gather", "soccer", "--seeds", "0:20000",
+                                "--scenario", SCENARIO, "--jobs", "2", "--out", str(tmp_path)],
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        time.sleep(8)  # the workers started, some batches done (or not: then no shard at all)
+        process.send_signal(signal.SIGINT)
+        assert process.wait(timeout=60) == 130
+        err = process.stderr.read().strip()
+        assert err.endswith("tailor gather: interrupted") and "Traceback" not in err
+    finally:
+        try:
+            os.killpg(process.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    shards = find_shards(tmp_path, SIM)  # every file a complete shard: no temporary file, nothing half-written
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(s.path.name for s in shards)
+    assert all(s.origin.first == 0 and s.origin.stop < 20000 for s in shards)
+    for shard in shards:
+        episodes = stored_gather(tmp_path, SIM, SCENARIO, shard.origin.stop, seed=0, progress=False)  # no gap
+        assert [e.seed for e in episodes] == episode_seeds(0, shard.origin.stop)
