@@ -113,6 +113,13 @@ class OutputFileError(TailorError):
     exit_code = 16
 
 
+# --- parallel work (any command with --backend) ---------------------------------------------------------
+class BackendError(TailorError):
+    """A parallel backend cannot be used: its optional packages are missing, or its cluster cannot be reached."""
+
+    exit_code = 17
+
+
 # --- simulators -----------------------------------------------------------------------------------------
 class SimError(TailorError):
     """Invalid simulator input: an unknown action or simulator, a state or parameter outside the world."""

@@ -1,4 +1,4 @@
-"""Experience gathering (Sec. 4.1): episodes of a simulator's scenarios, in parallel, stored as one .npz file.
+"""Experience gathering (Sec. 4.1): episodes of a simulator's scenarios, in parallel, stored as compressed .npz.
 
 A scenario (declared by the robot's package) draws a random initial and goal state and executes one action
 in a fresh simulator (the "instant environment modification" of Sec. 4.1 replaces a preparatory action).
@@ -11,16 +11,19 @@ from __future__ import annotations
 import os
 import sys
 import tempfile
+import zipfile
+import zlib
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from tailor.sims import registry
 from tailor.sims.episode import Episode
-from tailor.errors import SimError
+from tailor.errors import DataError, SimError
 from tailor.sims.protocol import Scenario
 
-SCHEMA = 2  # version of the .npz episode file (2: named state columns)
+SCHEMA = 3  # version of the .npz episode file (2: named state columns; 3: the origin, optional)
 EPISODES_PER_TASK = 10  # episodes one worker runs per joblib task
 
 
@@ -38,9 +41,11 @@ def run_episode(simulator: str, name: str, seed: int) -> Episode:
     return scenario(simulator, name).run(seed)
 
 
-def episode_seeds(seed: int, episodes: int) -> list[int]:
-    """One seed per episode, derived from (seed, index) only."""
-    return [int(child.generate_state(1)[0]) for child in np.random.SeedSequence(seed).spawn(episodes)]
+def episode_seeds(seed: int, episodes: int, first: int = 0) -> list[int]:
+    """One seed per episode, derived from (seed, index) only: the seeds of episodes first .. first + episodes - 1
+    (child `index` of `np.random.SeedSequence(seed)`, whatever else is spawned)."""
+    return [int(np.random.SeedSequence(seed, spawn_key=(index,)).generate_state(1)[0])
+            for index in range(first, first + episodes)]
 
 
 def _run_batch(simulator: str, name: str, seeds: list[int]) -> list[Episode]:
@@ -48,32 +53,28 @@ def _run_batch(simulator: str, name: str, seeds: list[int]) -> list[Episode]:
     return [run(s) for s in seeds]
 
 
-def gather(simulator: str, name: str, episodes: int, seed: int, jobs: int = 1, progress: bool = True) -> list[Episode]:
-    """Execute `episodes` random episodes of a scenario in `jobs` processes (joblib), with a progress bar.
+def gather(simulator: str, name: str, episodes: int, seed: int, jobs: int = 1, progress: bool = True,
+           first: int = 0, into: list[Episode] | None = None) -> list[Episode]:
+    """Execute episodes first .. first + episodes - 1 of a scenario's seed stream, with a progress bar, in
+    `jobs` worker processes (or the workers of the backend session in force, tailor.sims.parallel).
 
-    With jobs > 1 the workers find the simulator through its entry point (a simulator registered only
-    in-process with `register()` runs with jobs = 1)."""
-    from joblib import Parallel, delayed
+    The episodes are appended to `into` (a new list by default) in order as batches finish, so a caller
+    interrupted by Ctrl-C keeps the complete prefix. With workers the simulator is found through its entry
+    point (a simulator registered only in-process with `register()` runs with jobs = 1 on loky)."""
     from tqdm import tqdm
 
+    from tailor.sims.parallel import ordered_results
+
     scenario(simulator, name)
-    if episodes < 0 or jobs < 1:
-        raise SimError(f"gather needs episodes >= 0 and jobs >= 1, got {episodes} and {jobs}")
-    seeds = episode_seeds(seed, episodes)
-    batches = [seeds[i:i + EPISODES_PER_TASK] for i in range(0, episodes, EPISODES_PER_TASK)]
-    out: list[Episode] = []
+    if episodes < 0 or first < 0 or jobs < 1:
+        raise SimError(f"gather needs episodes >= 0, first >= 0 and jobs >= 1, got {episodes}, {first} and {jobs}")
+    seeds = episode_seeds(seed, episodes, first)
+    batches = [(simulator, name, seeds[i:i + EPISODES_PER_TASK]) for i in range(0, episodes, EPISODES_PER_TASK)]
+    out: list[Episode] = [] if into is None else into
     bar = tqdm(total=episodes, desc=f"gather {name}", unit="ep", file=sys.stderr, disable=not progress)
-    if jobs == 1:
-        try:
-            for batch in batches:
-                out.extend(_run_batch(simulator, name, batch))
-                bar.update(len(batch))
-        finally:
-            bar.close()
-        return out
-    results = Parallel(n_jobs=jobs, return_as="generator")(delayed(_run_batch)(simulator, name, b) for b in batches)
+    results = ordered_results(_run_batch, batches, jobs)
     try:
-        for batch in results:  # in order, so the list is the same for any number of jobs
+        for batch in results:  # in order, so the list is the same for any backend and number of workers
             out.extend(batch)
             bar.update(len(batch))
     finally:
@@ -84,13 +85,34 @@ def gather(simulator: str, name: str, episodes: int, seed: int, jobs: int = 1, p
 
 # --- storage -------------------------------------------------------------------------------------------
 _KEYS = ("schema", "action", "params", "outcome", "duration", "seed", "offsets", "t", "state", "columns")
+_ORIGIN_KEYS = ("simulator", "scenario", "stream_seed", "first", "stop")
+READABLE_SCHEMAS = (2, 3)  # 2 had no origin; both hold the same episode arrays
 
 
-def save_episodes(path: str | os.PathLike, episodes: list[Episode]) -> None:
-    """Write episodes of one action (same parameters and columns) to one compressed .npz, atomically."""
+@dataclass(frozen=True)
+class Origin:
+    """Where a file's episodes come from: episodes first .. stop - 1 of `scenario`'s seed stream `seed`
+    (`episode_seeds(seed, stop - first, first)`) in `simulator`."""
+
+    simulator: str
+    scenario: str
+    seed: int
+    first: int
+    stop: int
+
+    @property
+    def episodes(self) -> int:
+        return self.stop - self.first
+
+
+def save_episodes(path: str | os.PathLike, episodes: list[Episode], origin: Origin | None = None) -> None:
+    """Write episodes of one action (same parameters and columns) to one compressed .npz, atomically (a
+    temporary file renamed into place: Ctrl-C never leaves half a file), with their `origin` if given."""
     path = Path(path)
     if len({(e.action, len(e.params), e.columns) for e in episodes}) > 1:
-        raise SimError("save_episodes takes episodes of one action with the same state columns", file=str(path))
+        raise DataError("save_episodes takes episodes of one action with the same state columns", file=str(path))
+    if origin is not None and origin.episodes != len(episodes):
+        raise DataError(f"{len(episodes)} episodes cannot be episodes {origin.first}:{origin.stop}", file=str(path))
     columns = episodes[0].columns if episodes else ()
     n_params = len(episodes[0].params) if episodes else 0
     lengths = [len(e.t) for e in episodes]
@@ -106,11 +128,16 @@ def save_episodes(path: str | os.PathLike, episodes: list[Episode]) -> None:
         state=np.concatenate([e.state for e in episodes]) if episodes else np.zeros((0, 0)),
         columns=np.array(columns, dtype=str),
     )
+    if origin is not None:
+        arrays.update(simulator=np.array(origin.simulator), scenario=np.array(origin.scenario),
+                      stream_seed=np.array(origin.seed, dtype=np.int64), first=np.array(origin.first, dtype=np.int64),
+                      stop=np.array(origin.stop, dtype=np.int64))
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "wb") as f:
             np.savez_compressed(f, **arrays)
+        os.chmod(tmp, 0o644)  # mkstemp makes files private; experience is data like any other
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
@@ -118,27 +145,60 @@ def save_episodes(path: str | os.PathLike, episodes: list[Episode]) -> None:
         raise
 
 
-def load_episodes(path: str | os.PathLike) -> list[Episode]:
-    """Read episodes written by save_episodes; a missing, malformed or foreign file raises SimError."""
+def _open(path: str | os.PathLike):
+    """np.load of an episode file whose schema is readable; DataError naming the file otherwise."""
     name = str(path)
     try:
-        with np.load(path, allow_pickle=False) as data:
-            missing = [k for k in _KEYS if k not in data.files]
-            if missing:
-                raise SimError(f"not an episode file (missing {', '.join(missing)})", file=name)
-            if int(data["schema"]) != SCHEMA:
-                raise SimError(f"episode schema {int(data['schema'])}, expected {SCHEMA}", file=name)
-            a = {k: data[k] for k in _KEYS}
-    except SimError:
+        data = np.load(path, allow_pickle=False)
+    except (ValueError, EOFError, zipfile.BadZipFile):  # numpy takes bytes that are no .npz / .npy for pickled data
+        raise DataError("not an episode file (not an .npz archive)", file=name) from None
+    except OSError as exc:
+        raise DataError(f"cannot read episode file: {exc.strerror or exc}", file=name) from None
+    if not hasattr(data, "files"):
+        raise DataError("not an episode file (one array, not an .npz archive)", file=name)
+    try:
+        missing = [k for k in _KEYS if k not in data.files]
+        if missing:
+            raise DataError(f"not an episode file (missing {', '.join(missing)})", file=name)
+        schema = int(data["schema"])
+        if schema not in READABLE_SCHEMAS:
+            raise DataError(f"episode schema {schema}, expected {SCHEMA}", file=name)
+    except BaseException:
+        data.close()
         raise
-    except (OSError, ValueError, KeyError, EOFError) as exc:
-        raise SimError(f"cannot read episode file: {exc}", file=name) from None
+    return data
+
+
+def read_origin(path: str | os.PathLike) -> Origin | None:
+    """The origin stored in an episode file (None if it has none); reads only the small arrays."""
+    try:
+        with _open(path) as data:
+            if not all(k in data.files for k in _ORIGIN_KEYS):
+                return None
+            return Origin(str(data["simulator"]), str(data["scenario"]), int(data["stream_seed"]),
+                          int(data["first"]), int(data["stop"]))
+    except DataError:
+        raise
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
+        raise DataError(f"cannot read episode file: {exc}", file=str(path)) from None
+
+
+def load_episodes(path: str | os.PathLike) -> list[Episode]:
+    """Read episodes written by save_episodes; a missing, malformed or foreign file raises DataError."""
+    name = str(path)
+    try:
+        with _open(path) as data:
+            a = {k: data[k] for k in _KEYS}
+    except DataError:
+        raise
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
+        raise DataError(f"cannot read episode file: {exc}", file=name) from None
     n, off = len(a["action"]), a["offsets"]
     columns = tuple(str(c) for c in a["columns"])
     if (a["params"].ndim != 2 or len(a["params"]) != n or len(a["outcome"]) != n or len(a["duration"]) != n
             or len(a["seed"]) != n or off.shape != (n + 1,) or off[0] != 0 or np.any(np.diff(off) < 0)
             or off[-1] != len(a["t"]) or (n and a["state"].shape != (len(a["t"]), len(columns)))):
-        raise SimError("inconsistent array shapes in episode file", file=name)
+        raise DataError("inconsistent array shapes in episode file", file=name)
     return [Episode(str(a["action"][i]), a["params"][i].copy(), a["t"][off[i]:off[i + 1]].copy(),
                     a["state"][off[i]:off[i + 1]].copy(), columns, str(a["outcome"][i]), float(a["duration"][i]),
                     int(a["seed"][i])) for i in range(n)]

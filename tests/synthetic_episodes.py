@@ -64,9 +64,11 @@ def synthetic_episode(action: str, seed: int, collide_beyond: float | None = Non
 
 
 def gather(simulator: str, scenario: str, episodes: int, seed: int, jobs: int = 1,
-           progress: bool = True) -> list[Episode]:
+           progress: bool = True, first: int = 0, into: list[Episode] | None = None) -> list[Episode]:
     """Stand-in for sims.experience.gather: episodes of the scenario's action (looked up in the simulator's
     registry entry), one seed per episode, derived from `seed`."""
     action = find_scenario(simulator, scenario).action
     collide = 2.0 if scenario == "goToPoseAtBall" else None
-    return [synthetic_episode(action, seed * 100_003 + i, collide) for i in range(episodes)]
+    out = [] if into is None else into
+    out.extend(synthetic_episode(action, seed * 100_003 + i, collide) for i in range(first, first + episodes))
+    return out

@@ -34,6 +34,29 @@ def test_same_seed_same_result_and_seeds_differ():
     assert random.getstate() == state
 
 
+def test_draws_from_the_global_generator_in_another_thread_change_nothing():
+    """A Dask worker runs its tasks in a thread while its event loop draws from `random`: the GA's draws are its
+    own (with the shared global generator, refinement on Dask gave other subgoals from run to run)."""
+    import threading
+
+    objective = random_objective(np.random.default_rng(11), 2, 2, n_leaves=20)
+    alone = optimize(objective, "ga", seed=4)
+    stop = threading.Event()
+
+    def draw() -> None:
+        while not stop.is_set():
+            random.random()
+
+    thread = threading.Thread(target=draw)
+    thread.start()
+    try:
+        busy = [optimize(objective, "ga", seed=4) for _ in range(3)]
+    finally:
+        stop.set()
+        thread.join()
+    assert all((r.values, r.cost, r.evaluations) == (alone.values, alone.cost, alone.evaluations) for r in busy)
+
+
 class CountingModel:
     """Records the batch size of every prediction (one per generation)."""
 

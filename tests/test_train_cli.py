@@ -22,7 +22,9 @@ EXPECTED_FILES = {
 
 
 def files_under(root) -> set[str]:
-    return {str(p.relative_to(root)) for p in root.rglob("*") if p.is_file()}
+    """The files under root, but for the kept experience (OUT/experience/, tests/test_experience_shards.py)."""
+    return {str(p.relative_to(root)) for p in root.rglob("*")
+            if p.is_file() and p.relative_to(root).parts[0] != "experience"}
 
 
 def check_outputs(out, report: dict, episodes: int, fresh: int) -> None:
@@ -68,6 +70,9 @@ def test_train_soccer_end_to_end_in_the_simulator(tmp_path, capsys):
     assert code == 0
     report = json.loads(capsys.readouterr().out)
     check_outputs(tmp_path, report, 24, 20)
+    assert {p.name for p in (tmp_path / "experience").iterdir()} == {  # the episodes are kept, with their seeds
+        "goToPose.seed1.0-24.npz", "approachBall.seed1.0-24.npz", "dribbleBall.seed1.0-24.npz",
+        "goToPoseAtBall.seed1.0-24.npz", "goToPoseAtBall.seed7919001.0-20.npz"}
     assert [row["n_i"] for row in report["models"]["goToPose"]["n_i_curve"]] == [1, 3]
 
 

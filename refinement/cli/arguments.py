@@ -79,3 +79,23 @@ def announce_models(command: str, source) -> None:
     import sys
 
     print(f"tailor {command}: {source.describe()}", file=sys.stderr)
+
+
+def add_backend_arguments(parser: argparse.ArgumentParser) -> None:
+    """--backend and --scheduler: which joblib backend runs the parallel work (tailor.sims.parallel)."""
+    from tailor.sims.parallel import BACKENDS
+
+    parser.add_argument("--backend", choices=BACKENDS, default="loky",
+                        help="where the --jobs workers run: loky processes on this machine (default), a Dask "
+                             "cluster (pip install 'tailor[dask]') or a Ray cluster (pip install 'tailor[ray]')")
+    parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        help="join the existing cluster at ADDRESS (Dask: tcp://host:8786, Ray: host:6379) and "
+                             "use all its workers; without it --backend dask/ray starts a local cluster of --jobs "
+                             "workers")
+
+
+def backend_session(args: argparse.Namespace):
+    """The backend session the parsed --backend / --scheduler / --jobs ask for (a context manager)."""
+    from tailor.sims.parallel import backend_session as session
+
+    return session(args.backend, args.jobs, args.scheduler)

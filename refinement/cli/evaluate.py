@@ -5,7 +5,14 @@ from __future__ import annotations
 import argparse
 import sys
 
-from tailor.refinement.cli.arguments import add_models_argument, announce_models, whole_number, worker_count
+from tailor.refinement.cli.arguments import (
+    add_backend_arguments,
+    add_models_argument,
+    announce_models,
+    backend_session,
+    whole_number,
+    worker_count,
+)
 
 HELP = "measure refined vs greedy execution in the simulator over random situations"
 
@@ -25,23 +32,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="worker processes (default 1; at most the number of CPUs)")
     add_models_argument(parser)
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
+    add_backend_arguments(parser)
 
 
 def _run_parallel(function, items, jobs: int, desc: str) -> list:
-    from joblib import Parallel, delayed
     from tqdm import tqdm
+
+    from tailor.sims.parallel import ordered_results
 
     items = list(items)
     results = []
     with tqdm(total=len(items), desc=desc, unit="ep", file=sys.stderr, disable=not items) as bar:
-        if jobs <= 1:
-            for item in items:
-                results.append(function(*item))
-                bar.update()
-        else:
-            for result in Parallel(n_jobs=jobs, return_as="generator")(delayed(function)(*i) for i in items):
+        ordered = ordered_results(function, items, jobs)  # in order on any backend (tailor.sims.parallel)
+        try:
+            for result in ordered:
                 results.append(result)
                 bar.update()
+        finally:
+            ordered.close()
     return results
 
 
@@ -87,6 +95,11 @@ def _print_text(report: dict) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    with backend_session(args):  # the workers of --backend run every episode below
+        return _evaluate(args)
+
+
+def _evaluate(args: argparse.Namespace) -> int:
     from tailor.planner_bridge import resolve_domain_dir
     from tailor.refinement.binding import load_domain_binding
     from tailor.refinement.evaluation.experiments import (

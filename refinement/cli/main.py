@@ -19,6 +19,7 @@ from tailor.errors import TailorError
 COMMANDS = {
     "plan": "tailor.refinement.cli.plan",
     "train": "tailor.refinement.cli.train",
+    "gather": "tailor.refinement.cli.gather",
     "refine": "tailor.refinement.cli.refine",
     "evaluate": "tailor.refinement.cli.evaluate",
     "coordinate": "tailor.refinement.cli.coordinate",

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import functools
 import sys
 from pathlib import Path
 
-from tailor.refinement.cli.arguments import whole_number, worker_count
+from tailor.refinement.cli.arguments import add_backend_arguments, backend_session, whole_number, worker_count
 
 MIN_EPISODES = 8  # a quarter of the episodes is the test set
 
@@ -32,6 +33,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="learn only these models of the recipe (comma-separated actions), e.g. a model new to "
                              "the domain, leaving the others alone (use with --out: the report covers only them)")
     parser.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+    parser.add_argument("--experience", type=Path, default=None, metavar="DIR",
+                        help="keep the gathered episodes as shards in DIR and reuse the ones already there (`tailor "
+                             "gather` writes them too): only missing episodes are simulated (default: OUT/experience)")
+    add_backend_arguments(parser)
 
 
 def _positive_ints(text: str) -> tuple[int, ...]:
@@ -78,6 +83,7 @@ def run(args: argparse.Namespace) -> int:
     from tailor.refinement.learning.recipe import load_recipe
     from tailor.refinement.learning.training import train_domain
     from tailor.refinement.outputs import check_output_dir, json_text
+    from tailor.sims.shards import stored_gather
 
     recipe = load_recipe(resolve_domain_dir(args.domain))
     if args.only:
@@ -90,8 +96,12 @@ def run(args: argparse.Namespace) -> int:
 
     out = default_training_out(recipe.domain_dir) if args.out is None else args.out
     check_output_dir(out)  # before gathering anything: minutes of work must not end in an unwritable folder
-    report = train_domain(recipe, episodes, args.seed, out, jobs=args.jobs, fresh_episodes=args.fresh_episodes,
-                          n_i_candidates=args.n_i or N_I_CANDIDATES, progress=True)
+    experience = out / "experience" if args.experience is None else args.experience
+    check_output_dir(experience)
+    with backend_session(args):
+        report = train_domain(recipe, episodes, args.seed, out, jobs=args.jobs, fresh_episodes=args.fresh_episodes,
+                              n_i_candidates=args.n_i or N_I_CANDIDATES, progress=True,
+                              gather=functools.partial(stored_gather, experience))
     try:
         if args.json:
             sys.stdout.write(json_text(report) + "\n")  # the report, led by its own schema

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from sklearn.base import RegressorMixin
 from sklearn.ensemble import HistGradientBoostingRegressor
+from threadpoolctl import threadpool_limits
 
 from tailor.refinement.models.action_models import ActionModel
 from tailor.errors import DataError
@@ -35,6 +36,10 @@ DEFAULT_MIN_SAMPLES_LEAF = 10  # the leaf size while n_i is chosen
 LEAF_TOLERANCE = 0.03  # a larger leaf size is taken if its validation MAE is at most 3% above the best
 MIN_EPISODES = 8  # fewer successful episodes cannot be split into train / validation / test
 
+# Each fit runs on one thread (OpenMP, BLAS): the cores are used by fitting in --jobs workers. Left to itself,
+# HistGradientBoostingRegressor starts an OpenMP thread per CPU; on a busy machine its threads wait for one
+# another: a fit of 200 examples took 31 s with 2 threads under load, 0.14 s with one.
+ONE_THREAD = 1
 RegressorFactory = Callable[[int, int], RegressorMixin]  # (seed, min_samples_leaf) -> unfitted regressor
 
 
@@ -101,8 +106,13 @@ def train_duration_model(
     make_model: RegressorFactory = make_model_tree,
     make_reference: RegressorFactory = make_baseline,
     step: Callable[[str], None] = lambda label: None,
+    jobs: int = 1,
 ) -> DurationTraining:
-    """Run the protocol of Fig. 4.9 on the successful episodes; `step` is called before each fit (progress)."""
+    """Run the protocol of Fig. 4.9 on the successful episodes; `step` is called as each fit is done (progress).
+
+    Fits that do not depend on one another (the n_i candidates, the leaf sizes, the points of the learning
+    curve) run in `jobs` workers of the backend in force (tailor.sims.parallel), with the serial result: each
+    fit is deterministic and the results are taken in order. The factories must then be picklable."""
     used = [e for e in episodes if e.succeeded]
     if len(used) < MIN_EPISODES:
         raise DataError(f"{action}: {len(used)} successful episodes of {len(episodes)}; need at least {MIN_EPISODES}")
@@ -111,24 +121,37 @@ def train_duration_model(
     train, validation, test = pick(split.train), pick(split.validation), pick(split.test)
     learn = train + validation
 
-    def validate(n_i: int, leaf: int) -> dict:
-        step(f"{action}: n_i={n_i}, leaf={leaf}")
-        model = fit_on_episodes(train, feature_set, n_i, make_model(seed, leaf), observed)
-        return {"n_i": n_i, "min_samples_leaf": leaf, "examples": count_examples(train, n_i),
-                "mae": held_out_mae(model, validation, feature_set), "leaves": _leaves(model)}
+    train_examples: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # n_i -> features and targets of `train`
 
+    def examples(n_i: int) -> tuple[np.ndarray, np.ndarray]:
+        if n_i not in train_examples:
+            params, targets, _ = intermediate_examples(train, n_i, observed)
+            train_examples[n_i] = compute_features(feature_set, params), targets
+        return train_examples[n_i]
+
+    validation_set = _first_example_features(validation, feature_set)
     growth = len(used) / len(train)  # leaves grow about in proportion to the episodes (Fig. 4.6 data)
     fitted: dict[tuple[int, int], dict] = {}
 
+    def fit_rows(pairs) -> None:
+        """Fit the (n_i, leaf size) pairs not fitted yet, in the workers (independent fits, results in order)."""
+        todo = [pair for pair in dict.fromkeys(pairs) if pair not in fitted]
+        if not todo:
+            return
+        calls = [(make_model, seed, leaf, *examples(n_i), *validation_set) for n_i, leaf in todo]
+        for (n_i, leaf), (mae, leaves) in zip(todo, _results(_fit_and_test, calls, jobs)):
+            step(f"{action}: n_i={n_i}, leaf={leaf}")
+            fitted[n_i, leaf] = {"n_i": n_i, "min_samples_leaf": leaf, "examples": count_examples(train, n_i),
+                                 "mae": mae, "leaves": leaves,
+                                 "projected_leaves": None if leaves is None else round(leaves * growth)}
+
     def row_for(n_i: int, leaf: int) -> dict:
-        if (n_i, leaf) not in fitted:
-            row = validate(n_i, leaf)
-            row["projected_leaves"] = None if row["leaves"] is None else round(row["leaves"] * growth)
-            fitted[n_i, leaf] = row
+        fit_rows([(n_i, leaf)])
         return dict(fitted[n_i, leaf])
 
     # n_i (Fig. 4.5) at the default leaf size; where that tree outgrows MAX_LEAVES, also with the smallest leaf
     # size that keeps it within (estimated: leaves shrink about in proportion), unless it cannot win anyway
+    fit_rows([(n_i, DEFAULT_MIN_SAMPLES_LEAF) for n_i in n_i_candidates])
     n_i_curve = [row_for(n_i, DEFAULT_MIN_SAMPLES_LEAF) for n_i in n_i_candidates]
     small = [row for row in n_i_curve if _within_cap(row)]
     for row in sorted(n_i_curve, key=lambda row: row["mae"]):
@@ -142,33 +165,36 @@ def train_duration_model(
     n_i = min(small or n_i_curve, key=lambda row: (row["mae"], row["n_i"]))["n_i"]
 
     # the leaf size for that n_i: the largest within LEAF_TOLERANCE of the best that keeps the tree small
-    leaf_curve = [row_for(n_i, leaf) for leaf in sorted(set(leaf_candidates) | {DEFAULT_MIN_SAMPLES_LEAF})]
+    leaf_sizes = sorted(set(leaf_candidates) | {DEFAULT_MIN_SAMPLES_LEAF})
+    fit_rows([(n_i, leaf) for leaf in leaf_sizes])
+    leaf_curve = [row_for(n_i, leaf) for leaf in leaf_sizes]
     small = [row for row in leaf_curve if _within_cap(row)] or [max(leaf_curve, key=lambda r: r["min_samples_leaf"])]
     best = min(row["mae"] for row in small)
     leaf = max(row["min_samples_leaf"] for row in small if row["mae"] <= (1.0 + LEAF_TOLERANCE) * best)
 
-    episodes_curve = []
-    for fraction in episode_fractions:
-        subset = learn[: max(MIN_EPISODES // 2, round(fraction * len(learn)))]
-        step(f"{action}: {len(subset)} episodes")
-        model = fit_on_episodes(subset, feature_set, n_i, make_model(seed, leaf), observed)
-        reference = fit_on_episodes(subset, feature_set, n_i, make_reference(seed, leaf), observed)
-        episodes_curve.append({
-            "episodes": len(subset),
-            "mae": held_out_mae(model, test, feature_set),
-            "mae_hgb": held_out_mae(reference, test, feature_set),
-            "leaves": _leaves(model),
-        })
-    evaluated = episodes_curve[-1] if len(episodes_curve) and episodes_curve[-1]["episodes"] == len(learn) else None
-    if evaluated is None:  # the curve did not end with the full three quarters: evaluate them here
-        step(f"{action}: {len(learn)} episodes")
-        model = fit_on_episodes(learn, feature_set, n_i, make_model(seed, leaf), observed)
-        reference = fit_on_episodes(learn, feature_set, n_i, make_reference(seed, leaf), observed)
-        evaluated = {"mae": held_out_mae(model, test, feature_set), "mae_hgb": held_out_mae(reference, test, feature_set),
-                     "leaves": _leaves(model)}
+    # the learning curve (Fig. 4.6) and the test of the three quarters: model tree and reference, fitted at once
+    subsets = [learn[: max(MIN_EPISODES // 2, round(fraction * len(learn)))] for fraction in episode_fractions]
+    if not subsets or len(subsets[-1]) != len(learn):  # the curve does not end with the full three quarters
+        subsets.append(learn)
+    test_set = _first_example_features(test, feature_set)
+    calls = []
+    for subset in subsets:
+        params, targets, _ = intermediate_examples(subset, n_i, observed)
+        features = compute_features(feature_set, params)
+        calls += [(factory, seed, leaf, features, targets, *test_set) for factory in (make_model, make_reference)]
+    results = []
+    for k, result in enumerate(_results(_fit_and_test, calls, jobs)):
+        if k % 2 == 0:
+            step(f"{action}: {len(subsets[k // 2])} episodes")
+        results.append(result)
+    points = [{"episodes": len(subset), "mae": results[2 * k][0], "mae_hgb": results[2 * k + 1][0],
+               "leaves": results[2 * k][1]} for k, subset in enumerate(subsets)]
+    episodes_curve = points[:len(episode_fractions)]
+    evaluated = points[-1]
 
     step(f"{action}: final model")
-    final = fit_on_episodes(used, feature_set, n_i, make_model(seed, leaf), observed)
+    with threadpool_limits(limits=ONE_THREAD):
+        final = fit_on_episodes(used, feature_set, n_i, make_model(seed, leaf), observed)
     durations = np.array([e.duration for e in used])
     report = {
         "action": action,
@@ -195,6 +221,26 @@ def train_duration_model(
     }
     model = ActionModel(action, feature_set, feature_names(feature_set), final, n_i, report)
     return DurationTraining(model, report)
+
+
+def _first_example_features(episodes: list[Episode], feature_set: str) -> tuple[np.ndarray, np.ndarray]:
+    """Features and durations of the first example of each episode (the held-out examples)."""
+    params, durations = first_examples(episodes)
+    return compute_features(feature_set, params), durations
+
+
+def _fit_and_test(factory: RegressorFactory, seed: int, leaf: int, features: np.ndarray, targets: np.ndarray,
+                  test_features: np.ndarray, test_durations: np.ndarray) -> tuple[float, int | None]:
+    """(held-out MAE, leaves) of a regressor of `factory` fitted on the examples: one fit, run in a worker."""
+    with threadpool_limits(limits=ONE_THREAD):  # the parallelism is the workers'; see ONE_THREAD
+        regressor = factory(seed, leaf).fit(features, targets)
+        return float(np.mean(np.abs(regressor.predict(test_features) - test_durations))), _leaves(regressor)
+
+
+def _results(function: Callable, calls: list[tuple], jobs: int):
+    from tailor.sims.parallel import ordered_results
+
+    return ordered_results(function, calls, jobs)
 
 
 def _within_cap(row: dict) -> bool:

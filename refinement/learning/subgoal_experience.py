@@ -13,13 +13,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from joblib import Parallel, delayed
 from tqdm import tqdm
 
 from tailor.refinement.binding import load_domain_binding
 from tailor.refinement.refine import refine
 from tailor.refinement.situations import Job, draw_situations, job_binding, situation_sequence, stream_seed
 from tailor.sims.episode import Episode
+from tailor.sims.parallel import ordered_results
 
 SUBGOAL_STREAM = 2  # second seed word: apart from the evaluation's situations (SeedSequence([seed, index]))
 CHUNK = 50  # situations a worker refines per task
@@ -53,8 +53,11 @@ def gather_subgoal_experience(domain_dir: Path, generator: str, action: str, mod
     out: list[Episode] = []
     with tqdm(total=situations, desc=f"{generator} subgoals ({action})", unit="situation",
               disable=not progress) as bar:
-        calls = (delayed(_episodes)(chunk, models, action) for chunk in chunks)
-        for count, episodes in Parallel(n_jobs=jobs, return_as="generator")(calls):
-            out.extend(episodes)
-            bar.update(count)
+        results = ordered_results(_episodes, [(chunk, models, action) for chunk in chunks], jobs)
+        try:
+            for count, episodes in results:
+                out.extend(episodes)
+                bar.update(count)
+        finally:
+            results.close()
     return out

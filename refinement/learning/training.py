@@ -90,7 +90,7 @@ def train_domain(
         for m in recipe.models:
             models[m.action] = train_duration_model(
                 m.action, experience_of(m), seed, m.feature_space, recipe.specs[m.action].observed, step=step,
-                n_i_candidates=n_i_candidates, episode_fractions=episode_fractions).model
+                n_i_candidates=n_i_candidates, episode_fractions=episode_fractions, jobs=jobs).model
         classifiers = {c.action: train_collision_model(c.action, experience_of(c), fresh[c.action], seed,
                                                        c.feature_space, step=step).model
                        for c in recipe.classifiers}
@@ -143,7 +143,7 @@ def _learn_at_subgoals(recipe: TrainingRecipe, chain: SubgoalExperience, models:
             models[chain.action] = train_duration_model(
                 chain.action, experience[chain.action] + extra, seed, model_recipe.feature_space,
                 recipe.specs[chain.action].observed, step=lambda _: bar.update(1), n_i_candidates=n_i_candidates,
-                episode_fractions=episode_fractions).model
+                episode_fractions=episode_fractions, jobs=jobs).model
             bar.n = bar.total
             bar.refresh()
     return {"generator": chain.situations, "action": chain.action, "situations": situations, "episodes": len(extra),

@@ -8,15 +8,17 @@ mated pairwise with `tools.cxTwoPoint` on 65% of them
 (`tools.cxBlend` with a single gene, which has no inner cut point) and mutated with `tools.mutGaussian`,
 clipped to the ranges. The loop stops when the best cost has not improved for 50 generations, or after 500.
 
-DEAP's operators draw from the global `random` module: the run seeds it from `seed` and restores the
-caller's state afterwards, so refinement is seeded by its argument only. The fitness and individual types
-are plain classes defined once here, not written into `deap.creator`. A generation is evaluated with one
-vectorized call of the objective.
+DEAP's operators draw from the `random` module: for the run, their modules' `random` (and this module's `rng`)
+is a private `random.Random(seed)`, so refinement is seeded by its argument only, even where other threads
+draw from the global generator meanwhile (a Dask worker's event loop does), and the caller's state is
+untouched. The fitness and individual types are plain classes defined once here, not written into
+`deap.creator`. A generation is evaluated with one vectorized call of the objective.
 """
 
 from __future__ import annotations
 
 import random
+import sys
 import time
 from bisect import bisect_right
 from contextlib import contextmanager
@@ -24,6 +26,9 @@ from itertools import accumulate
 from operator import attrgetter
 
 import numpy as np
+import deap.tools.crossover  # noqa: F401  (DEAP_MODULES: loaded before seeded_random looks them up)
+import deap.tools.mutation  # noqa: F401
+import deap.tools.selection  # noqa: F401
 from deap import base, tools
 
 from tailor.refinement.optimizers.objective import Objective, OptimizationResult
@@ -60,15 +65,27 @@ def fitness(cost: np.ndarray, valid: np.ndarray) -> np.ndarray:
     return np.where(valid, t_max - cost + max(t_min, 0.0), 0.0)
 
 
+DEAP_MODULES = ("deap.tools.crossover", "deap.tools.mutation", "deap.tools.selection")  # they `import random`
+rng = random  # what this module draws from; a private generator during a run (seeded_random)
+
+
 @contextmanager
 def seeded_random(seed: int):
-    """Seed the global `random` module DEAP draws from; give the caller's state back afterwards."""
-    state = random.getstate()
-    random.seed(seed)
+    """Make DEAP's operators and this module draw from a private generator seeded with `seed` (the stream of
+    `random.seed(seed)`, draw for draw); the global generator is neither used nor disturbed."""
+    global rng
+    private = random.Random(seed)
+    modules = [sys.modules[name] for name in DEAP_MODULES]
+    saved = [module.random for module in modules], rng
+    for module in modules:
+        module.random = private
+    rng = private
     try:
         yield
     finally:
-        random.setstate(state)
+        for module, previous in zip(modules, saved[0]):
+            module.random = previous
+        rng = saved[1]
 
 
 def sel_roulette(individuals: list, k: int) -> list:
@@ -79,7 +96,7 @@ def sel_roulette(individuals: list, k: int) -> list:
     total = sum(ind.fitness.values[0] for ind in individuals)
     chosen = []
     for _ in range(k):
-        i = bisect_right(cumulative, random.random() * total)
+        i = bisect_right(cumulative, rng.random() * total)
         if i < len(ranked):  # DEAP appends nothing when rounding puts the spin past the last slot
             chosen.append(ranked[i])
     return chosen
@@ -89,7 +106,7 @@ def toolbox(low: np.ndarray, high: np.ndarray) -> base.Toolbox:
     """DEAP's operators configured for this problem's ranges."""
     n_free = len(low)
     box = base.Toolbox()
-    box.register("individual", lambda: Individual(random.uniform(lo, hi) for lo, hi in zip(low, high)))
+    box.register("individual", lambda: Individual(rng.uniform(lo, hi) for lo, hi in zip(low, high)))
     box.register("clone", Individual)
     box.register("select", sel_roulette)
     if n_free > 1:
@@ -106,7 +123,7 @@ def _next_generation(box: base.Toolbox, population: list, order: np.ndarray, n_e
     elite = [box.clone(population[i]) for i in order[:n_elite]]
     offspring = [box.clone(ind) for ind in box.select(population, len(population) - n_elite)]
     for a, b in zip(offspring[0::2], offspring[1::2]):
-        if random.random() < CROSSOVER_PROB:
+        if rng.random() < CROSSOVER_PROB:
             box.mate(a, b)
     bounds = list(zip(low.tolist(), high.tolist()))
     for ind in offspring:

@@ -1,0 +1,82 @@
+"""`tailor gather DOMAIN --seeds A:B`: simulate a shard of a domain's experience, for `tailor train --experience`.
+
+Episodes A .. B-1 of each experience scenario the domain's training recipe uses (episode i's seed depends only
+on --seed and i), written as one shard per scenario; gathered on several machines or in several runs and put in
+one folder, the shards are the episodes of one serial gather, which `tailor train --experience DIR` merges.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from tailor.refinement.cli.arguments import add_backend_arguments, backend_session, worker_count
+
+HELP = "simulate episodes A..B-1 of the domain's experience scenarios and keep them as shards for `tailor train`"
+
+
+def seed_range(text: str) -> tuple[int, int]:
+    """An argparse type: `A:B`, the episodes A .. B-1 (0 <= A < B)."""
+    first, colon, stop = text.partition(":")
+    try:
+        if not colon:
+            raise ValueError
+        a, b = int(first), int(stop)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected A:B (episodes A to B-1), got {text!r}") from None
+    if not 0 <= a < b:
+        raise argparse.ArgumentTypeError(f"expected 0 <= A < B, got {text!r}")
+    return a, b
+
+
+seed_range.__name__ = "episode range"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("domain", metavar="DOMAIN", help="bundled domain name, a domain folder, or its domain.pddl")
+    parser.add_argument("--seeds", type=seed_range, required=True, metavar="A:B",
+                        help="the episodes to simulate, A to B-1 of each scenario's seed stream (e.g. 0:3000 here and "
+                             "3000:6000 elsewhere make the 6000 episodes of `tailor train --episodes 6000`)")
+    parser.add_argument("--seed", type=int, default=0, metavar="S",
+                        help="the seed of the streams, as `tailor train --seed` (default 0)")
+    parser.add_argument("--scenario", action="append", default=None, metavar="NAME",
+                        help="only this experience scenario (repeatable; default: every one the recipe uses)")
+    parser.add_argument("--out", type=Path, default=None, metavar="DIR",
+                        help="the experience folder (default: <user data>/tailor/<domain>/experience, where "
+                             "`tailor train` without --out looks; the installed domain folder is never written)")
+    parser.add_argument("--jobs", type=worker_count, default=1, metavar="J",
+                        help="worker processes (default 1; at most the number of CPUs)")
+    add_backend_arguments(parser)
+
+
+def run(args: argparse.Namespace) -> int:
+    from tailor.errors import DataError
+    from tailor.planner_bridge import resolve_domain_dir
+    from tailor.refinement.learning.recipe import load_recipe
+    from tailor.refinement.outputs import check_output_dir
+    from tailor.sims.shards import stored_gather
+
+    recipe = load_recipe(resolve_domain_dir(args.domain))
+    used = list(dict.fromkeys(s for m in (*recipe.models, *recipe.classifiers) for s in m.scenarios))
+    scenarios = args.scenario or used
+    for name in scenarios:
+        if name not in used:
+            raise DataError(f"{recipe.domain!r} trains on no experience scenario {name!r} (known: {', '.join(used)})")
+    from tailor.refinement.model_store import default_training_out
+
+    out = default_training_out(recipe.domain_dir) / "experience" if args.out is None else args.out
+    check_output_dir(out)
+    first, stop = args.seeds
+    with backend_session(args):
+        for name in scenarios:
+            started = time.perf_counter()
+            episodes = stored_gather(out, recipe.simulator, name, stop - first, args.seed, jobs=args.jobs,
+                                     progress=True, first=first)
+            seconds = time.perf_counter() - started
+            print(f"{name}: episodes {first}:{stop} of seed {args.seed}, {len(episodes)} episodes "
+                  f"({sum(e.succeeded for e in episodes)} succeeded) in {seconds:.1f} s")
+    print(f"experience in {out}")
+    sys.stdout.flush()
+    return 0
