@@ -62,7 +62,8 @@ def gather(simulator: str, name: str, episodes: int, seed: int, jobs: int = 1, p
     seeds = episode_seeds(seed, episodes)
     batches = [seeds[i:i + EPISODES_PER_TASK] for i in range(0, episodes, EPISODES_PER_TASK)]
     out: list[Episode] = []
-    bar = tqdm(total=episodes, desc=f"gather {name}", unit="ep", file=sys.stderr, disable=not progress)
+    bar = tqdm(total=episodes, desc=f"gather {name}", unit="ep", file=sys.stderr,
+               disable=None if progress else True)  # None: a bar on a terminal only
     if jobs == 1:
         try:
             for batch in batches:

@@ -15,7 +15,7 @@ from synthetic_episodes import random_params
 
 EXPECTED_FILES = {
     "models/goToPose.json", "models/approachBall.json", "models/dribbleBall.json", "models/goToPose.collision.json",
-    "training/report.json", "training/report.txt", "training/mae_vs_n_i.png", "training/mae_vs_episodes.png",
+    "training/report.json", "training/report.txt", "training/report.html", "training/mae_vs_n_i.png", "training/mae_vs_episodes.png",
     "training/angle_at_polar.png", "training/goToPose.success_region.png",
 }
 
@@ -76,7 +76,7 @@ def test_train_is_reproducible_and_prints_the_table(tmp_path, monkeypatch, capsy
     assert main([*args, str(tmp_path / "a")]) == 0
     printed = capsys.readouterr().out
     assert printed.startswith("Action models of domain soccer (simulator soccer, seed 0, 24 episodes per scenario;")
-    assert f"wrote {tmp_path / 'a' / 'models'}" in printed
+    assert f"{tmp_path / 'a' / 'models' / 'goToPose.json'}\n" in printed
     assert main([*args, str(tmp_path / "b")]) == 0
     for name in ("goToPose.json", "approachBall.json", "dribbleBall.json", "goToPose.collision.json"):
         assert (tmp_path / "a" / "models" / name).read_text() == (tmp_path / "b" / "models" / name).read_text()

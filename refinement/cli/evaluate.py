@@ -26,13 +26,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
 
 
-def _run_parallel(function, items, jobs: int, desc: str) -> list:
+def _run_parallel(function, items, jobs: int, desc: str, progress: bool = True) -> list:
+    """function(*item) for every item, in order, in `jobs` processes; a progress bar on a terminal."""
     from joblib import Parallel, delayed
     from tqdm import tqdm
 
     items = list(items)
     results = []
-    with tqdm(total=len(items), desc=desc, unit="ep", file=sys.stderr, disable=not items) as bar:
+    with tqdm(total=len(items), desc=desc, unit="ep", file=sys.stderr,
+              disable=None if items and progress else True) as bar:
         if jobs <= 1:
             for item in items:
                 results.append(function(*item))
@@ -112,14 +114,15 @@ def run(args: argparse.Namespace) -> int:
         job, _, objects = items[0]
         job_models(job, situation_sequence(job, objects))
     rows = _run_parallel(comparison_episode, [(job, i, objects, i < args.oracle_episodes, plan.zero_baseline)
-                                              for job, i, objects in items], args.jobs, "greedy vs refined")
+                                              for job, i, objects in items], args.jobs, "greedy vs refined",
+                          getattr(args, "progress", True))
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
               "comparison": plan.comparison}
     report.update(summarize_comparison(rows))
     if plan.horizons and args.horizon_episodes:
         items = situations(plan.horizons, args.horizon_episodes)
         hrows = _run_parallel(horizon_episode, [(job, i, objects, HORIZONS) for job, i, objects in items],
-                              args.jobs, "horizons 1..4")
+                              args.jobs, "horizons 1..4", getattr(args, "progress", True))
         report["horizon_situations"] = plan.horizons
         report["horizons"] = summarize_horizons(hrows, HORIZONS)
     if args.json:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import math
 import sys
 
@@ -157,7 +158,7 @@ def _nothing_to_refine(prepared, args: argparse.Namespace, simulate: bool) -> in
     """An empty plan is a success in every mode: it is printed, with zero durations (and, asked to simulate,
     a trivially successful execution); no plot is drawn, since there is no trajectory."""
     if args.plot:
-        print(f"tailor refine: note: {args.plot} not written: {NOTHING_TO_REFINE}", file=sys.stderr)
+        logging.getLogger(__name__).warning("%s not written: %s", args.plot, NOTHING_TO_REFINE)
     if args.json:
         execution = {"horizon": args.horizon, "actions": [], "predicted_total": 0.0, "optimization": []}
         if simulate:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 from pathlib import Path
 
@@ -11,6 +12,10 @@ from tailor.refinement.cli.arguments import whole_number, worker_count
 MIN_EPISODES = 8  # a quarter of the episodes is the test set
 
 HELP = "gather experience in the simulator and learn the action models (durations, success classifiers)"
+DESCRIPTION = (f"{HELP}. Prints a short summary and names every file written: the models (DIR/models/*.json) "
+               "and, in DIR/training/, report.html (tables, learning curves, pictures and the rules in one page), "
+               "report.txt (tables and the full rules) and report.json; a warning on stderr where the run is too "
+               "small to trust.")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -46,7 +51,8 @@ def run(args: argparse.Namespace) -> int:
     from tailor.errors import BindingError
     from tailor.refinement.learning.protocol import N_I_CANDIDATES
     from tailor.refinement.learning.recipe import load_recipe
-    from tailor.refinement.learning.training import train_domain
+    from tailor.refinement.learning.report import summary_lines
+    from tailor.refinement.learning.training import REPORT_FILES, train_domain
     from tailor.refinement.outputs import check_output_dir, json_text
 
     recipe = load_recipe(resolve_domain_dir(args.domain))
@@ -57,13 +63,22 @@ def run(args: argparse.Namespace) -> int:
     out = recipe.domain_dir if args.out is None else args.out
     check_output_dir(out)  # before gathering anything: minutes of work must not end in an unwritable folder
     report = train_domain(recipe, episodes, args.seed, out, jobs=args.jobs, fresh_episodes=args.fresh_episodes,
-                          n_i_candidates=args.n_i or N_I_CANDIDATES, progress=True)
+                          n_i_candidates=args.n_i or N_I_CANDIDATES, progress=getattr(args, "progress", True))
+    log = logging.getLogger(__name__)
+    for warning in report["warnings"]:  # a diagnostic: stderr, also under --json; the report files hold them too
+        log.warning("this run is too small to trust: %s", warning)
+    written = [Path(out) / name for name in report["files"]]
     try:
         if args.json:
             sys.stdout.write(json_text(report) + "\n")
+            log.info("wrote %s", ", ".join(str(path) for path in written))
         else:
-            print((out / "training" / "report.txt").read_text(encoding="utf-8"), end="")
-            print(f"wrote {out / 'models'} and {out / 'training'}")
+            print("\n".join(summary_lines(report)))
+            print(f"\nWrote {len(written)} files:")
+            width = max(len(str(path)) for path in written)
+            for path in written:
+                what = REPORT_FILES.get(path.name, "the report as JSON" if path.name == "report.json" else "")
+                print(f"  {str(path):<{width}}  {what}".rstrip())
     except KeyboardInterrupt:  # the models are written and complete: report what is on disk, not the interrupt
         print(f"tailor train: interrupted while printing the report; the models in {out / 'models'} are complete",
               file=sys.stderr)

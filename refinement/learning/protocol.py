@@ -167,6 +167,10 @@ def train_duration_model(
         evaluated = {"mae": held_out_mae(model, test, feature_set), "mae_hgb": held_out_mae(reference, test, feature_set),
                      "leaves": _leaves(model)}
 
+    # the floor any model must beat: the median duration of the learning episodes, predicted for every test one
+    constant = float(np.median([e.duration for e in learn]))
+    mae_constant = float(np.mean(np.abs(first_examples(test)[1] - constant)))
+
     step(f"{action}: final model")
     final = fit_on_episodes(used, feature_set, n_i, make_model(seed, leaf), observed)
     durations = np.array([e.duration for e in used])
@@ -184,6 +188,7 @@ def train_duration_model(
         "test_episodes": len(test),
         "mae": evaluated["mae"],
         "mae_hgb": evaluated["mae_hgb"],
+        "mae_constant": mae_constant,  # predicting the median duration of the learning episodes
         "mae_relative": evaluated["mae"] / float(durations.mean()),
         "mae_over_hgb": evaluated["mae"] / evaluated["mae_hgb"] if evaluated["mae_hgb"] > 0 else None,
         "leaves_evaluated": evaluated["leaves"],
