@@ -58,7 +58,17 @@ def _draw(ax, result, layers, title: str) -> None:
 
 
 def plot_executions(path: Path, views, panels: list[tuple[str, object]]) -> None:
-    """One row per view, one column per (title, SequenceResult)."""
+    """One row per view, one column per (title, SequenceResult), written to `path`."""
+    import matplotlib.pyplot as plt
+
+    fig = executions_figure(views, panels)
+    _save(fig, path)
+    plt.close(fig)
+
+
+def executions_figure(views, panels: list[tuple[str, object]]):
+    """The figure of `plot_executions`: a start marker and the subgoals reached in each panel, the legend in
+    the first panel of each row."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -70,8 +80,7 @@ def plot_executions(path: Path, views, panels: list[tuple[str, object]]) -> None
         for col, (title, result) in enumerate(panels):
             _draw(axes[row, col], result, view_layers(view), title if row == 0 else "")
         axes[row, 0].legend(loc="best", fontsize=8)
-    _save(fig, path)
-    plt.close(fig)
+    return fig
 
 
 MARK_STYLES = {"greedy": ("s", "tab:orange"), "refined": ("*", "tab:green")}  # marker, colour of a chosen value
@@ -94,8 +103,18 @@ def tidy_polar(ax, largest: float) -> None:
 
 def plot_costs(path: Path, parameter, values: np.ndarray, curves: list[tuple[str, np.ndarray]],
                marks: list[tuple[str, float]]) -> None:
-    """Predicted duration over one free parameter, one panel per curve: polar where the parameter is an angle
-    spanning the full circle (Fig. 5.8), Cartesian otherwise; the greedy and refined choices marked."""
+    """Predicted duration over one free parameter, one panel per curve, written to `path`."""
+    import matplotlib.pyplot as plt
+
+    fig = costs_figure(parameter, values, curves, marks)
+    _save(fig, path)
+    plt.close(fig)
+
+
+def costs_figure(parameter, values: np.ndarray, curves: list[tuple[str, np.ndarray]],
+                 marks: list[tuple[str, float]]):
+    """The figure of `plot_costs`: polar where the parameter is an angle spanning the full circle (Fig. 5.8),
+    Cartesian otherwise; the greedy and refined choices marked, each panel with its legend."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -109,18 +128,21 @@ def plot_costs(path: Path, parameter, values: np.ndarray, curves: list[tuple[str
         if polar:
             tidy_polar(ax, float(np.nanmax(predicted)))
         else:
+            from matplotlib.ticker import MaxNLocator
+
             ax.set(xlabel=parameter.id, ylabel="predicted duration (s)")
+            ax.xaxis.set_major_locator(MaxNLocator(nbins=5))  # tick labels apart in a narrow panel
             ax.grid(alpha=0.3)
         for label, value in marks:
             k = int(np.argmin(np.abs(values - value)))
             shown = f"{np.degrees(value):.0f}°" if polar else f"{value:.3g}"
             marker, color = MARK_STYLES.get(label, ("o", "tab:red"))
             ax.plot([value], [predicted[k]], marker, color=color, ms=11 if marker == "*" else 8, mec="black",
-                    mew=0.6, zorder=4, clip_on=False, linestyle="none", label=f"{label}: {shown}, {predicted[k]:.2f} s")
+                    mew=0.6, zorder=4, clip_on=False, linestyle="none",
+                    label=f"{label}: {shown}, {predicted[k]:.2f} s")
         ax.set_title(f"{title}\n({parameter.id})" if polar else title, fontsize=10, pad=12)
-        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.08), fontsize=8, frameon=False)
-    _save(fig, path)
-    plt.close(fig)
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.08 if polar else -0.14), fontsize=8, frameon=False)
+    return fig
 
 
 def draw_refinement(path, prepared, outcomes, views) -> list[Path]:

@@ -99,9 +99,10 @@ def html_report(report: dict, rules: Mapping[str, str], figures: Mapping[str, tu
         _table(DURATION_COLUMNS, duration_rows(report["models"])),
     ]
     for chain in report.get("subgoal_experience") or ():
+        generator = chain.get("generator", chain.get("problem"))  # schema 2 named it the problem
         parts.append(f"<p class=\"note\">{_e(chain['action'])} also learned from {chain['episodes']} episodes "
                      f"started at the subgoals refinement chose in {chain['situations']} random "
-                     f"'{_e(chain['generator'])}' situations ({chain['rounds']} round(s), Sec. 8.1); its row "
+                     f"'{_e(generator)}' situations ({chain['rounds']} round(s), Sec. 8.1); its row "
                      "covers both.</p>")
     classifiers = classifier_reports(report)
     if classifiers:

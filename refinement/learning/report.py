@@ -50,8 +50,9 @@ def confusion_table(evaluation: dict) -> list[str]:
 def _subgoal_lines(chains: list[dict] | None) -> list[str]:
     lines = []
     for chain in chains or ():
+        generator = chain.get("generator", chain.get("problem"))  # schema 2 named it the problem
         lines += ["", f"{chain['action']} also learned from {chain['episodes']} episodes started at the subgoals "
-                      f"refinement chose in {chain['situations']} random '{chain['generator']}' situations",
+                      f"refinement chose in {chain['situations']} random '{generator}' situations",
                   f"(greedy and horizon 2 in turn, in {chain['rounds']} round(s), each with the models the one "
                   "before retrained; Sec. 8.1); its row covers both."]
     return lines

@@ -8,6 +8,7 @@ is renamed over the target once all are complete: an interrupted run leaves the 
 
 from __future__ import annotations
 
+import logging
 import os
 import signal
 import threading
@@ -34,9 +35,10 @@ from tailor.refinement.outputs import check_output_dir, json_text, staged_file, 
 from tailor.sims.episode import Episode
 
 FRESH_SEED_OFFSET = 7_919_000  # the fresh test episodes of a classifier use seed + this: no shared episode
-REPORT_SCHEMA = "tailor.training_report/3"  # 3: classifiers by action, the simulator named
+REPORT_SCHEMA = "tailor.training_report/3"  # 3: classifiers by action, the simulator named (+ warnings, files)
 
 Gather = Callable[..., list[Episode]]
+log = logging.getLogger(__name__)
 
 
 def train_domain(
@@ -79,6 +81,7 @@ def train_domain(
         if shared:
             raise DataError(f"fresh and training episodes share seeds {sorted(shared)[:3]}: choose another seed")
     gathered = time.perf_counter()
+    log.debug("gathered the experience of %s in %.1f s", ", ".join(gathered_by_scenario), gathered - started)
 
     fits = len(recipe.models) * _fits_per_model(n_i_candidates, episode_fractions) + 2 * len(recipe.classifiers)
     with tqdm(total=fits, desc="training", unit="fit", disable=None if progress else True) as bar:
@@ -113,6 +116,8 @@ def train_domain(
         "gather_seconds": gathered - started,
         "train_seconds": time.perf_counter() - gathered,
     }
+    log.debug("trained %s in %.1f s", ", ".join([*models, *(f"{a} classifier" for a in classifiers)]),
+              report["train_seconds"])
     report["warnings"] = trust_warnings(report)
     write_outputs(out, recipe, models, classifiers, report)
     return report
