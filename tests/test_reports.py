@@ -332,3 +332,27 @@ def test_cartesian_cost_panels_keep_tick_labels_and_legend_apart():
         legend = ax.get_legend().get_window_extent(fig.canvas.get_renderer())
         assert not legend.overlaps(ax.xaxis.label.get_window_extent(fig.canvas.get_renderer()))
     plt.close(fig)
+
+
+@pytest.mark.parametrize("name", ["mae_vs_n_i", "mae_vs_episodes"])
+def test_learning_curve_legends_hide_no_point(name, monkeypatch):
+    """The legends of Figs. 4.5 / 4.6 sit beside the axes, where they cannot cover a curve."""
+    import matplotlib.pyplot as plt
+
+    from tailor.refinement.learning import plots
+    from tailor.refinement.models.action_models import load_action_models
+
+    reports = {a: m.report for a, m in load_action_models(DOMAINS_DIR / "soccer" / "models").items()}
+    captured = []
+    monkeypatch.setattr(plots, "_save", lambda fig, target, layout=True: captured.append(fig))
+    getattr(plots, f"plot_{name}")(reports, None)
+    fig = captured[0]
+    fig.tight_layout()
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    ax = fig.axes[0]
+    legend = ax.get_legend()
+    assert len(legend.get_texts()) >= len(reports)
+    assert not legend.get_window_extent(renderer).overlaps(ax.get_window_extent(renderer))
+    assert legend.get_window_extent(renderer).x1 <= fig.bbox.x1  # not cut off at the figure's edge
+    plt.close(fig)

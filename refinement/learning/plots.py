@@ -41,7 +41,7 @@ def plot_mae_vs_n_i(reports: Mapping[str, dict], path: Target) -> None:
     default leaf size; hollow where that tree would be too large to store, a star at the chosen n_i and leaf."""
     from tailor.refinement.learning.protocol import MAX_LEAVES
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    fig, ax = plt.subplots(figsize=(8.4, 4.0))
     for index, (action, report) in enumerate(reports.items()):
         curve, color = report["n_i_curve"], f"C{index}"
         n_i, mae = [r["n_i"] for r in curve], [r["mae"] for r in curve]
@@ -58,25 +58,35 @@ def plot_mae_vs_n_i(reports: Mapping[str, dict], path: Target) -> None:
     ax.set_xticks(n_i, [str(v) for v in n_i])
     ax.minorticks_off()
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize="small", title=f"hollow: > {MAX_LEAVES} leaves at leaf size 10; star: chosen",
-              title_fontsize="small")
+    ax.legend(fontsize="small", title=f"hollow: > {MAX_LEAVES} leaves\nat leaf size 10; star: chosen",
+              title_fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
     _save(fig, path)
 
 
 def plot_mae_vs_episodes(reports: Mapping[str, dict], path: Target) -> None:
-    """Test MAE against the number of training episodes, model tree and gradient boosting (Fig. 4.6)."""
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    """Test MAE against the number of training episodes, model tree and gradient boosting (Fig. 4.6); the
+    legend beside the axes (colour: action, line: learner), where it hides no point."""
+    from matplotlib.lines import Line2D
+    from matplotlib.ticker import LogLocator, ScalarFormatter
+
+    fig, ax = plt.subplots(figsize=(8.0, 4.0))
+    handles = []
     for index, (action, report) in enumerate(reports.items()):
         curve = report["episodes_curve"]
         color = f"C{index}"
         episodes = [r["episodes"] for r in curve]
-        ax.plot(episodes, [r["mae"] for r in curve], marker="o", color=color, label=f"{action} model tree")
-        ax.plot(episodes, [r["mae_hgb"] for r in curve], marker="x", linestyle="--", color=color,
-                label=f"{action} gradient boosting")
+        ax.plot(episodes, [r["mae"] for r in curve], marker="o", color=color)
+        ax.plot(episodes, [r["mae_hgb"] for r in curve], marker="x", linestyle="--", color=color)
+        handles.append(Line2D([], [], color=color, lw=3, label=action))
+    handles += [Line2D([], [], color="0.3", marker="o", label="model tree"),
+                Line2D([], [], color="0.3", marker="x", linestyle="--", label="gradient boosting")]
     ax.set(xscale="log", xlabel="training episodes", ylabel="MAE on test episodes (s)",
            title="Accuracy against experience (Fig. 4.6)")
+    ax.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    ax.xaxis.set_major_formatter(ScalarFormatter())
+    ax.xaxis.set_minor_formatter(plt.NullFormatter())
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize="small")
+    ax.legend(handles=handles, fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
     _save(fig, path)
 
 
