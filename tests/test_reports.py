@@ -201,6 +201,8 @@ def test_verbosity_is_read_from_the_command_line():
     assert verbosity_of(["-qq", "evaluate"]) == -2
     assert verbosity_of(["--verbose", "refine", "-v"]) == 2
     assert verbosity_of(["plan", "--", "-q"]) == 0 and verbosity_of(["plan", "--quiet"]) == -1
+    assert verbosity_of(["--qui", "plan"]) == -1 and verbosity_of(["--verb", "plan"]) == 1
+    assert verbosity_of(["--ver", "plan", "--json", "--seed"]) == 0
     assert [level(v) for v in (-3, -2, -1, 0, 1, 2)] == [logging.ERROR, logging.ERROR, logging.WARNING,
                                                         logging.INFO, logging.DEBUG, logging.DEBUG]
 

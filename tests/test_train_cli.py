@@ -159,7 +159,7 @@ def test_interrupt_while_writing_leaves_nothing_half_written(tmp_path, monkeypat
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("tailor.refinement.learning.plots.plot_angle_at", interrupted)  # the last file staged
+    monkeypatch.setattr("tailor.refinement.learning.plots.plot_angle_at", interrupted)  # a figure being drawn
     code = main(["train", "soccer", "--episodes", "24", "--fresh-episodes", "20", "--n-i", "1", "--out", str(tmp_path)])
     assert code == 130
     assert capsys.readouterr().err.strip().endswith("tailor train: interrupted")

@@ -32,7 +32,9 @@ def verbosity_of(argv: Sequence[str]) -> int:
     for arg in argv:
         if arg == "--":
             break
-        if arg in QUIET_FLAGS or arg in VERBOSE_FLAGS:
+        if arg.startswith("--") and len(arg) > 3:  # argparse takes unique prefixes: --qui, --verb
+            total += ("--verbose".startswith(arg) and arg != "--ver") - "--quiet".startswith(arg)
+        elif arg in QUIET_FLAGS or arg in VERBOSE_FLAGS:
             total += VERBOSE_FLAGS.get(arg, 0) - QUIET_FLAGS.get(arg, 0)
         elif len(arg) > 1 and arg[0] == "-" and arg[1] != "-" and set(arg[1:]) <= {"q", "v"}:
             total += arg.count("v") - arg.count("q")
@@ -57,6 +59,11 @@ class _StderrHandler(logging.Handler):
             self.handleError(record)
 
 
+def set_verbosity(verbosity: int) -> None:
+    """The level of the `tailor` loggers for `verbosity` (see `level`)."""
+    logging.getLogger(LOGGER).setLevel(level(verbosity))
+
+
 @contextmanager
 def cli_logging(verbosity: int, prog: str = "tailor") -> Iterator[_StderrHandler]:
     """Show the `tailor` loggers' messages at the level `verbosity` asks for, as `PROG: note: ...` lines on
@@ -65,7 +72,7 @@ def cli_logging(verbosity: int, prog: str = "tailor") -> Iterator[_StderrHandler
     handler = _StderrHandler(prog)
     previous = (logger.level, logger.propagate)
     logger.addHandler(handler)
-    logger.setLevel(level(verbosity))
+    set_verbosity(verbosity)
     logger.propagate = False  # an application's own root handler would print every line twice
     try:
         yield handler

@@ -16,7 +16,7 @@ import threading
 
 from tailor import __version__
 from tailor.errors import TailorError
-from tailor.refinement.cli.logs import cli_logging, verbosity_of
+from tailor.refinement.cli.logs import cli_logging, set_verbosity, verbosity_of
 
 COMMANDS = {
     "plan": "tailor.refinement.cli.plan",
@@ -105,7 +105,7 @@ def build_parser() -> argparse.ArgumentParser:
             continue
         command = sub.add_parser(name, help=module.HELP, description=getattr(module, "DESCRIPTION", module.HELP))
         module.add_arguments(command)
-        _verbosity_options(command, argparse.SUPPRESS)  # also after the command: tailor train soccer -q
+        _verbosity_options(command, argparse.SUPPRESS)  # also after the command: tailor train DOMAIN -q
         command.set_defaults(run=module.run)
     return parser
 
@@ -115,6 +115,7 @@ def main(argv: list[str] | None = None) -> int:
     with cli_logging(verbosity_of(argv)) as log:  # before parsing: argument types may log (--jobs capped)
         args = build_parser().parse_args(argv)
         log.prog = f"tailor {args.command}"
+        set_verbosity(args.verbose - args.quiet)  # as argparse read it (also --qui, --verb)
         args.progress = args.quiet == 0  # progress bars (on a terminal only) unless -q
         return _run(args)
 

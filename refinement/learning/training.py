@@ -196,7 +196,7 @@ def write_outputs(out: Path, recipe: TrainingRecipe, models: dict, classifiers: 
     """Stage every file beside its target, then rename them all into place; `report["files"]` lists them
     (relative to `out`). Returns the files written."""
     files = training_files(out, recipe, models, classifiers, report)
-    report["files"] = [target.relative_to(out).as_posix() for target in files]
+    report["files"] = [target.relative_to(Path(out)).as_posix() for target in files]
     staged: list[tuple[Path, Path]] = []
     target = Path(out)
     try:
