@@ -65,17 +65,17 @@ def run(args: argparse.Namespace) -> int:
     report = train_domain(recipe, episodes, args.seed, out, jobs=args.jobs, fresh_episodes=args.fresh_episodes,
                           n_i_candidates=args.n_i or N_I_CANDIDATES, progress=getattr(args, "progress", True))
     log = logging.getLogger(__name__)
-    for warning in report["warnings"]:  # a diagnostic: stderr, also under --json; the report files hold them too
-        log.warning("this run is too small to trust: %s", warning)
-    written = [Path(out) / name for name in report["files"]]
+    written = [Path(out) / name for name in report.get("files", ())]
     try:
+        for warning in report.get("warnings", ()):  # diagnostics: stderr, also under --json (and in the reports)
+            log.warning("this run is too small to trust: %s", warning)
         if args.json:
             sys.stdout.write(json_text(report) + "\n")
             log.info("wrote %s", ", ".join(str(path) for path in written))
         else:
             print("\n".join(summary_lines(report)))
             print(f"\nWrote {len(written)} files:")
-            width = max(len(str(path)) for path in written)
+            width = max((len(str(path)) for path in written), default=0)
             for path in written:
                 what = REPORT_FILES.get(path.name, "the report as JSON" if path.name == "report.json" else "")
                 print(f"  {str(path):<{width}}  {what}".rstrip())
