@@ -16,6 +16,7 @@ import numpy as np
 from tailor.refinement.action_sequence import ActionSequence, ExecutableAction
 from tailor.errors import ModelFileError
 from tailor.refinement.optimizers import FreeParameter, Objective, OptimizationResult, Term, optimize
+from tailor.refinement.progress import progress_bar
 
 if TYPE_CHECKING:  # the models' module imports scikit-learn; refining needs only their methods
     from tailor.refinement.models.action_models import ActionModel
@@ -93,7 +94,8 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
     actions = sequence.actions
     assignment: dict[str, float] = {}
     windows: list[OptimizationResult] = []
-    for i in range(len(actions)):
+    steps = progress_bar(iterable=range(len(actions)), desc=f"refining (h={horizon})", unit="action", leave=False)
+    for i in steps:
         window = actions[i:i + horizon]
         free: list[FreeParameter] = []
         seen: set[str] = set()

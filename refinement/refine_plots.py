@@ -4,8 +4,6 @@ parameter (Fig. 5.8: a polar plot where that parameter is an angle spanning the 
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -15,22 +13,10 @@ LAYER_STYLES = (("-", "tab:blue"), ("--", "tab:orange"), (":", "tab:green"))
 
 
 def _save(fig, path: Path) -> None:
-    """Write the figure atomically: a reader never sees half a PNG."""
-    from tailor.refinement.outputs import write_error
+    """Write the figure atomically, with the permissions of a new file: a reader never sees half a PNG."""
+    from tailor.refinement.outputs import write_atomically
 
-    path = Path(path)
-    tmp = None
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix or ".png", dir=path.parent)
-        os.close(fd)
-        fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png")
-        os.replace(tmp, path)
-    except OSError as exc:
-        raise write_error(path, exc) from None
-    finally:
-        if tmp is not None and os.path.exists(tmp):
-            os.unlink(tmp)
+    write_atomically(path, lambda tmp: fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png"))
 
 
 def view_layers(view) -> tuple[tuple[str, ...], ...]:
@@ -56,13 +42,14 @@ def _draw(ax, result, layers, title: str) -> None:
         if not np.isfinite(x).any():
             continue
         ax.plot(x, y, style, color=color, lw=1.5, label=f"{layer[0]}, {layer[1]}")
-        ax.plot(x[:1], y[:1], "o", color=color, ms=6)
+        ax.plot(x[:1], y[:1], "o", color=color, ms=8, mec="black", mew=0.6, zorder=4,
+                label="start" if k == 0 else None)
         if len(layer) > 2 and result.has_column(layer[2]):
             heading, step = result.column(layer[2]), max(1, len(x) // 25)
             ax.quiver(x[::step], y[::step], np.cos(heading[::step]), np.sin(heading[::step]), color=color,
                       scale=25, width=0.004, alpha=0.6)
         if k == 0 and marks:
-            ax.plot(x[marks], y[marks], "x", color="k", ms=8, label="subgoals reached")
+            ax.plot(x[marks], y[marks], "x", color="k", ms=8, mew=2, zorder=5, label="subgoals reached")
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(alpha=0.3)
     ax.set_title(title, fontsize=10)
@@ -71,7 +58,17 @@ def _draw(ax, result, layers, title: str) -> None:
 
 
 def plot_executions(path: Path, views, panels: list[tuple[str, object]]) -> None:
-    """One row per view, one column per (title, SequenceResult)."""
+    """One row per view, one column per (title, SequenceResult), written to `path`."""
+    import matplotlib.pyplot as plt
+
+    fig = executions_figure(views, panels)
+    _save(fig, path)
+    plt.close(fig)
+
+
+def executions_figure(views, panels: list[tuple[str, object]]):
+    """The figure of `plot_executions`: a start marker and the subgoals reached in each panel, the legend in
+    the first panel of each row."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -83,14 +80,41 @@ def plot_executions(path: Path, views, panels: list[tuple[str, object]]) -> None
         for col, (title, result) in enumerate(panels):
             _draw(axes[row, col], result, view_layers(view), title if row == 0 else "")
         axes[row, 0].legend(loc="best", fontsize=8)
-    _save(fig, path)
-    plt.close(fig)
+    return fig
+
+
+MARK_STYLES = {"greedy": ("s", "tab:orange"), "refined": ("*", "tab:green")}  # marker, colour of a chosen value
+POLAR_MARGIN = 1.12  # the radius axis reaches this far beyond the largest value: no marker cut at the rim
+
+
+def tidy_polar(ax, largest: float) -> None:
+    """Readable polar axes: radius from 0 to a margin beyond `largest` (markers at the maximum stay whole), a
+    few radial ticks in a small font at 112.5 deg (between the 90 and 135 deg angle labels), angle labels
+    every 45 deg, small and padded so neighbouring panels do not run into each other."""
+    from matplotlib.ticker import MaxNLocator
+
+    ax.set_ylim(0.0, POLAR_MARGIN * largest if largest > 0 else 1.0)
+    ax.yaxis.set_major_locator(MaxNLocator(nbins=4))
+    ax.set_rlabel_position(112.5)
+    ax.tick_params(axis="y", labelsize=7, labelcolor="0.35")
+    ax.tick_params(axis="x", labelsize=8, pad=1)
+    ax.grid(alpha=0.4)
 
 
 def plot_costs(path: Path, parameter, values: np.ndarray, curves: list[tuple[str, np.ndarray]],
                marks: list[tuple[str, float]]) -> None:
-    """Predicted duration over one free parameter, one panel per curve: polar where the parameter is an angle
-    spanning the full circle (Fig. 5.8), Cartesian otherwise."""
+    """Predicted duration over one free parameter, one panel per curve, written to `path`."""
+    import matplotlib.pyplot as plt
+
+    fig = costs_figure(parameter, values, curves, marks)
+    _save(fig, path)
+    plt.close(fig)
+
+
+def costs_figure(parameter, values: np.ndarray, curves: list[tuple[str, np.ndarray]],
+                 marks: list[tuple[str, float]]):
+    """The figure of `plot_costs`: polar where the parameter is an angle spanning the full circle (Fig. 5.8),
+    Cartesian otherwise; the greedy and refined choices marked, each panel with its legend."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -98,21 +122,27 @@ def plot_costs(path: Path, parameter, values: np.ndarray, curves: list[tuple[str
 
     polar = parameter.high - parameter.low >= FULL_CIRCLE
     fig, axes = plt.subplots(1, len(curves), subplot_kw={"projection": "polar"} if polar else {},
-                             figsize=(4.2 * len(curves), 4.2))
+                             figsize=(4.6 * len(curves), 5.0), layout="constrained")
     for ax, (title, predicted) in zip(np.atleast_1d(axes), curves):
-        ax.plot(values, predicted, color="tab:blue")
+        ax.plot(values, predicted, color="tab:blue", label="predicted duration (s)")
         if polar:
-            ax.set_rlabel_position(202.5)  # radial labels off the 0°/180° axis labels
+            tidy_polar(ax, float(np.nanmax(predicted)))
         else:
+            from matplotlib.ticker import MaxNLocator
+
             ax.set(xlabel=parameter.id, ylabel="predicted duration (s)")
+            ax.xaxis.set_major_locator(MaxNLocator(nbins=5))  # tick labels apart in a narrow panel
+            ax.grid(alpha=0.3)
         for label, value in marks:
             k = int(np.argmin(np.abs(values - value)))
             shown = f"{np.degrees(value):.0f}°" if polar else f"{value:.3g}"
-            ax.plot([value], [predicted[k]], "o", ms=6, label=f"{label}: {shown}, {predicted[k]:.2f} s")
-        ax.set_title(title, fontsize=10)
-        ax.legend(loc="lower center", bbox_to_anchor=(0.5, -0.32), fontsize=8)
-    _save(fig, path)
-    plt.close(fig)
+            marker, color = MARK_STYLES.get(label, ("o", "tab:red"))
+            ax.plot([value], [predicted[k]], marker, color=color, ms=11 if marker == "*" else 8, mec="black",
+                    mew=0.6, zorder=4, clip_on=False, linestyle="none",
+                    label=f"{label}: {shown}, {predicted[k]:.2f} s")
+        ax.set_title(f"{title}\n({parameter.id})" if polar else title, fontsize=10, pad=12)
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.08 if polar else -0.14), fontsize=8, frameon=False)
+    return fig
 
 
 def draw_refinement(path, prepared, outcomes, views) -> list[Path]:

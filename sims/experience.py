@@ -71,7 +71,8 @@ def gather(simulator: str, name: str, episodes: int, seed: int, jobs: int = 1, p
     seeds = episode_seeds(seed, episodes, first)
     batches = [(simulator, name, seeds[i:i + EPISODES_PER_TASK]) for i in range(0, episodes, EPISODES_PER_TASK)]
     out: list[Episode] = [] if into is None else into
-    bar = tqdm(total=episodes, desc=f"gather {name}", unit="ep", file=sys.stderr, disable=not progress)
+    bar = tqdm(total=episodes, desc=f"gather {name}", unit="ep", file=sys.stderr,
+               disable=None if progress else True)  # None: a bar on a terminal only
     results = ordered_results(_run_batch, batches, jobs)
     try:
         for batch in results:  # in order, so the list is the same for any backend and number of workers

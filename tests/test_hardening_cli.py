@@ -266,9 +266,14 @@ def test_predictions_are_checked_against_the_durations_seen_in_training():
 # --- 8. --jobs capped at the CPU count -------------------------------------------------------------------
 def test_jobs_beyond_the_cpus_are_capped_with_a_note(capsys):
     from tailor.refinement.cli.arguments import cpu_count, worker_count
+    from tailor.refinement.cli.logs import cli_logging
 
-    assert worker_count("1000") == cpu_count()
+    with cli_logging(0):
+        assert worker_count("1000") == cpu_count()
     assert capsys.readouterr().err.strip() == f"tailor: note: --jobs 1000 capped at {cpu_count()}, the number of CPUs"
+    with cli_logging(-1):  # -q: notes are silenced
+        assert worker_count("1000") == cpu_count()
+    assert capsys.readouterr().err == ""
     assert worker_count("1") == 1
 
 

@@ -87,7 +87,7 @@ def test_train_without_out_writes_the_users_folder_and_never_the_bundled_models(
     assert main(["train", "soccer", "--episodes", "24", "--fresh-episodes", "20", "--n-i", "1,3"]) == 0
     out = tmp_path / "tailor" / "soccer"
     printed = capsys.readouterr().out
-    assert f"wrote {out / 'models'} and {out / 'training'}" in printed
+    assert f"  {out / 'models' / 'goToPose.json'}" in printed  # every file named, in the user's folder
     assert f"--models {out}` or TAILOR_MODELS={out.parent}" in printed
     assert {p.name for p in (out / "models").iterdir()} >= {"goToPose.json", "approachBall.json", "dribbleBall.json"}
     assert {p.name: p.read_bytes() for p in (DOMAINS / "soccer" / "models").iterdir()} == bundled

@@ -4,6 +4,8 @@
 from __future__ import annotations
 
 import json
+import os
+import stat
 import subprocess
 import sys
 from pathlib import Path
@@ -47,9 +49,18 @@ def test_refined_score_is_consistent(capsys):
 
 def test_refine_plot_writes_trajectories_and_polar_plot(tmp_path, capsys):
     out = tmp_path / "score.png"
-    assert main(["refine", "soccer", "score", "--plot", str(out)]) == 0
+    previous = os.umask(0o022)
+    try:
+        assert main(["refine", "soccer", "score", "--plot", str(out)]) == 0
+    finally:
+        os.umask(previous)
     assert out.stat().st_size > 10_000 and (tmp_path / "score_polar.png").stat().st_size > 10_000
-    assert f"Wrote {out}" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    polar = tmp_path / "score_polar.png"
+    assert f"Wrote {out}\n" in printed and f"Wrote {polar}\n" in printed  # every file written is named
+    for png in (out, polar):  # a new file's permissions under umask 022, not mkstemp's 0600
+        assert stat.S_IMODE(png.stat().st_mode) == 0o644
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["score.png", "score_polar.png"]  # nothing staged left
 
 
 def _tailor(*args: str) -> subprocess.CompletedProcess:

@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import base64
 import json
+import os
+import re
+import stat
 
 import numpy as np
 import pytest
@@ -12,11 +16,16 @@ from tailor.refinement.models.action_models import load_action_models, load_coll
 from tailor.refinement.cli.main import main
 from tailor.refinement.models.features import compute_features
 from synthetic_episodes import random_params
+from test_reports import assert_self_contained
+
+UMASK = os.umask(0o022)
+os.umask(UMASK)
 
 EXPECTED_FILES = {
     "models/goToPose.json", "models/approachBall.json", "models/dribbleBall.json", "models/goToPose.collision.json",
     "models/goToPosition.json",
-    "training/report.json", "training/report.txt", "training/mae_vs_n_i.png", "training/mae_vs_episodes.png",
+    "training/report.json", "training/report.txt", "training/report.html", "training/mae_vs_n_i.png",
+    "training/mae_vs_episodes.png",
     "training/angle_at_polar.png", "training/goToPose.success_region.png",
 }
 
@@ -61,6 +70,16 @@ def check_outputs(out, report: dict, episodes: int, fresh: int) -> None:
     assert "predicted Success" in text and "observed Fail" in text
     for png in ("mae_vs_n_i", "mae_vs_episodes", "angle_at_polar", "goToPose.success_region"):
         assert (out / "training" / f"{png}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the HTML report: one file, nothing external, every action's row, every figure embedded, rules collapsible
+    page = assert_self_contained((out / "training" / "report.html").read_text(encoding="utf-8"))
+    assert {row[0] for row in page.rows if row} >= set(report["models"])
+    images = [base64.b64decode(attrs["src"].split(",", 1)[1]) for tag, attrs in page.tags if tag == "img"]
+    assert images == [(out / "training" / f"{png}.png").read_bytes() for png in
+                      ("mae_vs_n_i", "mae_vs_episodes", "angle_at_polar", "goToPose.success_region")]
+    assert page.details == len(models) + 1
+    assert sorted(report["files"]) == sorted(EXPECTED_FILES)
+    for name in EXPECTED_FILES:  # a new file's permissions (the tests run under umask 022), not mkstemp's 0600
+        assert stat.S_IMODE((out / name).stat().st_mode) == 0o666 & ~UMASK, name
 
 
 def test_train_soccer_end_to_end_in_the_simulator(tmp_path, capsys):
@@ -80,9 +99,23 @@ def test_train_is_reproducible_and_prints_the_table(tmp_path, monkeypatch, capsy
     monkeypatch.setattr("tailor.sims.experience.gather", synthetic_episodes.gather)
     args = ["train", "soccer", "--episodes", "24", "--fresh-episodes", "20", "--n-i", "1,3", "--out"]
     assert main([*args, str(tmp_path / "a")]) == 0
-    printed = capsys.readouterr().out
+    captured = capsys.readouterr()
+    printed = captured.out
     assert printed.startswith("Action models of domain soccer (simulator soccer, seed 0, 24 episodes per scenario;")
-    assert f"wrote {tmp_path / 'a' / 'models'}" in printed
+    for name in EXPECTED_FILES:  # every file written is named
+        assert f"  {tmp_path / 'a' / name}" in printed
+    # the short summary: a row per action, no rules (they are in report.txt and report.html)
+    assert "Rules of" not in printed and len(printed.splitlines()) < 30
+    report = json.loads((tmp_path / "a" / "training" / "report.json").read_text())
+    for action, row in report["models"].items():
+        assert re.search(rf"^  {action} +{row['episodes']} +{row['examples']} +{row['mae']:.3f} ", printed, re.M)
+    assert "success classifier of goToPose: " in printed
+    # 24 episodes are too few to trust: warnings on stderr (and in the report files), not on stdout
+    assert report["warnings"] and "too small to trust" not in printed
+    assert [line for line in captured.err.splitlines() if "too small to trust" in line] == [
+        f"tailor train: warning: this run is too small to trust: {w}" for w in report["warnings"]]
+    assert "too small to trust" in (tmp_path / "a" / "training" / "report.html").read_text()
+    assert "too small to trust" in (tmp_path / "a" / "training" / "report.txt").read_text()
     assert main([*args, str(tmp_path / "b")]) == 0
     for name in ("goToPose.json", "approachBall.json", "dribbleBall.json", "goToPose.collision.json"):
         assert (tmp_path / "a" / "models" / name).read_text() == (tmp_path / "b" / "models" / name).read_text()
@@ -148,7 +181,7 @@ def test_interrupt_while_writing_leaves_nothing_half_written(tmp_path, monkeypat
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("tailor.refinement.learning.plots.plot_angle_at", interrupted)  # the last file staged
+    monkeypatch.setattr("tailor.refinement.learning.plots.plot_angle_at", interrupted)  # a figure being drawn
     code = main(["train", "soccer", "--episodes", "24", "--fresh-episodes", "20", "--n-i", "1", "--out", str(tmp_path)])
     assert code == 130
     assert capsys.readouterr().err.strip().endswith("tailor train: interrupted")

@@ -52,14 +52,14 @@ def cpu_count() -> int:
 
 
 def worker_count(text: str) -> int:
-    """An argparse type for --jobs: a whole number >= 1, capped at the CPU count with a note on stderr (more
-    worker processes than CPUs only cost memory and start-up time)."""
-    import sys
+    """An argparse type for --jobs: a whole number >= 1, capped at the CPU count with a note (logged: on stderr
+    unless -q; more worker processes than CPUs only cost memory and start-up time)."""
+    import logging
 
     value = whole_number(1)(text)
     cpus = cpu_count()
     if value > cpus:
-        print(f"tailor: note: --jobs {value} capped at {cpus}, the number of CPUs", file=sys.stderr)
+        logging.getLogger(__name__).info("--jobs %d capped at %d, the number of CPUs", value, cpus)
         return cpus
     return value
 

@@ -35,14 +35,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_backend_arguments(parser)
 
 
-def _run_parallel(function, items, jobs: int, desc: str) -> list:
+def _run_parallel(function, items, jobs: int, desc: str, progress: bool = True) -> list:
+    """function(*item) for every item, in order, in `jobs` workers of the backend; a progress bar on a terminal."""
     from tqdm import tqdm
 
     from tailor.sims.parallel import ordered_results
 
     items = list(items)
     results = []
-    with tqdm(total=len(items), desc=desc, unit="ep", file=sys.stderr, disable=not items) as bar:
+    with tqdm(total=len(items), desc=desc, unit="ep", file=sys.stderr,
+              disable=None if items and progress else True) as bar:
         ordered = ordered_results(function, items, jobs)  # in order on any backend (tailor.sims.parallel)
         try:
             for result in ordered:
@@ -132,7 +134,8 @@ def _evaluate(args: argparse.Namespace) -> int:
         job_models(job, situation_sequence(job, objects))
     announce_models("evaluate", source)
     rows = _run_parallel(comparison_episode, [(job, i, objects, i < args.oracle_episodes, plan.zero_baseline)
-                                              for job, i, objects in items], args.jobs, "greedy vs refined")
+                                              for job, i, objects in items], args.jobs, "greedy vs refined",
+                          getattr(args, "progress", True))
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
               "models": str(source.path), "comparison": plan.comparison}
     report.update(summarize_comparison(rows))
@@ -140,7 +143,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     if plan.horizons and args.horizon_episodes:
         items = situations(plan.horizons, args.horizon_episodes)
         hrows = _run_parallel(horizon_episode, [(job, i, objects, HORIZONS) for job, i, objects in items],
-                              args.jobs, "horizons 1..4")
+                              args.jobs, "horizons 1..4", getattr(args, "progress", True))
         report["horizon_situations"] = plan.horizons
         report["horizons"] = summarize_horizons(hrows, HORIZONS)
         report["horizons"]["situations"] = horizon_rows(hrows, {i: objects for _, i, objects in items}, HORIZONS)

@@ -2,7 +2,8 @@
 
 Each command module defines `HELP`, `add_arguments(parser)` and `run(args) -> int`, and keeps heavy imports
 inside `run` so that `tailor plan` does not pay for the simulator or the learners.
-Every project error is printed as one line on stderr and ends the process with its own exit status.
+Every project error is printed as one line on stderr and ends the process with its own exit status; other
+diagnostics go through `logging` (tailor.refinement.cli.logs), results to stdout.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import threading
 
 from tailor import __version__
 from tailor.errors import TailorError
+from tailor.refinement.cli.logs import cli_logging, set_verbosity, verbosity_of
 
 COMMANDS = {
     "plan": "tailor.refinement.cli.plan",
@@ -48,10 +50,54 @@ class Parser(argparse.ArgumentParser):
         self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
 
 
+DESCRIPTION = """\
+tailor makes a robot execute a symbolic plan fast and smoothly. A PDDL planner decides what to do; action
+models learned from simulated experience predict how long each action takes and whether it succeeds;
+subgoal refinement chooses the values the plan leaves free (where and how fast the robot arrives at each
+subgoal) so that the whole sequence is predicted fastest; a simulator executes and measures the result."""
+
+READ_MORE = """\
+Each command has its own help: tailor COMMAND --help. Read more in the README (README.md in the source
+tree; the home page `pip show tailor` names): the pipeline, the exit statuses, how to add your own robot."""
+
+
+def _examples() -> str:
+    """Examples with a bundled domain that can be refined (its name and a problem read from the data)."""
+    domain = problem = None
+    try:
+        from tailor.planner_bridge.bundled import DOMAINS_DIR, bundled_domains, bundled_problems
+
+        ready = [d for d in bundled_domains() if any((DOMAINS_DIR / d / "models").glob("*.json"))]
+        if ready and bundled_problems(ready[-1]):
+            domain, problem = ready[-1], bundled_problems(ready[-1])[0]
+    except (OSError, TailorError):
+        pass
+    domain, problem = domain or "DOMAIN", problem or "PROBLEM"
+    examples = [
+        ("tailor domains", "what is installed, and what each domain can do"),
+        (f"tailor plan {domain} {problem}", "the partial-order plan with its causal links"),
+        (f"tailor refine {domain} {problem} --simulate --plot run.png",
+         "choose the free parameters, simulate greedy and refined execution, draw both"),
+        (f"tailor train {domain} --out DIR", "learn the action models again, into DIR"),
+        (f"tailor -q evaluate {domain} --json > results.json",
+         "measure refined against greedy; only warnings on stderr"),
+    ]
+    return "examples:\n" + "\n".join(f"  {command}\n      {what}" for command, what in examples)
+
+
+def _verbosity_options(parser: argparse.ArgumentParser, default) -> None:
+    parser.add_argument("-q", "--quiet", action="count", default=default,
+                        help="less on stderr: -q only warnings and errors, no progress bars; -qq only errors")
+    parser.add_argument("-v", "--verbose", action="count", default=default,
+                        help="more on stderr: stages and timings (debug lines)")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = Parser(prog="tailor", description=__doc__.splitlines()[0])
+    parser = Parser(prog="tailor", description=DESCRIPTION, epilog=f"{_examples()}\n\n{READ_MORE}",
+                    formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"tailor {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    _verbosity_options(parser, 0)
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", title="commands")
     for name, module_name in COMMANDS.items():
         try:
             module = importlib.import_module(module_name)
@@ -59,14 +105,24 @@ def build_parser() -> argparse.ArgumentParser:
             if exc.name != module_name:
                 raise
             continue
-        command = sub.add_parser(name, help=module.HELP, description=module.HELP)
+        command = sub.add_parser(name, help=module.HELP, description=getattr(module, "DESCRIPTION", module.HELP))
         module.add_arguments(command)
+        _verbosity_options(command, argparse.SUPPRESS)  # also after the command: tailor train DOMAIN -q
         command.set_defaults(run=module.run)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    with cli_logging(verbosity_of(argv)) as log:  # before parsing: argument types may log (--jobs capped)
+        args = build_parser().parse_args(argv)
+        log.prog = f"tailor {args.command}"
+        set_verbosity(args.verbose - args.quiet)  # as argparse read it (also --qui, --verb)
+        args.progress = args.quiet == 0  # progress bars (on a terminal only) unless -q
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     previous = None
     if threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGTERM, _terminate)

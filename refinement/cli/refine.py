@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import math
 import sys
+import time
 
 from tailor.refinement.cli.arguments import add_models_argument, announce_models, positive_seconds, whole_number
 
@@ -32,8 +34,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--timeout", type=positive_seconds, default=None, metavar="S", help="planner time limit")
     parser.add_argument("--simulate", action="store_true", help="execute greedy and refined sequences in the simulator")
     parser.add_argument("--plot", metavar="FILE.png",
-                        help="draw greedy and refined trajectories side by side (simulates them); where the first "
-                             "subgoal has a free heading, also FILE_polar.png: predicted time over that angle")
+                        help="draw greedy and refined trajectories side by side (simulates them); also "
+                             "FILE_polar.png (the first free parameter a full-circle angle) or FILE_costs.png: "
+                             "the predicted time over that parameter; every file written is named")
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
 
 
@@ -162,7 +165,7 @@ def _nothing_to_refine(prepared, args: argparse.Namespace, simulate: bool) -> in
     """An empty plan is a success in every mode: it is printed, with zero durations (and, asked to simulate,
     a trivially successful execution); no plot is drawn, since there is no trajectory."""
     if args.plot:
-        print(f"tailor refine: note: {args.plot} not written: {NOTHING_TO_REFINE}", file=sys.stderr)
+        logging.getLogger(__name__).warning("%s not written: %s", args.plot, NOTHING_TO_REFINE)
     if args.json:
         execution = {"horizon": args.horizon, "actions": [], "predicted_total": 0.0, "optimization": []}
         if simulate:
@@ -186,6 +189,7 @@ def _nothing_to_refine(prepared, args: argparse.Namespace, simulate: bool) -> in
 
 def run(args: argparse.Namespace) -> int:
     from tailor.refinement.pipeline import GREEDY_HORIZON, prepare, refine_and_dispatch, resolve_task
+    from tailor.refinement.progress import showing_progress
 
     if args.plot:  # before planning and refining: a plot that cannot be written must not cost their time
         from tailor.refinement.outputs import check_output_file
@@ -194,9 +198,12 @@ def run(args: argparse.Namespace) -> int:
     from tailor.planner_bridge import resolve_problem
     from tailor.refinement.model_store import resolve_models
 
+    log = logging.getLogger(__name__)
+    started = time.perf_counter()
     source = resolve_models(resolve_problem(args.domain, args.problem)[0].parent, args.models)
     task = resolve_task(args.domain, args.problem, args.belief, source.path)
     prepared = prepare(task, args.planner, args.timeout)
+    log.debug("planned, instantiated and loaded the models in %.2f s", time.perf_counter() - started)
     simulate = args.simulate or bool(args.plot)
     if not prepared.sequence.actions:
         return _nothing_to_refine(prepared, args, simulate)
@@ -204,8 +211,12 @@ def run(args: argparse.Namespace) -> int:
         from tailor.refinement.dispatch import check_scene
 
         check_scene(prepared.sequence, prepared.binding.file)
-    outcomes = {"greedy": refine_and_dispatch(prepared, GREEDY_HORIZON, args.optimizer, args.seed, simulate),
-                "refined": refine_and_dispatch(prepared, args.horizon, args.optimizer, args.seed, simulate)}
+    method, seed = args.optimizer, args.seed
+    with showing_progress(getattr(args, "progress", True)):  # the genetic algorithm takes seconds per window
+        outcomes = {"greedy": refine_and_dispatch(prepared, GREEDY_HORIZON, method, seed, simulate),
+                    "refined": refine_and_dispatch(prepared, args.horizon, method, seed, simulate)}
+    log.debug("refined greedy and with h=%d%s in %.2f s", args.horizon,
+              " and simulated both" if simulate else "", time.perf_counter() - started)
     announce_models("refine", source)  # once the models have made their predictions: an error stays one line
     if args.plot:
         from tailor.refinement.refine_plots import draw_refinement
@@ -213,13 +224,15 @@ def run(args: argparse.Namespace) -> int:
         executions = dict(outcomes)
         if prepared.binding.evaluation.get("zero_baseline") and prepared.sequence.free_parameters():
             executions = {"zero": _zero_outcome(prepared, args.seed), **outcomes}
-        draw_refinement(args.plot, prepared, executions, prepared.binding.entry.views)
+        written = draw_refinement(args.plot, prepared, executions, prepared.binding.entry.views)
     if args.json:
         from tailor.refinement.outputs import json_text
 
         sys.stdout.write(json_text(result_json(prepared, args.optimizer, args.seed, outcomes)) + "\n")
+        if args.plot:  # stdout holds the JSON only
+            logging.getLogger(__name__).info("wrote %s", ", ".join(str(path) for path in written))
     else:
         _print_text(prepared, args.optimizer, outcomes)
         if args.plot:
-            sys.stdout.write(f"Wrote {args.plot}\n")
+            sys.stdout.write("".join(f"Wrote {path}\n" for path in written))
     return 0

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import functools
+import logging
 import sys
 from pathlib import Path
 
@@ -12,6 +13,10 @@ from tailor.refinement.cli.arguments import add_backend_arguments, backend_sessi
 MIN_EPISODES = 8  # a quarter of the episodes is the test set
 
 HELP = "gather experience in the simulator and learn the action models (durations, success classifiers)"
+DESCRIPTION = (f"{HELP}. Prints a short summary and names every file written: the models (DIR/models/*.json) "
+               "and, in DIR/training/, report.html (tables, learning curves, pictures and the rules in one page), "
+               "report.txt (tables and the full rules) and report.json; a warning on stderr where the run is too "
+               "small to trust.")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -81,7 +86,8 @@ def run(args: argparse.Namespace) -> int:
     from tailor.errors import BindingError
     from tailor.refinement.learning.protocol import N_I_CANDIDATES
     from tailor.refinement.learning.recipe import load_recipe
-    from tailor.refinement.learning.training import train_domain
+    from tailor.refinement.learning.report import summary_lines
+    from tailor.refinement.learning.training import REPORT_FILES, train_domain
     from tailor.refinement.outputs import check_output_dir, json_text
     from tailor.sims.shards import stored_gather
 
@@ -100,15 +106,24 @@ def run(args: argparse.Namespace) -> int:
     check_output_dir(experience)
     with backend_session(args):
         report = train_domain(recipe, episodes, args.seed, out, jobs=args.jobs, fresh_episodes=args.fresh_episodes,
-                              n_i_candidates=args.n_i or N_I_CANDIDATES, progress=True,
+                              n_i_candidates=args.n_i or N_I_CANDIDATES, progress=getattr(args, "progress", True),
                               gather=functools.partial(stored_gather, experience))
+    log = logging.getLogger(__name__)
+    written = [Path(out) / name for name in report.get("files", ())]
     try:
+        for warning in report.get("warnings", ()):  # diagnostics: stderr, also under --json (and in the reports)
+            log.warning("this run is too small to trust: %s", warning)
         if args.json:
             sys.stdout.write(json_text(report) + "\n")  # the report, led by its own schema
+            log.info("wrote %s", ", ".join(str(path) for path in written))
         else:
-            print((out / "training" / "report.txt").read_text(encoding="utf-8"), end="")
-            print(f"wrote {out / 'models'} and {out / 'training'}")
-            print(f"use them with `tailor refine {args.domain} PROBLEM --models {out}`"
+            print("\n".join(summary_lines(report)))
+            print(f"\nWrote {len(written)} files:")
+            width = max((len(str(path)) for path in written), default=0)
+            for path in written:
+                what = REPORT_FILES.get(path.name, "the report as JSON" if path.name == "report.json" else "")
+                print(f"  {str(path):<{width}}  {what}".rstrip())
+            print(f"Use them with `tailor refine {args.domain} PROBLEM --models {out}`"
                   + (f" or {ENVIRONMENT_VARIABLE}={out.parent}" if args.out is None else ""))
     except KeyboardInterrupt:  # the models are written and complete: report what is on disk, not the interrupt
         print(f"tailor train: interrupted while printing the report; the models in {out / 'models'} are complete",

@@ -192,6 +192,10 @@ def train_duration_model(
     episodes_curve = points[:len(episode_fractions)]
     evaluated = points[-1]
 
+    # the floor any model must beat: the median duration of the learning episodes, predicted for every test one
+    constant = float(np.median([e.duration for e in learn]))
+    mae_constant = float(np.mean(np.abs(first_examples(test)[1] - constant)))
+
     step(f"{action}: final model")
     with threadpool_limits(limits=ONE_THREAD):
         final = fit_on_episodes(used, feature_set, n_i, make_model(seed, leaf), observed)
@@ -210,6 +214,7 @@ def train_duration_model(
         "test_episodes": len(test),
         "mae": evaluated["mae"],
         "mae_hgb": evaluated["mae_hgb"],
+        "mae_constant": mae_constant,  # predicting the median duration of the learning episodes
         "mae_relative": evaluated["mae"] / float(durations.mean()),
         "mae_over_hgb": evaluated["mae"] / evaluated["mae_hgb"] if evaluated["mae_hgb"] > 0 else None,
         "leaves_evaluated": evaluated["leaves"],

@@ -1,15 +1,17 @@
 """The readable training report: a Table 4.3-like row per duration model, the classifier's confusion matrix
-(Table 4.4), and the learned rules."""
+(Table 4.4), and the learned rules (the full text file); and the short summary `tailor train` prints."""
 
 from __future__ import annotations
 
+from tailor.refinement.learning.trust import classifier_reports
 
-def _hours_minutes(hours: float) -> str:
+
+def hours_minutes(hours: float) -> str:
     minutes = round(hours * 60.0)
     return f"{minutes // 60}:{minutes % 60:02d}"
 
 
-def _percent(share: float) -> str:
+def percent(share: float) -> str:
     return f"{100.0 * share:.1f}%"
 
 
@@ -19,8 +21,9 @@ def duration_table(reports: dict[str, dict]) -> list[str]:
     lines = [header, "-" * len(header)]
     for action, r in reports.items():
         lines.append(
-            f"{action:<14}{r['episodes']:>9d}{r['mean_duration']:>11.2f}{_hours_minutes(r['simulated_hours']):>10}"
-            f"{r['n_i']:>5d}{r['min_samples_leaf']:>5d}{r['mae']:>9.3f}{_percent(r['mae_relative']):>7}{r['mae_hgb']:>12.3f}"
+            f"{action:<14}{r['episodes']:>9d}{r['mean_duration']:>11.2f}{hours_minutes(r['simulated_hours']):>10}"
+            f"{r['n_i']:>5d}{r['min_samples_leaf']:>5d}{r['mae']:>9.3f}{percent(r['mae_relative']):>7}"
+            f"{r['mae_hgb']:>12.3f}"
             f"{'-' if r['mae_over_hgb'] is None else format(r['mae_over_hgb'], '.2f'):>8}{r['leaves']:>7}"
         )
     return lines
@@ -28,7 +31,7 @@ def duration_table(reports: dict[str, dict]) -> list[str]:
 
 def confusion_table(evaluation: dict) -> list[str]:
     c, n = evaluation["counts"], max(evaluation["episodes"], 1)
-    share = lambda key: _percent(c[key] / n)  # noqa: E731
+    share = lambda key: percent(c[key] / n)  # noqa: E731
     fail_row = c["predicted_fail_observed_fail"] + c["predicted_fail_observed_success"]
     success_row = c["predicted_success_observed_fail"] + c["predicted_success_observed_success"]
     fail_col = c["predicted_fail_observed_fail"] + c["predicted_success_observed_fail"]
@@ -36,19 +39,20 @@ def confusion_table(evaluation: dict) -> list[str]:
     return [
         f"{'':<20}{'observed Fail':>14}{'observed Success':>18}{'total':>8}",
         f"{'predicted Fail':<20}{share('predicted_fail_observed_fail'):>14}"
-        f"{share('predicted_fail_observed_success'):>18}{_percent(fail_row / n):>8}",
+        f"{share('predicted_fail_observed_success'):>18}{percent(fail_row / n):>8}",
         f"{'predicted Success':<20}{share('predicted_success_observed_fail'):>14}"
-        f"{share('predicted_success_observed_success'):>18}{_percent(success_row / n):>8}",
-        f"{'total':<20}{_percent(fail_col / n):>14}{_percent(success_col / n):>18}"
-        f"   correct {_percent(evaluation['accuracy'])}",
+        f"{share('predicted_success_observed_success'):>18}{percent(success_row / n):>8}",
+        f"{'total':<20}{percent(fail_col / n):>14}{percent(success_col / n):>18}"
+        f"   correct {percent(evaluation['accuracy'])}",
     ]
 
 
 def _subgoal_lines(chains: list[dict] | None) -> list[str]:
     lines = []
     for chain in chains or ():
+        generator = chain.get("generator", chain.get("problem"))  # schema 2 named it the problem
         lines += ["", f"{chain['action']} also learned from {chain['episodes']} episodes started at the subgoals "
-                      f"refinement chose in {chain['situations']} random '{chain['generator']}' situations",
+                      f"refinement chose in {chain['situations']} random '{generator}' situations",
                   f"(greedy and horizon 2 in turn, in {chain['rounds']} round(s), each with the models the one "
                   "before retrained; Sec. 8.1); its row covers both."]
     return lines
@@ -65,16 +69,33 @@ def _classifier_lines(c: dict) -> list[str]:
         "",
         *confusion_table(c["confusion"]),
         "",
-        f"false success: {_percent(c['false_success'])} of the failing episodes were predicted to succeed",
+        f"false success: {percent(c['false_success'])} of the failing episodes were predicted to succeed",
     ]
 
 
-def format_report(report: dict, models: dict, classifiers: dict) -> str:
+def rules_sections(models: dict, classifiers: dict) -> dict[str, str]:
+    """Section title -> the learned rules (WEKA-like text, App. C.3.1) of each model and classifier."""
+    sections = {f"Rules of {action} (n_i = {model.n_i})": model.rules_text() for action, model in models.items()}
+    sections.update({f"Rules of the success classifier of {action}": classifier.rules_text()
+                     for action, classifier in classifiers.items()})
+    return sections
+
+
+def header_line(report: dict) -> str:
+    return (f"Action models of domain {report['domain']} (simulator {report.get('simulator', '?')}, seed "
+            f"{report['seed']}, {report['episodes_per_scenario']} episodes per scenario; "
+            f"gathering {report['gather_seconds']:.0f} s, training {report['train_seconds']:.0f} s)")
+
+
+def warning_lines(warnings: list[str]) -> list[str]:
+    return ["", "WARNING: this run is too small to trust:", *(f"  - {w}" for w in warnings)] if warnings else []
+
+
+def format_report(report: dict, models: dict, classifiers: dict, warnings: list[str] = ()) -> str:
     """The whole report as text; `models` and `classifiers` (by action) give the rules."""
     lines = [
-        f"Action models of domain {report['domain']} (simulator {report.get('simulator', '?')}, seed "
-        f"{report['seed']}, {report['episodes_per_scenario']} episodes per scenario; "
-        f"gathering {report['gather_seconds']:.0f} s, training {report['train_seconds']:.0f} s)",
+        header_line(report),
+        *warning_lines(list(warnings)),
         "",
         "Duration models (Table 4.3): successful episodes, their mean duration, simulated time of all gathered",
         "episodes, chosen n_i and leaf size (min_samples_leaf), MAE on the held-out quarter (first example of each",
@@ -84,11 +105,25 @@ def format_report(report: dict, models: dict, classifiers: dict) -> str:
         *duration_table(report["models"]),
         *_subgoal_lines(report.get("subgoal_experience")),
     ]
-    for c in report.get("classifiers", {}).values():
+    for c in classifier_reports(report).values():
         lines += _classifier_lines(c)
     lines.append("")
-    for action, model in models.items():
-        lines += [f"Rules of {action} (n_i = {model.n_i}):", model.rules_text(), ""]
-    for action, classifier in classifiers.items():
-        lines += [f"Rules of the success classifier of {action}:", classifier.rules_text(), ""]
+    for title, text in rules_sections(models, classifiers).items():
+        lines += [f"{title}:", text, ""]
     return "\n".join(lines)
+
+
+def summary_lines(report: dict) -> list[str]:
+    """What `tailor train` prints: per duration model its examples, MAE, MAE relative to the mean duration and
+    to gradient boosting; per classifier its accuracy on fresh episodes (the details are in the report files)."""
+    header = f"  {'action':<16}{'episodes':>9}{'examples':>10}{'MAE (s)':>9}{'MAE/mean':>10}{'vs HGB':>8}"
+    lines = [header_line(report), "", header]
+    for action, r in report["models"].items():
+        ratio = "-" if r.get("mae_over_hgb") is None else f"{r['mae_over_hgb']:.2f}x"
+        lines.append(f"  {action:<16}{r['episodes']:>9d}{r['examples']:>10d}{r['mae']:>9.3f}"
+                     f"{percent(r['mae_relative']):>10}{ratio:>8}")
+    for action, c in classifier_reports(report).items():
+        lines.append(f"  success classifier of {action}: {percent(c['accuracy'])} correct on "
+                     f"{c['confusion']['episodes']} fresh episodes, {percent(c['false_success'])} of the failing ones "
+                     "predicted to succeed")
+    return lines

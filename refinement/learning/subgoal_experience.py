@@ -52,7 +52,7 @@ def gather_subgoal_experience(domain_dir: Path, generator: str, action: str, mod
     chunks = [drawn[k:k + CHUNK] for k in range(0, len(drawn), CHUNK)]
     out: list[Episode] = []
     with tqdm(total=situations, desc=f"{generator} subgoals ({action})", unit="situation",
-              disable=not progress) as bar:
+              disable=None if progress else True) as bar:
         results = ordered_results(_episodes, [(chunk, models, action) for chunk in chunks], jobs)
         try:
             for count, episodes in results:

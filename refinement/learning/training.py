@@ -8,9 +8,9 @@ is renamed over the target once all are complete: an interrupted run leaves the 
 
 from __future__ import annotations
 
+import logging
 import os
 import signal
-import tempfile
 import threading
 import time
 from collections.abc import Callable
@@ -27,16 +27,18 @@ from tailor.refinement.learning.protocol import (
     train_duration_model,
 )
 from tailor.refinement.learning.recipe import SubgoalExperience, TrainingRecipe
-from tailor.refinement.learning.report import format_report
+from tailor.refinement.learning.html_report import html_report
+from tailor.refinement.learning.report import format_report, rules_sections
+from tailor.refinement.learning.trust import trust_warnings
 from tailor.refinement.models.action_models import COLLISION_SUFFIX
-from tailor.refinement.outputs import check_output_dir, json_text, write_error
+from tailor.refinement.outputs import check_output_dir, json_text, staged_file, write_error
 from tailor.sims.episode import Episode
 
-FILE_MODE = 0o644  # permissions of the written files
 FRESH_SEED_OFFSET = 7_919_000  # the fresh test episodes of a classifier use seed + this: no shared episode
-REPORT_SCHEMA = "tailor.training_report/3"  # 3: classifiers by action, the simulator named
+REPORT_SCHEMA = "tailor.training_report/3"  # 3: classifiers by action, the simulator named (+ warnings, files)
 
 Gather = Callable[..., list[Episode]]
+log = logging.getLogger(__name__)
 
 
 def train_domain(
@@ -79,9 +81,10 @@ def train_domain(
         if shared:
             raise DataError(f"fresh and training episodes share seeds {sorted(shared)[:3]}: choose another seed")
     gathered = time.perf_counter()
+    log.debug("gathered the experience of %s in %.1f s", ", ".join(gathered_by_scenario), gathered - started)
 
     fits = len(recipe.models) * _fits_per_model(n_i_candidates, episode_fractions) + 2 * len(recipe.classifiers)
-    with tqdm(total=fits, desc="training", unit="fit", disable=not progress) as bar:
+    with tqdm(total=fits, desc="training", unit="fit", disable=None if progress else True) as bar:
         def step(label: str) -> None:
             bar.set_postfix_str(label, refresh=False)
             bar.update(1)
@@ -113,6 +116,9 @@ def train_domain(
         "gather_seconds": gathered - started,
         "train_seconds": time.perf_counter() - gathered,
     }
+    log.debug("trained %s in %.1f s", ", ".join([*models, *(f"{a} classifier" for a in classifiers)]),
+              report["train_seconds"])
+    report["warnings"] = trust_warnings(report)
     write_outputs(out, recipe, models, classifiers, report)
     return report
 
@@ -139,7 +145,7 @@ def _learn_at_subgoals(recipe: TrainingRecipe, chain: SubgoalExperience, models:
                                            bounds[k + 1] - bounds[k], seed, jobs=jobs, progress=progress,
                                            first=bounds[k], planned=planned)
         label = f"retraining {chain.action} ({k + 1}/{rounds})"
-        with tqdm(total=fits, desc=label, unit="fit", disable=not progress) as bar:
+        with tqdm(total=fits, desc=label, unit="fit", disable=None if progress else True) as bar:
             models[chain.action] = train_duration_model(
                 chain.action, experience[chain.action] + extra, seed, model_recipe.feature_space,
                 recipe.specs[chain.action].observed, step=lambda _: bar.update(1), n_i_candidates=n_i_candidates,
@@ -155,9 +161,16 @@ def _fits_per_model(n_i_candidates: tuple[int, ...], episode_fractions: tuple[fl
     return 2 * len(n_i_candidates) + len(MIN_SAMPLES_LEAF) + 2 * len(episode_fractions) + 2
 
 
+REPORT_FILES = {  # the report files beside report.json, and what each holds (named by `tailor train`)
+    "report.html": "tables, learning curves, pictures and rules in one page",
+    "report.txt": "tables and the full rules as text",
+}
+
+
 def training_files(out: Path, recipe: TrainingRecipe, models: dict, classifiers: dict,
                    report: dict) -> dict[Path, Callable[[Path], None]]:
-    """Every file a training run writes, with the function that writes it."""
+    """Every file a training run writes, with the function that writes it. The figures are drawn here, once:
+    the same PNG bytes are written as files and embedded in the HTML report."""
     from tailor.refinement.learning import plots
 
     models_dir, training_dir = Path(out) / "models", Path(out) / "training"
@@ -166,32 +179,39 @@ def training_files(out: Path, recipe: TrainingRecipe, models: dict, classifiers:
         files[models_dir / f"{action}.json"] = _json_writer(model.to_json())
     for action, classifier in classifiers.items():
         files[models_dir / f"{action}{COLLISION_SUFFIX}"] = _json_writer(classifier.to_json())
+    figures = {name: (plots.png_bytes(draw), plots.caption(name))
+               for name, draw in plots.training_plots(recipe.simulator, models, classifiers).items()}
+    warnings = report.get("warnings", [])
     files[training_dir / "report.json"] = _json_writer(report)
-    files[training_dir / "report.txt"] = lambda p: p.write_text(format_report(report, models, classifiers), "utf-8")
-    for name, draw in plots.training_plots(recipe.simulator, models, classifiers).items():
-        files[training_dir / name] = draw
+    files[training_dir / "report.html"] = lambda p: p.write_text(
+        html_report(report, rules_sections(models, classifiers), figures, warnings), "utf-8")
+    files[training_dir / "report.txt"] = lambda p: p.write_text(
+        format_report(report, models, classifiers, warnings), "utf-8")
+    for name, (png, _) in figures.items():
+        files[training_dir / name] = lambda p, png=png: p.write_bytes(png)
     return files
 
 
-def write_outputs(out: Path, recipe: TrainingRecipe, models: dict, classifiers: dict, report: dict) -> None:
-    """Stage every file beside its target, then rename them all into place."""
+def write_outputs(out: Path, recipe: TrainingRecipe, models: dict, classifiers: dict, report: dict) -> list[Path]:
+    """Stage every file beside its target, then rename them all into place; `report["files"]` lists them
+    (relative to `out`). Returns the files written."""
     files = training_files(out, recipe, models, classifiers, report)
+    report["files"] = [target.relative_to(Path(out)).as_posix() for target in files]
     staged: list[tuple[Path, Path]] = []
     target = Path(out)
     try:
         for target, write in files.items():
             target.parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(prefix=f".{target.stem}.", suffix=target.suffix, dir=target.parent)
-            os.close(fd)
-            staged.append((Path(tmp), target))
-            write(Path(tmp))
-            os.chmod(tmp, FILE_MODE)  # mkstemp makes files private; models and reports are for everyone
+            tmp = staged_file(target)  # the permissions of a new file (0666 less the umask), not mkstemp's 0600
+            staged.append((tmp, target))
+            write(tmp)
         _rename_all(staged)
     except OSError as exc:
         raise write_error(target, exc) from None
     finally:
         for tmp, _ in staged:
             tmp.unlink(missing_ok=True)
+    return list(files)
 
 
 def _rename_all(staged: list[tuple[Path, Path]]) -> None:

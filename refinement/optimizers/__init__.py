@@ -7,6 +7,7 @@ enter the features piecewise affinely (C.3.4).
 
 from __future__ import annotations
 
+import logging
 import time
 from dataclasses import replace
 from typing import Callable
@@ -23,6 +24,8 @@ from tailor.refinement.optimizers.objective import (
     brute_force,
 )
 from tailor.refinement.optimizers.structure import NotApplicable
+
+log = logging.getLogger(__name__)
 
 __all__ = [
     "OPTIMIZERS",
@@ -41,6 +44,7 @@ def _analytic_or_ga(objective: Objective, seed: int = 0) -> OptimizationResult:
     try:
         return analytic.minimize(objective, seed)
     except NotApplicable as why:
+        log.debug("analytic minimization not applicable (%s): the genetic algorithm instead", why)
         result = genetic.minimize(objective, seed)
         return replace(result, seconds=time.perf_counter() - start, note=f"analytic not applicable: {why}")
 

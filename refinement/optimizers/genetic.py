@@ -6,7 +6,8 @@ within the ranges; each generation the best 2% (at least one) pass unchanged, th
 model marks invalid gets fitness 0, the lowest; `sel_roulette` is selRoulette with a binary search),
 mated pairwise with `tools.cxTwoPoint` on 65% of them
 (`tools.cxBlend` with a single gene, which has no inner cut point) and mutated with `tools.mutGaussian`,
-clipped to the ranges. The loop stops when the best cost has not improved for 50 generations, or after 500.
+clipped to the ranges. The loop stops when the best cost has not improved for 50 generations, or after 500
+(a progress bar over the generations where the caller shows progress: tailor.refinement.progress).
 
 DEAP's operators draw from the `random` module: for the run, their modules' `random` (and this module's `rng`)
 is a private `random.Random(seed)`, so refinement is seeded by its argument only, even where other threads
@@ -32,6 +33,7 @@ import deap.tools.selection  # noqa: F401
 from deap import base, tools
 
 from tailor.refinement.optimizers.objective import Objective, OptimizationResult
+from tailor.refinement.progress import progress_bar
 
 POPULATION_PER_PARAMETER = 25
 ELITE_FRACTION = 0.02
@@ -141,7 +143,8 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
     box = toolbox(low, high)
     best_cost, best_genes, best_valid = np.inf, None, False
     stall = generation = evaluations = 0
-    with seeded_random(seed):
+    with seeded_random(seed), progress_bar(total=MAX_GENERATIONS, desc="genetic algorithm", unit="gen",
+                                           leave=False) as bar:
         population = [box.individual() for _ in range(size)]
         while generation < MAX_GENERATIONS and stall < STALL_GENERATIONS:
             genes = np.array(population, dtype=float)
@@ -158,6 +161,8 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
                 best_cost, best_genes, best_valid = float(cost[top]), genes[top].copy(), bool(valid[top])
             else:
                 stall += 1
+            bar.set_postfix_str(f"best {best_cost:.2f}, stalled {stall}/{STALL_GENERATIONS}", refresh=False)
+            bar.update(1)
             population = _next_generation(box, population, order, n_elite, low, high)
     return OptimizationResult(
         values=tuple(float(v) for v in best_genes),

@@ -26,6 +26,7 @@ SIMULATOR = SimulatorEntry(
     scenarios={name: Scenario(name, r.action, r.run, r.__doc__ or "") for name, r in RANGES.items()},
     situations=SITUATIONS,
     scene_objects=("robot", "ball"),
+    views=((("x", "y", "phi"), ("ball_x", "ball_y")),),  # the field from above: robot with heading, and ball
     subgoal_episode=subgoal_episode,
     team=TEAM,
     description="RoboCup mid-size field, Pioneer-like robot with a ball guide, a ball (pymunk)",

@@ -1,0 +1,34 @@
+"""Progress bars of long steps inside the library (the genetic algorithm, a refinement's windows), shown only
+where a command asks for them and only on a terminal.
+
+The same functions run thousands of times inside `tailor evaluate` and `tailor train` (in worker processes,
+under their own bars), where a bar per call would be noise; so they are off unless the caller opens a
+`showing_progress()` block, as `tailor refine` does. Bars go to stderr (tqdm's `disable=None`: none when stderr
+is not a terminal).
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
+
+_SHOWING: ContextVar[bool] = ContextVar("tailor_showing_progress", default=False)
+
+
+@contextmanager
+def showing_progress(enabled: bool = True) -> Iterator[None]:
+    """Within this block (this thread or task), `progress_bar` shows bars on a terminal."""
+    token = _SHOWING.set(enabled)
+    try:
+        yield
+    finally:
+        _SHOWING.reset(token)
+
+
+def progress_bar(**kwargs):
+    """A tqdm bar on stderr, shown on a terminal inside `showing_progress()` and disabled elsewhere."""
+    from tqdm import tqdm
+
+    return tqdm(file=sys.stderr, disable=None if _SHOWING.get() else True, **kwargs)
