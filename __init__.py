@@ -8,9 +8,9 @@ bundled `domains` as package data. Every error derives from `tailor.TailorError`
 The Python API (refinement.api), one call per stage:
 
     import tailor
-    plan = tailor.plan("soccer", "score")              # or tailor.plan(up_problem)
-    refined = tailor.refine("soccer", "score")         # belief: the problem's file, a dict or a path
-    refined.chosen                                     # {"pos2.phi": 2.356, ...}
+    plan = tailor.plan(domain, problem)                # names of a bundled pair, files, or tailor.plan(up_problem)
+    refined = tailor.refine(domain, problem)           # belief: the problem's file, a dict or a path
+    refined.chosen                                     # the free parameters' values: {"pos2.phi": 2.356, ...}
     result = tailor.dispatch(refined)                  # simulated durations and outcomes
     tailor.to_partial_order_plan(plan, up_problem)     # a unified-planning PartialOrderPlan
 """

@@ -1,9 +1,9 @@
 """The Python API, one call per stage: `tailor.plan`, `tailor.refine`, `tailor.dispatch` (exported by `tailor`).
 
     import tailor
-    plan = tailor.plan("soccer", "score")                      # files, bundled names, or a UP Problem
-    refined = tailor.refine("soccer", "score", horizon=2)      # belief: the problem's file, a dict or a path
-    refined.chosen                                             # {"pos2.phi": 2.356, ...}
+    plan = tailor.plan(domain, problem)                        # files, bundled names, or a UP Problem
+    refined = tailor.refine(domain, problem, horizon=2)        # belief: the problem's file, a dict or a path
+    refined.chosen                                             # free parameter -> value: {"pos2.phi": 2.356}
     result = tailor.dispatch(refined, seed=0)                  # what the simulator measured
 
 Files are planned in one planner child process kept for the whole session (fixed hash seed: the same files give

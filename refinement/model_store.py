@@ -2,7 +2,7 @@
 
 The models bundled with a domain (`domains/<name>/models/`) are read-only defaults: `tailor train` never
 writes into the installed package; it writes to `--out DIR` or, by default, to the user's data folder,
-`<user data>/<domain>/` (platformdirs; e.g. ~/.local/share/tailor/soccer on Linux), as `models/` and
+`<user data>/<domain>/` (platformdirs; e.g. ~/.local/share/tailor/<domain> on Linux), as `models/` and
 `training/`. Refinement reads, in this order: `--models DIR` (a folder of `<action>.json`, or a training
 output folder holding `models/`), then `$TAILOR_MODELS/<domain>/` when that folder exists (the variable names
 a root laid out like the user data folder), then the bundled models; commands say which in one line.

@@ -75,10 +75,10 @@ def add_models_argument(parser: argparse.ArgumentParser) -> None:
 
 
 def announce_models(command: str, source) -> None:
-    """The one line that says which models a command uses (stderr: stdout may be JSON)."""
-    import sys
+    """The one line that says which models a command uses: a note on stderr (stdout may be JSON; -q hides it)."""
+    import logging
 
-    print(f"tailor {command}: {source.describe()}", file=sys.stderr)
+    logging.getLogger(f"tailor.{command}").info("%s", source.describe())
 
 
 def add_backend_arguments(parser: argparse.ArgumentParser) -> None:

@@ -41,24 +41,6 @@ def _robots(text: str) -> int:
     return value
 
 
-def _run_parallel(function, items: list, jobs: int, desc: str) -> list:
-    """function(*item) for every item, in order, in `jobs` processes, with a progress bar (Ctrl-C stops all)."""
-    from joblib import Parallel, delayed
-    from tqdm import tqdm
-
-    results = []
-    with tqdm(total=len(items), desc=desc, unit="sit", file=sys.stderr, disable=not items) as bar:
-        if jobs <= 1:
-            for item in items:
-                results.append(function(*item))
-                bar.update()
-        else:
-            for result in Parallel(n_jobs=jobs, return_as="generator")(delayed(function)(*i) for i in items):
-                results.append(result)
-                bar.update()
-    return results
-
-
 def _scene(binding):
     from tailor.errors import BindingError
     from tailor.sims.team import TeamScene
@@ -90,6 +72,7 @@ def run(args: argparse.Namespace) -> int:
         summarize_static,
     )
     from tailor.refinement.outputs import check_output_dir
+    from tailor.refinement.progress import run_in_workers
 
     started = time.perf_counter()
     domain_dir = resolve_domain_dir(args.domain)
@@ -104,10 +87,11 @@ def run(args: argparse.Namespace) -> int:
     predictor = Predictor(scene, _load_models(source.path, scene, kinds))
     announce_models("coordinate", source)
     setup = Setup(kinds, args.seed)
-    static_rows = _run_parallel(static_situation, [(scene, predictor, setup, i) for i in range(args.episodes)],
-                                args.jobs, "static situations")
-    dynamic_rows = _run_parallel(dynamic_episode, [(scene, predictor, setup, i) for i in range(args.episodes)],
-                                 args.jobs, "dynamic episodes")
+    progress = getattr(args, "progress", True)
+    static_rows = run_in_workers(static_situation, [(scene, predictor, setup, i) for i in range(args.episodes)],
+                                 args.jobs, "static situations", progress, unit="sit")
+    dynamic_rows = run_in_workers(dynamic_episode, [(scene, predictor, setup, i) for i in range(args.episodes)],
+                                  args.jobs, "dynamic episodes", progress, unit="sit")
     static = summarize_static(static_rows)
     dynamic = summarize_dynamic(dynamic_rows, len(kinds), args.seed)
     failure = dynamic.pop("_failure")

@@ -35,26 +35,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_backend_arguments(parser)
 
 
-def _run_parallel(function, items, jobs: int, desc: str, progress: bool = True) -> list:
-    """function(*item) for every item, in order, in `jobs` workers of the backend; a progress bar on a terminal."""
-    from tqdm import tqdm
-
-    from tailor.sims.parallel import ordered_results
-
-    items = list(items)
-    results = []
-    with tqdm(total=len(items), desc=desc, unit="ep", file=sys.stderr,
-              disable=None if items and progress else True) as bar:
-        ordered = ordered_results(function, items, jobs)  # in order on any backend (tailor.sims.parallel)
-        try:
-            for result in ordered:
-                results.append(result)
-                bar.update()
-        finally:
-            ordered.close()
-    return results
-
-
 def _fmt(value, pattern="{:.2f}") -> str:
     return "-" if value is None else pattern.format(value)
 
@@ -102,6 +82,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
+    from tailor.refinement.progress import run_in_workers
     from tailor.planner_bridge import resolve_domain_dir
     from tailor.refinement.binding import load_domain_binding
     from tailor.refinement.evaluation.experiments import (
@@ -133,7 +114,7 @@ def _evaluate(args: argparse.Namespace) -> int:
         job, _, objects = items[0]
         job_models(job, situation_sequence(job, objects))
     announce_models("evaluate", source)
-    rows = _run_parallel(comparison_episode, [(job, i, objects, i < args.oracle_episodes, plan.zero_baseline)
+    rows = run_in_workers(comparison_episode, [(job, i, objects, i < args.oracle_episodes, plan.zero_baseline)
                                               for job, i, objects in items], args.jobs, "greedy vs refined",
                           getattr(args, "progress", True))
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
@@ -142,7 +123,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     report["situations"] = situation_rows(rows, {i: objects for _, i, objects in items})
     if plan.horizons and args.horizon_episodes:
         items = situations(plan.horizons, args.horizon_episodes)
-        hrows = _run_parallel(horizon_episode, [(job, i, objects, HORIZONS) for job, i, objects in items],
+        hrows = run_in_workers(horizon_episode, [(job, i, objects, HORIZONS) for job, i, objects in items],
                               args.jobs, "horizons 1..4", getattr(args, "progress", True))
         report["horizon_situations"] = plan.horizons
         report["horizons"] = summarize_horizons(hrows, HORIZONS)
