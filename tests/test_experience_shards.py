@@ -176,7 +176,8 @@ def test_train_keeps_its_experience_and_reuses_it(tmp_path, monkeypatch, capsys)
     assert main(args) == 130
     names = sorted(p.name for p in (tmp_path / "exp").iterdir())
     assert names == ["approachBall.seed0.0-12.npz", "dribbleBall.seed0.0-12.npz", "goToPose.seed0.0-12.npz",
-                     "goToPoseAtBall.seed0.0-12.npz", "goToPoseAtBall.seed7919000.0-10.npz"]  # the fresh episodes too
+                     "goToPoseAtBall.seed0.0-12.npz", "goToPoseAtBall.seed7919000.0-10.npz",  # the fresh episodes too
+                     "goToPosition.seed0.0-12.npz"]
     same(load_episodes(tmp_path / "exp" / "goToPose.seed0.0-12.npz"), synthetic_gather(SIM, "goToPose", 12, 0))
     assert not (tmp_path / "out" / "models").exists()
     monkeypatch.setattr(experience, "gather", no_simulation)
@@ -198,7 +199,7 @@ def test_train_extends_the_experience_it_has(tmp_path, monkeypatch):
 def test_gather_command_errors_are_one_line(tmp_path, capsys):
     assert main(["gather", "soccer", "--seeds", "0:4", "--scenario", "kick", "--out", str(tmp_path)]) == 14
     assert capsys.readouterr().err.strip() == ("tailor gather: error: 'soccer' trains on no experience scenario "
-                                               "'kick' (known: goToPose, approachBall, dribbleBall, goToPoseAtBall)")
+                                               "'kick' (known: goToPose, approachBall, dribbleBall, goToPosition, goToPoseAtBall)")
     with pytest.raises(SystemExit) as exit:
         main(["gather", "soccer", "--seeds", "5:5"])
     assert exit.value.code == 2

@@ -91,7 +91,7 @@ def test_train_soccer_end_to_end_in_the_simulator(tmp_path, capsys):
     check_outputs(tmp_path, report, 24, 20)
     assert {p.name for p in (tmp_path / "experience").iterdir()} == {  # the episodes are kept, with their seeds
         "goToPose.seed1.0-24.npz", "approachBall.seed1.0-24.npz", "dribbleBall.seed1.0-24.npz",
-        "goToPoseAtBall.seed1.0-24.npz", "goToPoseAtBall.seed7919001.0-20.npz"}
+        "goToPoseAtBall.seed1.0-24.npz", "goToPoseAtBall.seed7919001.0-20.npz", "goToPosition.seed1.0-24.npz"}
     assert [row["n_i"] for row in report["models"]["goToPose"]["n_i_curve"]] == [1, 3]
 
 
