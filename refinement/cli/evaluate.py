@@ -24,6 +24,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--jobs", type=worker_count, default=1, metavar="J",
                         help="worker processes (default 1; at most the number of CPUs)")
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
+    parser.add_argument("--assertion", action="store_true",
+                        help="measure subgoal assertion instead (Table 6.1): random situations of the binding's "
+                             "[evaluation] assertion generator, plain vs with assertion + refinement")
+    parser.add_argument("--plot", metavar="FILE.png",
+                        help="with --assertion: draw three instances with their asserted subgoals (Fig. 6.6)")
 
 
 def _run_parallel(function, items, jobs: int, desc: str) -> list:
@@ -101,6 +106,10 @@ def run(args: argparse.Namespace) -> int:
     domain_dir = resolve_domain_dir(args.domain)
     binding = load_domain_binding(domain_dir)
     plan = evaluation_plan(binding)
+    if args.assertion or args.plot:
+        from tailor.refinement.cli.evaluate_assertion import run_assertion
+
+        return run_assertion(args, domain_dir, binding, plan, _run_parallel)
     planned: dict = {}  # each problem the situations need, planned once
 
     def situations(generator: str, count: int) -> list:

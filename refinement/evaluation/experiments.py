@@ -5,6 +5,7 @@ parameter zero, and the horizons 1-4 (Table 5.3), for any domain whose binding n
     [evaluation]
     comparison = "score"     # situation generator of the simulator for greedy vs refined (Tables 5.1, 5.4)
     horizons = "waypoints"   # situation generator for the horizon experiment (Table 5.3); optional
+    assertion = "approach"   # situation generator for subgoal assertion (Table 6.1, `--assertion`); optional
     zero_baseline = false    # also dispatch every situation with its free parameters set to 0 (e.g. the arm's
                              # way-point velocities: stop at every way-point)
 
@@ -46,6 +47,7 @@ class EvaluationPlan:
     comparison: str
     horizons: str | None
     zero_baseline: bool
+    assertion: str | None = None  # situation generator of the subgoal assertion experiment (Table 6.1)
 
 
 def evaluation_plan(binding: Binding) -> EvaluationPlan:
@@ -58,12 +60,12 @@ def evaluation_plan(binding: Binding) -> EvaluationPlan:
     if not table:
         raise fail("missing: the domain's binding names no situations to evaluate on (add an [evaluation] table)")
     for key in table:
-        if key not in ("comparison", "horizons", "zero_baseline"):
-            raise fail(f"unknown key '{key}' (expected comparison, horizons, zero_baseline)")
+        if key not in ("comparison", "horizons", "zero_baseline", "assertion"):
+            raise fail(f"unknown key '{key}' (expected comparison, horizons, zero_baseline, assertion)")
     known = binding.entry.situations
-    for key in ("comparison", "horizons"):
+    for key in ("comparison", "horizons", "assertion"):
         value = table.get(key)
-        if value is None and key == "horizons":
+        if value is None and key in ("horizons", "assertion"):
             continue
         if not isinstance(value, str) or value not in known:
             raise fail(f"{key} = {value!r} is not a situation generator of simulator {binding.simulator!r} "
@@ -71,7 +73,7 @@ def evaluation_plan(binding: Binding) -> EvaluationPlan:
     zero = table.get("zero_baseline", False)
     if not isinstance(zero, bool):
         raise fail(f"zero_baseline must be true or false, not {zero!r}")
-    return EvaluationPlan(table["comparison"], table.get("horizons"), zero)
+    return EvaluationPlan(table["comparison"], table.get("horizons"), zero, table.get("assertion"))
 
 
 def situation_seed(seed: int, index: int) -> int:
