@@ -58,7 +58,7 @@ class ActionBinding:
     """A PDDL action bound to an executable action; `args`: parameter group -> index of the PDDL argument.
 
     `success_model`: the learned success classifier of the executable action for this action's refined goal
-    (Ch. 6: approaching a ball is goToPose to the ball's pose without bumping it), a file
+    (Ch. 6: reaching an object's pose without bumping it is a navigation to that pose), a file
     `models/<success_model>.collision.json`; where it predicts failure, subgoal assertion (Alg. 5) inserts a
     subgoal and a second action, and refinement keeps the action inside its predicted-success region (Alg. 6).
     `subgoal`: ranges of the asserted subgoal's quantities where they differ from the type defaults (e.g. the
