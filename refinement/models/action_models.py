@@ -154,7 +154,7 @@ class CollisionModel:
         """The leaves predicting success as rules with a zero linear model: intersected with a model tree's
         rules (App. C.3.3) they restrict the analytic minimization to the predicted-success region (Alg. 6)."""
         n = len(self.feature_names)
-        return [Rule(box.lower, box.upper, np.zeros(n), 0.0) for box in self.regions() if box.success]
+        return [Rule(box.lower, box.upper, np.zeros(n), 0.0) for box in self.tree.success_boxes(n)]
 
     def regions(self) -> list[LeafBox]:
         """The tree's leaves as boxes in feature space (lower < x <= upper), each predicting success or not."""
