@@ -63,6 +63,9 @@ def _print_text(report: dict) -> None:
     out(f"Domain {report['domain']}: greedy vs refined over {s['scenarios']} random '{report['comparison']}' "
         f"situations (seed {report['seed']}; problems {', '.join(s['problems'])}); {s['episodes']} where greedy "
         f"and refined both succeeded (failed: greedy {s['failed_greedy']}, refined {s['failed_refined']})\n")
+    out(f"  failure rate greedy / refined {_pct(s['failure_rate_greedy'])}% / {_pct(s['failure_rate_refined'])}%\n")
+    out(f"  penalized mean, all scenarios {_fmt(s['penalized_greedy_mean'])} s / {_fmt(s['penalized_refined_mean'])} s "
+        f"(a failure counts its time + {s['failure_penalty_s']:.0f} s; improvement {_pct(s['penalized_improvement'])}%)\n")
     out(f"  mean duration greedy (h=1)   {_fmt(s['greedy_mean'])} s\n")
     out(f"  mean duration refined (h=2)  {_fmt(s['refined_mean'])} s\n")
     out(f"  mean improvement (Eq. 5.3)   {_pct(s['improvement'])}%   (predicted {_pct(s['predicted_improvement'])}%)\n")
