@@ -199,3 +199,45 @@ def test_binding_reads_success_model_and_subgoal_ranges():
 def test_binding_rejects_bad_assertion_keys(action, message):
     with pytest.raises(BindingError, match=message):
         parse_binding(binding_data(**action), "b.toml")
+
+
+# --- the evaluation's arithmetic (Table 6.1) ---------------------------------------------------------------
+
+def _row(inserted, predicted, plain, with_, plain_t=10.0, with_t=10.0, leg=None):
+    return {"inserted": inserted, "predicted_success": predicted, "plain_ok": plain == "success",
+            "plain_outcome": plain, "plain_time": plain_t, "with_ok": with_ == "success", "with_outcome": with_,
+            "with_time": with_t, "with_failed_leg": leg, "methods": ["ga"] if inserted else [],
+            "optimizer_seconds": 0.1 if inserted else 0.0}
+
+
+def test_summary_counts_avoided_collisions_needless_assertions_and_table_6_1():
+    from tailor.refinement.evaluation.assertion import summarize_assertion
+
+    rows = [_row(True, False, "collision", "success"),  # avoided
+            _row(True, False, "collision", "collision", leg="final"),  # not avoided
+            _row(True, False, "success", "success", 10.0, 12.0),  # needless, 20% slower
+            _row(True, False, "success", "success", 10.0, 11.0),  # needless, 10% slower
+            _row(False, True, "success", "success"), _row(False, True, "success", "success"),
+            _row(False, True, "collision", "collision", leg="final"),  # a false success
+            _row(False, True, "success", "success")]
+    s = summarize_assertion(rows)
+    assert s["episodes"] == 8 and s["success_without"] == 5 / 8 and s["success_with"] == 6 / 8
+    assert s["collisions"] == 3 and s["collisions_avoided"] == pytest.approx(1 / 3)
+    assert s["needless_assertions"] == 2 / 8 and s["needless_cost"] == pytest.approx(0.15)
+    assert s["asserted"] == 4 / 8 and s["new_failures"] == 0 and s["failed_legs_with"] == {"final": 2}
+    assert s["table_before"] == {"predicted_fail_observed_fail": 2 / 8, "predicted_fail_observed_success": 2 / 8,
+                                 "predicted_success_observed_fail": 1 / 8,
+                                 "predicted_success_observed_success": 3 / 8}
+    assert s["table_after"]["predicted_fail_observed_success"] == 3 / 8
+    assert s["table_after"]["predicted_success_observed_fail"] == 1 / 8
+
+
+def test_evaluate_assertion_json_has_the_issue_keys(capsys):
+    from tailor.refinement.cli.main import main
+
+    assert main(["evaluate", "soccer", "--assertion", "--episodes", "3", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    for key in ("episodes", "success_without", "success_with", "collisions_avoided", "needless_assertions",
+                "needless_cost", "table_before", "table_after"):
+        assert key in data
+    assert data["episodes"] == 3 and data["situations"] == "approach"

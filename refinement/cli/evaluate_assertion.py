@@ -27,8 +27,10 @@ def _print_text(report: dict) -> None:
         f"({_pct(s['collisions_avoided_and_succeeded'])} avoided and succeeded)\n")
     out(f"  subgoal asserted              {_pct(s['asserted'])} of the situations\n")
     out(f"  needless assertions           {_pct(s['needless_assertions'])} of the situations "
-        f"(plain would have succeeded), slower there by {_pct(s['needless_cost'])} on average\n")
-    out(f"  failures with assertion where plain succeeded: {s['new_failures']}\n")
+        f"(plain would have succeeded), slower there by {_pct(s['needless_cost'])} on average "
+        f"(median {_pct(s['needless_cost_median'])})\n")
+    legs = ", ".join(f"{k} {v}" for k, v in s["failed_legs_with"].items()) or "none"
+    out(f"  failures with assertion where plain succeeded: {s['new_failures']} (failed action: {legs})\n")
     ms = s["optimizer_ms_median"]
     out(f"  optimizer                     {', '.join(s['optimizers']) or '-'}; median "
         f"{'-' if ms is None else f'{ms:.0f}'} ms per asserted situation\n")

@@ -57,6 +57,7 @@ def assertion_episode(job: Job, index: int, objects: dict, setup: AssertionSetup
            "predicted_success": predicted_success,
            "plain_ok": plain.succeeded, "plain_outcome": _outcome(plain), "plain_time": plain.duration,
            "with_ok": result.succeeded, "with_outcome": _outcome(result), "with_time": result.duration,
+           "with_failed_leg": _failed_leg(result, refined.sequence),
            "predicted_plain": plain_refined.predicted_total, "predicted_with": refined.predicted_total,
            "methods": sorted({w.method for w in refined.windows}),
            "optimizer_seconds": sum(w.seconds for w in refined.windows),
@@ -64,6 +65,14 @@ def assertion_episode(job: Job, index: int, objects: dict, setup: AssertionSetup
     if keep:
         row.update(plain_result=plain, with_result=result, sequence=refined.sequence, plain_sequence=sequence)
     return row
+
+
+def _failed_leg(result, sequence) -> str | None:
+    """Which action of the executed sequence failed: "to subgoal" (reaching an asserted subgoal), "final"."""
+    for k, r in enumerate(result.results):
+        if r.outcome != "success":
+            return "to subgoal" if "to the subgoal" in sequence.actions[k].origin else "final"
+    return None
 
 
 def _outcome(result) -> str:
@@ -115,9 +124,11 @@ def summarize_assertion(rows: list[dict]) -> dict:
         "asserted": _share(inserted),
         "needless_assertions": _share(needless),
         "needless_cost": float(np.mean(cost)) if cost else None,
+        "needless_cost_median": float(np.median(cost)) if cost else None,
         "failures_without": _counts(r["plain_outcome"] for r in rows),
         "failures_with": _counts(r["with_outcome"] for r in rows),
         "new_failures": int((plain_ok & ~with_ok).sum()),
+        "failed_legs_with": _counts(r["with_failed_leg"] or "success" for r in rows),
         "table_before": confusion_table(predicted, plain_ok),
         "table_after": confusion_table(predicted, with_ok),
         "optimizers": methods,
