@@ -40,7 +40,7 @@ ORACLE_PASSES = 2  # coordinate-search passes over all free parameters
 ORACLE_LINE_VALUES = 9  # values per free parameter in a coordinate-search line
 FULL_CIRCLE = 2 * math.pi - 1e-9
 # s, what a failed execution costs on top of the time it ran, in the penalized means (every scenario counted):
-# a failure is as bad as waiting for one more action to time out (the soccer actions' timeout)
+# a failure is as bad as waiting for one more action to time out (30 s: the mobile robot's action timeout)
 FAILURE_PENALTY_S = 30.0
 
 
