@@ -60,6 +60,7 @@ class ExecutableAction:
     params: tuple[Parameter, ...]  # in the ActionSpec's order: observed then internal (x, y, phi, v, xg, ...)
     guard: str = ""
     origin: str = ""
+    guard_margin: float = 0.0  # share of each free range around a choice where the guard must predict success
 
     def free_parameters(self) -> tuple[Parameter, ...]:
         return tuple(p for p in self.params if p.free)
@@ -80,14 +81,15 @@ class ExecutableAction:
     def to_json(self) -> dict:
         data = {"step": self.step, "pddl": self.pddl, "action": self.action,
                 "params": [p.to_json() for p in self.params]}
-        data.update({k: v for k, v in (("guard", self.guard), ("origin", self.origin)) if v})
+        data.update({k: v for k, v in (("guard", self.guard), ("origin", self.origin),
+                                       ("guard_margin", self.guard_margin)) if v})
         return data
 
     @classmethod
     def from_json(cls, data: Mapping) -> "ExecutableAction":
         return cls(int(data["step"]), str(data["pddl"]), str(data["action"]),
                    tuple(Parameter.from_json(p) for p in data["params"]), str(data.get("guard", "")),
-                   str(data.get("origin", "")))
+                   str(data.get("origin", "")), float(data.get("guard_margin", 0.0)))
 
 
 @dataclass(frozen=True)

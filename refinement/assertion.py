@@ -115,12 +115,12 @@ def assert_subgoals(sequence: ActionSequence, binding: Binding, success_models: 
         check = Assertion(action.step, action.pddl, action.action, bound.success_model, bool(success.any()),
                           float(success.mean()), leaf, samples)
         if check.predicted_success:
-            actions.append(replace(action, guard=bound.success_model))
+            actions.append(replace(action, guard=bound.success_model, guard_margin=bound.success_margin))
         else:
             name = _subgoal_name(current, action.step)
             check = replace(check, subgoal=name)
             first, second = _split(action, bound, name, binding, object_types, check)
-            actions += [first, replace(second, guard=bound.success_model)]
+            actions += [first, replace(second, guard=bound.success_model, guard_margin=bound.success_margin)]
             current = replace(current, actions=(*current.actions, first))  # the name is now taken
         assertions.append(check)
     return AssertedSequence(replace(sequence, actions=tuple(actions)), tuple(assertions))

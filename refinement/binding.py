@@ -62,7 +62,9 @@ class ActionBinding:
     `models/<success_model>.collision.json`; where it predicts failure, subgoal assertion (Alg. 5) inserts a
     subgoal and a second action, and refinement keeps the action inside its predicted-success region (Alg. 6).
     `subgoal`: ranges of the asserted subgoal's quantities where they differ from the type defaults (e.g. the
-    speeds the action's models were trained for).
+    speeds the action's models were trained for). `success_margin`: a chosen parameterization is valid only if
+    success is also predicted this share of each free parameter's range to either side (an optimizer otherwise
+    picks the very edge of the predicted-success region, where the classifier is least right).
     """
 
     pddl: str
@@ -71,6 +73,7 @@ class ActionBinding:
     spec: ActionSpec
     success_model: str | None = None
     subgoal: Mapping[str, Range] = field(default_factory=dict)  # ranges of an asserted subgoal's quantities
+    success_margin: float = 0.0  # the success prediction must hold this share of each free range around a choice
 
 
 @dataclass(frozen=True)
@@ -227,7 +230,7 @@ def _index(where: str, value: Any, fail) -> int:
 
 def _action(name: str, table: Mapping[str, Any], entry: SimulatorEntry, fail) -> ActionBinding:
     where = f"[actions.{name}]"
-    _check_keys(table, {"executable", "success_model", "subgoal", *GROUPS}, where, fail)
+    _check_keys(table, {"executable", "success_model", "subgoal", "success_margin", *GROUPS}, where, fail)
     executable = table.get("executable")
     if not isinstance(executable, str) or executable not in entry.actions:
         hint = _did_you_mean(executable, entry.actions) if isinstance(executable, str) else ""
@@ -261,8 +264,13 @@ def _action(name: str, table: Mapping[str, Any], entry: SimulatorEntry, fail) ->
     if subgoal and success_model is None:
         raise fail(f"{where} subgoal: ranges of an asserted subgoal need a success_model (nothing is asserted)")
     subgoal = _ranges(f"{where} subgoal", subgoal, set(), spec.internal_quantities, fail)
+    margin = table.get("success_margin", 0.0)
+    if isinstance(margin, bool) or not isinstance(margin, (int, float)) or not 0.0 <= margin < 0.5:
+        raise fail(f"{where} success_margin must be a share of a free range in [0, 0.5), not {margin!r}")
+    if margin and success_model is None:
+        raise fail(f"{where} success_margin needs a success_model")
     return ActionBinding(name.lower(), executable, MappingProxyType(args), spec, success_model,
-                         MappingProxyType(subgoal))
+                         MappingProxyType(subgoal), float(margin))
 
 
 def _predicate(name: str, table: Mapping[str, Any], entry: SimulatorEntry, fail) -> PredicateBinding:

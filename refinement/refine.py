@@ -67,9 +67,24 @@ def action_term(action: ExecutableAction, model: ActionModel, free: tuple[FreePa
 
     if success_model is None:
         return Term(model=model.duration, features=features, label=action.pddl)
-    return Term(model=model.duration, features=features, label=action.pddl,
-                valid=lambda theta: success_model.predict_success(params(theta)),
-                region=success_model, region_features=lambda theta: success_model.features(params(theta)))
+    margin = [0.0] * len(free)
+    for _, j in free_slots:
+        margin[j] = action.guard_margin * (free[j].high - free[j].low)
+
+    def valid(theta: np.ndarray) -> np.ndarray:
+        """Success predicted at theta and, with a margin, that far to either side of every free value used."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        ok = np.asarray(success_model.predict_success(params(theta)), dtype=bool)
+        for _, j in free_slots if action.guard_margin else ():
+            for sign in (-1.0, 1.0):
+                moved = theta.copy()
+                moved[:, j] = np.clip(moved[:, j] + sign * margin[j], free[j].low, free[j].high)
+                ok &= np.asarray(success_model.predict_success(params(moved)), dtype=bool)
+        return ok
+
+    return Term(model=model.duration, features=features, label=action.pddl, valid=valid,
+                region=success_model, region_features=lambda theta: success_model.features(params(theta)),
+                region_margin=tuple(margin))
 
 
 class _NoDuration:
@@ -108,7 +123,7 @@ def guard_for(action: ExecutableAction, success_models: Mapping[str, object] | N
 def predicted_success(sequence: ActionSequence, success_models: Mapping[str, object] | None) -> tuple[bool, ...]:
     """Per action of a bound sequence: does its guard predict success (True where it has none)?"""
     out = []
-    for action in sequence.actions:
+    for action in sequence.actions:  # at the chosen values (the margin is the optimizers' concern)
         guard = guard_for(action, success_models)
         out.append(True if guard is None else bool(guard.predict_success(action.values()[None, :])[0]))
     return tuple(out)

@@ -241,3 +241,35 @@ def test_evaluate_assertion_json_has_the_issue_keys(capsys):
                 "needless_cost", "table_before", "table_after"):
         assert key in data
     assert data["episodes"] == 3 and data["situations"] == "approach"
+
+
+def test_success_margin_keeps_choices_off_the_edge_of_the_region(soccer):
+    """With the binding's margin the refined approach heading of `score` is predicted to succeed also 5% of the
+    heading range to either side; without it the optimizer may sit on the very edge."""
+    from dataclasses import replace as copy
+
+    from tailor.refinement.pipeline import prepare as prepare_task
+
+    score = prepare_task(resolve_task("soccer", "score"))
+    guarded = score.sequence.actions[0]
+    assert guarded.guard == "goToPose" and guarded.guard_margin == 0.05
+    classifier = score.success_models["goToPose"]
+    refined = refine(score.sequence, score.models, 2, "analytic", 0, score.success_models)
+    phi = next(p for p in refined.sequence.actions[0].params if p.id == "pos2.phi")
+    width = 0.05 * (phi.high - phi.low)
+    for shift in (-width, 0.0, width):
+        row = refined.sequence.actions[0].values()
+        row[6] = min(max(phi.value + shift, phi.low), phi.high)
+        assert classifier.predict_success(row[None, :])[0]
+    edge = copy(score.sequence, actions=(copy(guarded, guard_margin=0.0), *score.sequence.actions[1:]))
+    plain = refine(edge, score.models, 2, "analytic", 0, score.success_models)
+    assert plain.predicted_total <= refined.predicted_total  # the margin costs predicted time, never gains it
+
+
+def test_binding_rejects_a_bad_margin():
+    with pytest.raises(BindingError, match="success_margin must be a share"):
+        parse_binding(binding_data(success_model="goToPose", success_margin=0.7), "b.toml")
+    with pytest.raises(BindingError, match="success_margin needs a success_model"):
+        parse_binding(binding_data(success_margin=0.1), "b.toml")
+    b = parse_binding(binding_data(success_model="goToPose", success_margin=0.1), "b.toml")
+    assert b.actions["approachball"].success_margin == 0.1

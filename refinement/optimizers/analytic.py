@@ -120,6 +120,19 @@ def _axis_shape(n_rules: int, n_free: int, j: int, n_pieces: int) -> tuple[int, 
     return tuple(shape)
 
 
+def _inside(boxes, margin: tuple[float, ...], low: np.ndarray, high: np.ndarray):
+    """Region boxes shrunk by `margin` per free parameter (not at the ends of the range, beyond which there is
+    nothing to be robust against); boxes that vanish are dropped."""
+    if not margin or not any(margin):
+        return boxes
+    lo, hi, grad, const = boxes
+    m = np.asarray(margin, dtype=float)
+    lo = np.where(lo > low, lo + m, lo)
+    hi = np.where(hi < high, hi - m, hi)
+    keep = np.all(lo <= hi, axis=1)
+    return lo[keep], hi[keep], grad[keep], const[keep]
+
+
 def merge(first, second):
     """C.3.3: every pair of rules, boxes intersected and linear models summed; contradictory pairs dropped."""
     lo1, hi1, g1, c1 = first
@@ -146,7 +159,8 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
         if term.region is not None:
             region_term = replace(term, features=term.region_features)
             rules = region_rules(term.region)
-            merged = merge(merged, term_boxes(detect(region_term, low, high, names), rules))
+            merged = merge(merged, _inside(term_boxes(detect(region_term, low, high, names), rules),
+                                           term.region_margin, low, high))
             regions += 1
     lo, hi, grad, const = merged
     if len(lo) == 0:

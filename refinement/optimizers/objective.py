@@ -35,6 +35,7 @@ class Term:
     # (axis-aligned boxes with a zero linear model) over region_features(theta) (batch, n_region_features)
     region: object | None = None
     region_features: Callable[[np.ndarray], np.ndarray] | None = None
+    region_margin: tuple[float, ...] = ()  # per free parameter: how far inside the region a choice must lie
 
 
 @dataclass(frozen=True, eq=False)
