@@ -142,7 +142,7 @@ BAD_BINDINGS = [
      r"\(known: goToPose, approachBall, dribbleBall\)"),
     (VALID_ACTION + "observd = 0\n",
      r"\[actions.go\]: unknown key 'observd' \(expected one of executable, internal, observed, subgoal, "
-     r"success_model\)"),
+     r"success_margin, success_model\)"),
     ('[actions.go]\nexecutable = "goToPose"\nobserved = 0\n',
      r"\[actions.go\] missing 'internal': the PDDL argument index that supplies goToPose's internal "
      r"parameters xg, yg, phig, vg"),
