@@ -174,4 +174,4 @@ def test_cli_refine_with_pocl(capsys):
     assert main(["refine", "soccer", "score", "--planner", "pocl", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["planner"] == "tailor-pocl"
-    assert [a["action"] for a in data["actions"]] == ["approachBall", "dribbleBall"]
+    assert [a["action"] for a in data["actions"]] == ["goToPose", "dribbleBall"]  # approachball: goToPose (Ch. 6)
