@@ -273,3 +273,23 @@ def test_binding_rejects_a_bad_margin():
         parse_binding(binding_data(success_margin=0.1), "b.toml")
     b = parse_binding(binding_data(success_model="goToPose", success_margin=0.1), "b.toml")
     assert b.actions["approachball"].success_margin == 0.1
+
+
+def test_a_missing_or_broken_success_model_is_one_line(tmp_path, capsys):
+    import shutil
+    from pathlib import Path
+
+    from tailor.refinement.cli.main import main
+
+    domain = tmp_path / "soccer"
+    shutil.copytree(Path(__file__).parent.parent / "domains" / "soccer", domain,
+                    ignore=shutil.ignore_patterns("training"))
+    model = domain / "models" / "goToPose.collision.json"
+    model.write_text('{"schema": "tailor.collision_model/1", "action": "goToPose"}')
+    assert main(["refine", str(domain / "domain.pddl"), "approach"]) == 12
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(model) in err[0]
+    model.unlink()
+    assert main(["refine", str(domain / "domain.pddl"), "approach"]) == 12
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no success classifier goToPose.collision.json" in err[0]
