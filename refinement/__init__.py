@@ -4,7 +4,9 @@ The Python API, read top to bottom (the same stages `tailor refine` runs):
 
     plan = planner_bridge.plan_files(domain, problem)          # AbstractPlan with causal links
     sequence = instantiate(plan, load_domain_binding(dir), belief)   # Algorithm 3: BOUND / FREE parameters
-    refined = refine(sequence, load_action_models(dir / "models"), horizon=2)   # Sec. 5.4
+    asserted = assert_subgoals(sequence, binding, success_models)     # Algorithm 5 (where a binding asks)
+    refined = refine(asserted.sequence, load_action_models(dir / "models"), horizon=2,
+                     success_models=success_models)           # Sec. 5.4, within predicted success (Alg. 6)
     result = dispatch(refined.sequence, seed=0)                # simulated durations and outcomes
 
 `instantiate`, `refine` and `dispatch` share their names with their modules, so they are imported here (an
@@ -33,6 +35,10 @@ _EXPORTS = {
     "ActionModel": "tailor.refinement.models.action_models",
     "load_action_models": "tailor.refinement.models.action_models",
     "load_collision_model": "tailor.refinement.models.action_models",
+    "load_success_models": "tailor.refinement.models.action_models",
+    "assert_subgoals": "tailor.refinement.assertion",
+    "AssertedSequence": "tailor.refinement.assertion",
+    "Assertion": "tailor.refinement.assertion",
     "ModelTree": "tailor.refinement.models.model_tree",
     "RefinedSequence": "tailor.refinement.refine",
     "OPTIMIZERS": "tailor.refinement.optimizers",

@@ -47,12 +47,20 @@ class Parameter:
 
 @dataclass(frozen=True)
 class ExecutableAction:
-    """Plan step `step` (`pddl`, e.g. "(reach f1 f2)") as executable `action` with its params."""
+    """Plan step `step` (`pddl`, e.g. "(reach f1 f2)") as executable `action` with its params.
+
+    `guard` names a success classifier whose predicted-success region the parameters must lie in (Alg. 6: the
+    duration term is invalid outside); `origin` says why subgoal assertion inserted or replaced the action
+    (empty for an action the plan step maps to as it is). Several actions may serve one plan step.
+    """
 
     step: int
     pddl: str
     action: str
     params: tuple[Parameter, ...]  # in the ActionSpec's order: observed then internal (x, y, phi, v, xg, ...)
+    guard: str = ""
+    origin: str = ""
+    guard_margin: float = 0.0  # share of each free range around a choice where the guard must predict success
 
     def free_parameters(self) -> tuple[Parameter, ...]:
         return tuple(p for p in self.params if p.free)
@@ -71,13 +79,17 @@ class ExecutableAction:
         return out
 
     def to_json(self) -> dict:
-        return {"step": self.step, "pddl": self.pddl, "action": self.action,
+        data = {"step": self.step, "pddl": self.pddl, "action": self.action,
                 "params": [p.to_json() for p in self.params]}
+        data.update({k: v for k, v in (("guard", self.guard), ("origin", self.origin),
+                                       ("guard_margin", self.guard_margin)) if v})
+        return data
 
     @classmethod
     def from_json(cls, data: Mapping) -> "ExecutableAction":
         return cls(int(data["step"]), str(data["pddl"]), str(data["action"]),
-                   tuple(Parameter.from_json(p) for p in data["params"]))
+                   tuple(Parameter.from_json(p) for p in data["params"]), str(data.get("guard", "")),
+                   str(data.get("origin", "")), float(data.get("guard_margin", 0.0)))
 
 
 @dataclass(frozen=True)

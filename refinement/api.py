@@ -36,9 +36,10 @@ class Refinement:
     """A plan refined for the fastest predicted execution: what was free, what it was set to, and why."""
 
     plan: AbstractPlan
-    instantiated: ActionSequence  # after Alg. 3: free parameters as ranges
+    instantiated: ActionSequence  # after Alg. 3 and the assert stage (Alg. 5): free parameters as ranges
     refined: RefinedSequence  # every parameter bound, with its predicted durations
     models: Path  # the folder the action models came from
+    assertions: tuple = ()  # the assert stage's decisions (tailor.refinement.assertion), with their provenance
 
     @property
     def sequence(self) -> ActionSequence:
@@ -63,6 +64,7 @@ class Refinement:
 
     def to_json(self) -> dict:
         return {"plan": self.plan.to_json(), "models": str(self.models), "horizon": self.refined.horizon,
+                "assertions": [a.to_json() for a in self.assertions],
                 "free_parameters": [{"id": pid, "low": low, "high": high, "value": self.chosen[pid]}
                                     for pid, (low, high) in self.free.items()],
                 "sequence": self.sequence.to_json(), "predicted_s": list(self.refined.predicted),
@@ -86,9 +88,10 @@ def plan(domain, problem=None, *, planner: str = DEFAULT_PLANNER, timeout: float
 
 def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 2, optimizer: str = "analytic",
            seed: int = 0, models: str | Path | None = None, planner: str = DEFAULT_PLANNER,
-           timeout: float | None = None) -> Refinement:
+           timeout: float | None = None, assertion: bool = True) -> Refinement:
     """Plan (unless `plan` is given: ours, or a SequentialPlan / PartialOrderPlan of any UP engine),
-    instantiate (Alg. 3) and refine over `horizon` actions (Sec. 5.4; 1 is greedy).
+    instantiate (Alg. 3), assert subgoals where a success model predicts failure (Alg. 5; unless `assertion`
+    is False) and refine over `horizon` actions (Sec. 5.4; 1 is greedy), as `tailor refine` does.
 
     `domain` is a bundled name, a domain folder or its domain.pddl (the binding `actions.toml` beside it says
     how its actions execute); `problem` a PDDL file, a problem name or a unified-planning Problem; `belief`
@@ -101,11 +104,14 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     from tailor.refinement.model_store import resolve_models
     from tailor.refinement.models.action_models import load_action_models
     from tailor.refinement.optimizers import OPTIMIZERS
+    from tailor.refinement.pipeline import assert_task, success_models_in
     from tailor.refinement.refine import refine as refine_sequence
 
     _check(domain, (str, Path), "domain")
     _check(seed, int, "seed")
     _check(horizon, int, "horizon")
+    if not isinstance(assertion, bool):
+        raise ArgumentTypeError(f"assertion must be bool, not {type(assertion).__name__}")
     if horizon < 1:
         raise ArgumentValueError(f"horizon must be at least 1, not {horizon}")
     if optimizer not in OPTIMIZERS:
@@ -140,9 +146,15 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
                                 f"not {type(belief).__name__}")
     sequence = instantiate(abstract, binding, belief_state)
     source = resolve_models(domain_dir, models)
+    success_models, assertions = {}, ()
+    if assertion:
+        success_models = success_models_in(source.path, binding, sequence)
+        asserted = assert_task(sequence, binding, success_models, abstract)
+        sequence, assertions = asserted.sequence, asserted.assertions
     action_models = load_action_models(source.path, tuple(sorted({a.action for a in sequence.actions})))
-    refined = refine_sequence(sequence, action_models, horizon=horizon, method=optimizer, seed=seed)
-    return Refinement(abstract, sequence, refined, source.path)
+    refined = refine_sequence(sequence, action_models, horizon=horizon, method=optimizer, seed=seed,
+                              success_models=success_models)
+    return Refinement(abstract, sequence, refined, source.path, tuple(assertions))
 
 
 def dispatch(refined, seed: int = 0) -> SequenceResult:

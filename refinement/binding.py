@@ -55,12 +55,25 @@ def read_toml(path: Path, error: type[TailorError], what: str) -> dict[str, Any]
 
 @dataclass(frozen=True)
 class ActionBinding:
-    """A PDDL action bound to an executable action; `args`: parameter group -> index of the PDDL argument."""
+    """A PDDL action bound to an executable action; `args`: parameter group -> index of the PDDL argument.
+
+    `success_model`: the learned success classifier of the executable action for this action's refined goal
+    (Ch. 6: reaching an object's pose without bumping it is a navigation to that pose), a file
+    `models/<success_model>.collision.json`; where it predicts failure, subgoal assertion (Alg. 5) inserts a
+    subgoal and a second action, and refinement keeps the action inside its predicted-success region (Alg. 6).
+    `subgoal`: ranges of the asserted subgoal's quantities where they differ from the type defaults (e.g. the
+    speeds the action's models were trained for). `success_margin`: a chosen parameterization is valid only if
+    success is also predicted this share of each free parameter's range to either side (an optimizer otherwise
+    picks the very edge of the predicted-success region, where the classifier is least right).
+    """
 
     pddl: str
     executable: str
     args: Mapping[str, int]
     spec: ActionSpec
+    success_model: str | None = None
+    subgoal: Mapping[str, Range] = field(default_factory=dict)  # ranges of an asserted subgoal's quantities
+    success_margin: float = 0.0  # the success prediction must hold this share of each free range around a choice
 
 
 @dataclass(frozen=True)
@@ -217,7 +230,7 @@ def _index(where: str, value: Any, fail) -> int:
 
 def _action(name: str, table: Mapping[str, Any], entry: SimulatorEntry, fail) -> ActionBinding:
     where = f"[actions.{name}]"
-    _check_keys(table, {"executable", *GROUPS}, where, fail)
+    _check_keys(table, {"executable", "success_model", "subgoal", "success_margin", *GROUPS}, where, fail)
     executable = table.get("executable")
     if not isinstance(executable, str) or executable not in entry.actions:
         hint = _did_you_mean(executable, entry.actions) if isinstance(executable, str) else ""
@@ -234,7 +247,30 @@ def _action(name: str, table: Mapping[str, Any], entry: SimulatorEntry, fail) ->
                 raise fail(f"{where} missing '{group}': the PDDL argument index that supplies "
                            f"{executable}'s {group} parameters {', '.join(getattr(spec, group))}")
             args[group] = _index(f"{where} {group}", table[group], fail)
-    return ActionBinding(name.lower(), executable, MappingProxyType(args), spec)
+    success_model = table.get("success_model")
+    if success_model is not None and (not isinstance(success_model, str) or not success_model.strip()):
+        raise fail(f"{where} success_model must name a success classifier file "
+                   f"(models/<name>.collision.json), not {success_model!r}")
+    if success_model is not None and not {"observed", "internal"} <= set(args):
+        raise fail(f"{where} success_model: subgoal assertion needs an action with observed and internal "
+                   f"parameters (a start and a subgoal); {executable} has {', '.join(args) or 'none'}")
+    if success_model is not None and not set(spec.observed_quantities) <= set(spec.internal_quantities):
+        raise fail(f"{where} success_model: an asserted subgoal is reached and left by {executable}, so its start "
+                   f"quantities ({', '.join(spec.observed_quantities)}) must be among its goal quantities "
+                   f"({', '.join(spec.internal_quantities)})")
+    subgoal = table.get("subgoal", {})
+    if not isinstance(subgoal, dict):
+        raise fail(f"{where} subgoal must be a table of ranges, e.g. subgoal = {{ v = [0.0, 0.6] }}")
+    if subgoal and success_model is None:
+        raise fail(f"{where} subgoal: ranges of an asserted subgoal need a success_model (nothing is asserted)")
+    subgoal = _ranges(f"{where} subgoal", subgoal, set(), spec.internal_quantities, fail)
+    margin = table.get("success_margin", 0.0)
+    if isinstance(margin, bool) or not isinstance(margin, (int, float)) or not 0.0 <= margin < 0.5:
+        raise fail(f"{where} success_margin must be a share of a free range in [0, 0.5), not {margin!r}")
+    if margin and success_model is None:
+        raise fail(f"{where} success_margin needs a success_model")
+    return ActionBinding(name.lower(), executable, MappingProxyType(args), spec, success_model,
+                         MappingProxyType(subgoal), float(margin))
 
 
 def _predicate(name: str, table: Mapping[str, Any], entry: SimulatorEntry, fail) -> PredicateBinding:

@@ -69,7 +69,7 @@ def instantiate(plan: AbstractPlan, binding: Binding, belief: BeliefState,
             for name, quantity in zip(names, quantities):
                 key = (obj.lower(), quantity)
                 if key not in composed:
-                    types = _type_chain(obj, binding, object_types)
+                    types = type_chain(obj, binding, object_types)
                     on_links = facts.get(obj.lower(), ())
                     composed[key] = _compose(obj, quantity, on_links, types, binding, belief)
                 value, low, high = composed[key]
@@ -94,7 +94,7 @@ def _facts_by_object(plan: AbstractPlan, binding: Binding) -> dict[str, list[_Fa
     return out
 
 
-def _type_chain(obj: str, binding: Binding, object_types: ObjectTypes | None) -> tuple[str, ...]:
+def type_chain(obj: str, binding: Binding, object_types: ObjectTypes | None) -> tuple[str, ...]:
     """The type names whose defaults apply to `obj`, most specific first, ending with `default`."""
     declared = None if object_types is None else object_types.get(obj)
     if declared is None:

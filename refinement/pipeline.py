@@ -1,4 +1,4 @@
-"""The pipeline read top to bottom (Algorithm 4 without assertion): plan -> instantiate -> refine -> dispatch.
+"""The pipeline read top to bottom (Algorithm 4): plan -> instantiate -> assert -> refine -> dispatch.
 
 One named function per stage; `prepare` strings the first ones together for a domain/problem pair on disk
 (the PDDL is parsed once, by the planner: the plan carries the objects, types and initial facts).
@@ -6,18 +6,19 @@ One named function per stage; `prepare` strings the first ones together for a do
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from tailor.planner_bridge import DEFAULT_PLANNER, AbstractPlan, plan_files, resolve_problem
 from tailor.refinement.action_sequence import ActionSequence
+from tailor.refinement.assertion import AssertedSequence, Assertion, assert_subgoals
 from tailor.refinement.belief import BeliefState, belief_path_for, load_belief
 from tailor.refinement.binding import BINDING_FILE, Binding, load_domain_binding
 from tailor.refinement.dispatch import dispatch
 from tailor.errors import BindingError, ModelFileError
 from tailor.refinement.instantiate import instantiate
 from tailor.refinement.model_store import MODELS as MODELS_DIR
-from tailor.refinement.models.action_models import ActionModel, load_action_models
+from tailor.refinement.models.action_models import ActionModel, load_action_models, load_success_models
 from tailor.refinement.refine import RefinedSequence, refine
 from tailor.sims.episode import SequenceResult
 
@@ -44,13 +45,17 @@ class Task:
 
 @dataclass(frozen=True)
 class Prepared:
-    """Everything before refinement: the plan, its instantiated sequence and the models to refine it with."""
+    """Everything before refinement: the plan, its sequence (instantiated, subgoals asserted) and the models to
+    refine it with; `instantiated` is the sequence before assertion, `assertions` what Algorithm 5 decided."""
 
     task: Task
     plan: AbstractPlan
     sequence: ActionSequence
     models: dict[str, ActionModel]
     binding: Binding
+    success_models: dict = field(default_factory=dict)
+    assertions: tuple[Assertion, ...] = ()
+    instantiated: ActionSequence | None = None
 
 
 def resolve_task(domain_arg: str, problem_arg: str, belief: str | Path | None = None,
@@ -75,6 +80,25 @@ def load_models(task: Task, sequence: ActionSequence) -> dict[str, ActionModel]:
     return load_action_models(models_dir, needed)
 
 
+def success_models_for(task: Task, binding: Binding, sequence: ActionSequence) -> dict:
+    """The success classifiers the binding names for the sequence's PDDL actions (subgoal assertion)."""
+    return success_models_in(task.models_dir, binding, sequence)
+
+
+def success_models_in(models_dir: Path, binding: Binding, sequence: ActionSequence) -> dict:
+    """The success classifiers in `models_dir` that the binding names for the sequence's PDDL actions."""
+    names = {binding.action(a.pddl.strip("()").split()[0]).success_model for a in sequence.actions}
+    names.discard(None)
+    return load_success_models(models_dir, names) if names else {}
+
+
+def assert_task(sequence: ActionSequence, binding: Binding, success_models: dict, plan: AbstractPlan | None = None
+                ) -> AssertedSequence:
+    """Algorithm 5 (see tailor.refinement.assertion), the object types taken from the plan."""
+    types = plan.object_types if plan is not None and plan.objects else None
+    return assert_subgoals(sequence, binding, success_models, types)
+
+
 def plan_task(task: Task, planner: str = DEFAULT_PLANNER, timeout: float | None = None) -> AbstractPlan:
     return plan_files(task.domain, task.problem, planner=planner, timeout=timeout)
 
@@ -87,11 +111,17 @@ def instantiate_task(task: Task, plan: AbstractPlan, binding: Binding, belief: B
     return instantiate(plan, binding, belief)
 
 
-def prepare(task: Task, planner: str = DEFAULT_PLANNER, timeout: float | None = None) -> Prepared:
+def prepare(task: Task, planner: str = DEFAULT_PLANNER, timeout: float | None = None, assertion: bool = True
+            ) -> Prepared:
+    """Plan, instantiate and (unless `assertion` is False: the plain executable actions) assert subgoals."""
     binding = load_binding(task)  # a bad binding fails before the planner runs
     plan = plan_task(task, planner, timeout)
-    sequence = instantiate_task(task, plan, binding)
-    return Prepared(task, plan, sequence, load_models(task, sequence), binding)
+    instantiated = instantiate_task(task, plan, binding)
+    success_models = success_models_for(task, binding, instantiated) if assertion else {}
+    asserted = assert_task(instantiated, binding, success_models, plan) if assertion else None
+    sequence = asserted.sequence if asserted else instantiated
+    return Prepared(task, plan, sequence, load_models(task, sequence), binding, success_models,
+                    asserted.assertions if asserted else (), instantiated)
 
 
 @dataclass(frozen=True)
@@ -103,6 +133,7 @@ class Outcome:
 
 
 def refine_and_dispatch(prepared: Prepared, horizon: int, method: str, seed: int, simulate: bool) -> Outcome:
-    refined = refine(prepared.sequence, prepared.models, horizon=horizon, method=method, seed=seed)
+    refined = refine(prepared.sequence, prepared.models, horizon=horizon, method=method, seed=seed,
+                     success_models=prepared.success_models)
     simulated = dispatch(refined.sequence, seed=seed) if simulate else None
     return Outcome(refined, simulated)

@@ -8,7 +8,7 @@ action that reaches it only.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Mapping
 
 import numpy as np
@@ -37,11 +37,12 @@ class RefinedSequence:
 
 
 def action_term(action: ExecutableAction, model: ActionModel, free: tuple[FreeParameter, ...],
-                assignment: Mapping[str, float]) -> Term:
+                assignment: Mapping[str, float], success_model=None) -> Term:
     """The predicted duration of one action as a function of the window's free parameters.
 
     Parameters already fixed (bound, or chosen in an earlier window) are baked in; the others are read from
-    the columns of theta.
+    the columns of theta. With a `success_model` (the action's guard) the term is invalid where it predicts
+    failure (Alg. 6), and its success leaves are the region the analytic optimizer intersects with.
     """
     column = {p.id: j for j, p in enumerate(free)}
     base = np.empty(len(action.params))
@@ -55,14 +56,78 @@ def action_term(action: ExecutableAction, model: ActionModel, free: tuple[FreePa
         else:
             base[k] = assignment[param.id]
 
-    def features(theta: np.ndarray) -> np.ndarray:
+    def params(theta: np.ndarray) -> np.ndarray:
         theta = np.atleast_2d(theta)
-        params = np.repeat(base[None, :], len(theta), axis=0)
+        out = np.repeat(base[None, :], len(theta), axis=0)
         for k, j in free_slots:
-            params[:, k] = theta[:, j]
-        return model.features(params)
+            out[:, k] = theta[:, j]
+        return out
 
-    return Term(model=model.duration, features=features, label=action.pddl)
+    def features(theta: np.ndarray) -> np.ndarray:
+        return model.features(params(theta))
+
+    if success_model is None:
+        return Term(model=model.duration, features=features, label=action.pddl)
+    margin = [0.0] * len(free)
+    for _, j in free_slots:
+        margin[j] = action.guard_margin * (free[j].high - free[j].low)
+
+    def valid(theta: np.ndarray) -> np.ndarray:
+        """Success predicted at theta and, with a margin, that far to either side of every free value used."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        ok = np.asarray(success_model.predict_success(params(theta)), dtype=bool)
+        for _, j in free_slots if action.guard_margin else ():
+            for sign in (-1.0, 1.0):
+                moved = theta.copy()
+                moved[:, j] = np.clip(moved[:, j] + sign * margin[j], free[j].low, free[j].high)
+                ok &= np.asarray(success_model.predict_success(params(moved)), dtype=bool)
+        return ok
+
+    return Term(model=model.duration, features=features, label=action.pddl, valid=valid,
+                region=success_model, region_features=lambda theta: success_model.features(params(theta)),
+                region_margin=tuple(margin))
+
+
+class _NoDuration:
+    """A term that adds nothing to the predicted duration: one rule covering everything, zero linear model."""
+
+    def predict(self, features: np.ndarray) -> np.ndarray:
+        return np.zeros(len(np.atleast_2d(features)))
+
+    def rules(self) -> list:
+        from tailor.refinement.models.rules import Rule
+
+        return [Rule(np.array([-np.inf]), np.array([np.inf]), np.zeros(1), 0.0)]
+
+
+_NO_DURATION = _NoDuration()
+
+
+def guard_term(action: ExecutableAction, model: ActionModel, free: tuple[FreeParameter, ...],
+               assignment: Mapping[str, float], success_model) -> Term:
+    """Only the validity of a guarded action beyond the horizon (its duration is not part of this window)."""
+    term = action_term(action, model, free, assignment, success_model)
+    return replace(term, model=_NO_DURATION, features=lambda theta: np.zeros((len(np.atleast_2d(theta)), 1)),
+                   label=f"guard of {action.pddl}")
+
+
+def guard_for(action: ExecutableAction, success_models: Mapping[str, object] | None):
+    """The success classifier an action's parameters must satisfy (Alg. 6), or None if it has no guard."""
+    if not action.guard:
+        return None
+    if success_models is None or action.guard not in success_models:
+        raise ModelFileError(f"step {action.step} {action.action} is guarded by success model {action.guard!r}, "
+                             "which is not loaded")
+    return success_models[action.guard]
+
+
+def predicted_success(sequence: ActionSequence, success_models: Mapping[str, object] | None) -> tuple[bool, ...]:
+    """Per action of a bound sequence: does its guard predict success (True where it has none)?"""
+    out = []
+    for action in sequence.actions:  # at the chosen values (the margin is the optimizers' concern)
+        guard = guard_for(action, success_models)
+        out.append(True if guard is None else bool(guard.predict_success(action.values()[None, :])[0]))
+    return tuple(out)
 
 
 def model_for(action: ExecutableAction, models: Mapping[str, ActionModel]) -> ActionModel:
@@ -87,8 +152,13 @@ def predicted_durations(sequence: ActionSequence, models: Mapping[str, ActionMod
 
 
 def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon: int = 2,
-           method: str = "analytic", seed: int = 0) -> RefinedSequence:
-    """Bind every free parameter of `sequence`, h actions at a time, minimizing summed predicted duration."""
+           method: str = "analytic", seed: int = 0, success_models: Mapping[str, object] | None = None
+           ) -> RefinedSequence:
+    """Bind every free parameter of `sequence`, h actions at a time, minimizing summed predicted duration.
+
+    Guarded actions (subgoal assertion) take their success classifier from `success_models` by name: the
+    optimizers consider only parameterizations it predicts to succeed (Alg. 6).
+    """
     if horizon < 1:
         raise ValueError("the horizon must be at least 1")
     actions = sequence.actions
@@ -99,15 +169,27 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
         window = actions[i:i + horizon]
         free: list[FreeParameter] = []
         seen: set[str] = set()
-        for action in window:
+
+        def take(action: ExecutableAction) -> None:
             for p in action.params:
                 if p.free and p.id not in assignment and p.id not in seen:
                     seen.add(p.id)
                     free.append(FreeParameter(p.id, p.low, p.high))
+
+        for action in window:
+            take(action)
         if not any(p.free and p.id not in assignment for p in actions[i].params):
             continue  # action i's subgoal is already fixed; nothing of it to choose in this window
+        # a guarded action beyond the horizon that shares a free parameter still constrains it (Alg. 6): it
+        # joins as a validity-only term, its other open parameters chosen with the window's (not fixed yet)
+        beyond = [a for a in actions[i + horizon:] if a.guard and any(p.id in seen for p in a.params if p.free)]
+        for action in beyond:
+            take(action)
         free_t = tuple(free)
-        terms = tuple(action_term(a, model_for(a, models), free_t, assignment) for a in window)
+        terms = tuple(action_term(a, model_for(a, models), free_t, assignment, guard_for(a, success_models))
+                      for a in window)
+        terms += tuple(guard_term(a, model_for(a, models), free_t, assignment, guard_for(a, success_models))
+                       for a in beyond)
         result = optimize(Objective(free=free_t, terms=terms), method=method, seed=seed + i)
         windows.append(result)
         chosen = dict(zip((p.id for p in free_t), result.values))

@@ -54,6 +54,28 @@ def job_models(job: Job, sequence: ActionSequence):
     return _CACHE[key]
 
 
+def job_success_models(job: Job, sequence: ActionSequence) -> dict:
+    """The success classifiers the binding names for the sequence's actions, loaded once per process."""
+    from tailor.refinement.pipeline import success_models_for
+
+    key = ("success", str(job.task.models_dir), tuple(sorted({a.pddl.split()[0] for a in sequence.actions})))
+    if key not in _CACHE:
+        _CACHE[key] = success_models_for(job.task, job_binding(job), sequence)
+    return _CACHE[key]
+
+
+def asserted_situation(job: Job, objects: dict) -> tuple[ActionSequence, dict]:
+    """One situation through Algorithm 4 up to refinement: instantiated, subgoals asserted where the binding's
+    success classifiers predict failure; with the classifiers the refinement must respect (Alg. 6)."""
+    from tailor.refinement.pipeline import assert_task
+
+    sequence = situation_sequence(job, objects)
+    success = job_success_models(job, sequence)
+    if not success:
+        return sequence, success
+    return assert_task(sequence, job_binding(job), success, job.plan).sequence, success
+
+
 def situation_sequence(job: Job, objects: dict) -> ActionSequence:
     """The instantiated plan of `job` for one random situation (belief values per object)."""
     belief = BeliefState(MappingProxyType({k.lower(): MappingProxyType(v) for k, v in objects.items()}))

@@ -23,10 +23,14 @@ def test_soccer_binding():
     assert b.quantities == ("x", "y", "phi", "v") and b.entry.name == "soccer"
     assert b.action("gotopose").spec.internal == ("xg", "yg", "phig", "vg")
     assert {n: (a.executable, dict(a.args)) for n, a in b.actions.items()} == {
-        "approachball": ("approachBall", {"observed": 0, "internal": 1}),
+        "approachball": ("goToPose", {"observed": 0, "internal": 1}),
         "dribbleball": ("dribbleBall", {"observed": 0, "internal": 1}),
         "gotopose": ("goToPose", {"observed": 0, "internal": 1}),
     }
+    # approaching the ball is goToPose with its success classifier (Ch. 6), subgoals no faster than trained
+    assert b.action("approachball").success_model == "goToPose"
+    assert dict(b.action("approachball").subgoal) == {"v": (0.0, 0.6)}
+    assert b.action("dribbleball").success_model is None
     assert {n: (p.read, dict(p.ranges), p.scene, p.args) for n, p in b.predicates.items()} == {
         "robot": (("x", "y", "phi", "v"), {}, "robot", None),
         "ball": (("x", "y"), {}, "ball", None),
@@ -137,7 +141,8 @@ BAD_BINDINGS = [
      r"\[actions.go\] executable = 'fly' is not an executable action of simulator 'soccer' "
      r"\(known: goToPose, approachBall, dribbleBall, goToPosition\)"),
     (VALID_ACTION + "observd = 0\n",
-     r"\[actions.go\]: unknown key 'observd' \(expected one of executable, internal, observed\)"),
+     r"\[actions.go\]: unknown key 'observd' \(expected one of executable, internal, observed, subgoal, "
+     r"success_margin, success_model\)"),
     ('[actions.go]\nexecutable = "goToPose"\nobserved = 0\n',
      r"\[actions.go\] missing 'internal': the PDDL argument index that supplies goToPose's internal "
      r"parameters xg, yg, phig, vg"),

@@ -55,12 +55,12 @@ def test_zero_baseline_is_paired_with_refined_where_both_succeeded():
 
 
 def test_the_evaluation_plan_is_data_in_the_binding():
-    assert evaluation_plan(load_domain_binding(DOMAINS_DIR / "soccer")) == EvaluationPlan("score", "waypoints", False)
+    assert evaluation_plan(load_domain_binding(DOMAINS_DIR / "soccer")) == EvaluationPlan("score", "waypoints", False, "approach")
     head = 'schema = 2\nsimulator = "soccer"\n'
     for table, message in (("", r"\[evaluation\] missing"),
                            ('[evaluation]\ncomparison = "tour"\n',
                             r"\[evaluation\] comparison = 'tour' is not a situation generator of simulator 'soccer' "
-                            r"\(known: score, waypoints\)"),
+                            r"\(known: score, waypoints, approach\)"),
                            ('[evaluation]\ncomparison = "score"\nhorizon = "waypoints"\n',
                             r"\[evaluation\] unknown key 'horizon'"),
                            ('[evaluation]\ncomparison = "score"\nzero_baseline = 1\n',

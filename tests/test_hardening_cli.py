@@ -66,7 +66,7 @@ def test_a_plot_in_a_read_only_file_system_fails_before_planning(monkeypatch, ca
 
 # --- 2. model and binding files of the wrong type --------------------------------------------------------
 def test_a_model_file_of_random_bytes_is_one_line(soccer, capsys):
-    model = soccer / "models" / "approachBall.json"
+    model = soccer / "models" / "goToPose.json"  # the approach of `score` is goToPose (Ch. 6)
     model.write_bytes(bytes(range(128, 256)) * 3)
     assert main(refine(soccer)) == 12
     assert one_line(capsys.readouterr().err).startswith(f"tailor refine: error: {model}: not JSON")
@@ -97,10 +97,13 @@ def test_nan_in_a_model_file_is_not_json(soccer):
         load_action_models(soccer / "models", ("approachBall",))
 
 
-@pytest.mark.parametrize("executable", ['["approachBall"]', '{ name = "approachBall" }', "3"])
+@pytest.mark.parametrize("executable", ['["goToPose"]', '{ name = "goToPose" }', "3"])
 def test_a_binding_executable_of_the_wrong_type_names_file_and_key(soccer, capsys, executable):
     binding = soccer / "actions.toml"
-    binding.write_text(binding.read_text().replace('executable = "approachBall"', f"executable = {executable}"))
+    text = binding.read_text()
+    assert '[actions.approachball]\nexecutable = "goToPose"' in text
+    binding.write_text(text.replace('[actions.approachball]\nexecutable = "goToPose"',
+                                    f"[actions.approachball]\nexecutable = {executable}"))
     assert main(refine(soccer)) == 11
     line = one_line(capsys.readouterr().err)
     assert line.startswith(f"tailor refine: error: {binding}: [actions.approachball] executable")
@@ -229,7 +232,7 @@ def test_a_scene_the_simulator_rejects_fails_the_dry_reset():
 # --- 7. absurd but finite model coefficients -------------------------------------------------------------
 @pytest.mark.parametrize("leaf", [{"coef": 1e300}, {"intercept": -1e6}, {"intercept": 1e6}])
 def test_absurd_predictions_are_rejected_naming_the_model(soccer, capsys, leaf):
-    model = soccer / "models" / "approachBall.json"
+    model = soccer / "models" / "goToPose.json"
     data = json.loads(model.read_text())
     for row in data["duration"]["leaves"]:
         for key, value in leaf.items():
@@ -239,7 +242,7 @@ def test_absurd_predictions_are_rejected_naming_the_model(soccer, capsys, leaf):
         assert main(refine(soccer, *flags)) == 12
         captured = capsys.readouterr()
         assert "Infinity" not in captured.out
-        assert one_line(captured.err).startswith(f"tailor refine: error: {model}: step 1 approachBall: ")
+        assert one_line(captured.err).startswith(f"tailor refine: error: {model}: step 1 goToPose: ")
 
 
 def test_json_output_is_strict_json():

@@ -41,8 +41,8 @@ def table(action: ExecutableAction) -> dict[str, object]:
 def test_score_matches_the_comment_under_algorithm_3():
     seq = soccer("score")
     assert [(a.step, a.pddl, a.action) for a in seq.actions] == [
-        (1, "(approachball pos1 pos2)", "approachBall"), (2, "(dribbleball pos2 pos3)", "dribbleBall")]
-    # approachBall(x=0,y=1,phi=0,v=0, xg=3,yg=1,phig=[-pi,pi],vg=[0,0.3])
+        (1, "(approachball pos1 pos2)", "goToPose"), (2, "(dribbleball pos2 pos3)", "dribbleBall")]
+    # goToPose(x=0,y=1,phi=0,v=0, xg=3,yg=1,phig=[-pi,pi],vg=[0,0.3])
     assert table(seq.actions[0]) == {"x": 0.0, "y": 1.0, "phi": 0.0, "v": 0.0,
                                      "xg": 3.0, "yg": 1.0, "phig": (-PI, PI), "vg": (0.0, 0.3)}
     # dribbleBall(x=3,y=1,phi=[-pi,pi],v=[0,0.3], xg=1,yg=3,phig=2.6,vg=0)
@@ -115,7 +115,7 @@ def test_values_take_free_parameters_from_the_assignment():
     np.testing.assert_array_equal(approach.values(assignment), [0, 1, 0, 0, 3, 1, 1.25, 0.2])
     np.testing.assert_array_equal(dribble.values(assignment), [3, 1, 1.25, 0.2, 1, 3, 2.6, 0])
     with pytest.raises(TailorError,
-                       match=r"no value for free parameter 'pos2.phi' \(phig of approachBall, step 1\)"):
+                       match=r"no value for free parameter 'pos2.phi' \(phig of goToPose, step 1\)"):
         approach.values({"pos2.v": 0.2})
 
 

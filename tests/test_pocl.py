@@ -184,7 +184,7 @@ def test_cli_refine_with_pocl(capsys):
     assert main(["refine", "soccer", "score", "--planner", "pocl", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["planner"] == "tailor-pocl"
-    assert [a["action"] for a in data["refined"]["actions"]] == ["approachBall", "dribbleBall"]
+    assert [a["action"] for a in data["refined"]["actions"]] == ["goToPose", "dribbleBall"]  # approachball: goToPose (Ch. 6)
 
 
 # --- least commitment (planner_bridge.pocl_order and the engine's search for alternatives) ---------------------

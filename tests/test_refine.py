@@ -87,12 +87,12 @@ def test_greedy_minimizes_the_first_action_only_and_is_not_better_in_total(model
     refined = refine(sequence, models, horizon=2, method="analytic")
     first = sequence.actions[0]
     ids = [p.id for p in sequence.free_parameters()]
-    grid = [(float(models["approachBall"].predict_duration(first.values(dict(zip(ids, (phi, v))))[None])[0]))
+    grid = [(float(models["goToPose"].predict_duration(first.values(dict(zip(ids, (phi, v))))[None])[0]))
             for phi in np.linspace(-math.pi, math.pi, 721) for v in (0.0, 0.1, 0.2, 0.3)]
     assert greedy.predicted[0] <= min(grid) + 1e-9
     assert refined.predicted[0] >= greedy.predicted[0] - 1e-9  # refinement gives up speed on the approach ...
     assert refined.predicted_total <= greedy.predicted_total + 1e-9  # ... to be faster over both actions
-    # the shared parameter is one value: approachBall's goal heading is dribbleBall's start heading
+    # the shared parameter is one value: the approach's goal heading is dribbleBall's start heading
     a, d = refined.sequence.actions
     assert a.params[6].value == d.params[2].value and a.params[7].value == d.params[3].value
 
@@ -119,4 +119,4 @@ def test_a_missing_model_is_a_one_line_error(models):
 
     sequence = _sequence("score_plan.json", SCORE)
     with pytest.raises(ModelFileError, match="no action model for executable action 'dribbleBall'"):
-        refine(sequence, {"approachBall": models["approachBall"]}, horizon=2)
+        refine(sequence, {"goToPose": models["goToPose"]}, horizon=2)

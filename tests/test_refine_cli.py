@@ -31,11 +31,15 @@ def test_refine_json_matches_golden(domain, problem):
 def test_refined_score_is_consistent(capsys):
     assert main(["refine", "soccer", "score", "--json", "--simulate"]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert [a["action"] for a in data["refined"]["actions"]] == ["approachBall", "dribbleBall"]
+    # approachball is goToPose guarded by its success model (Ch. 6); here no subgoal is needed
+    assert [a["action"] for a in data["refined"]["actions"]] == ["goToPose", "dribbleBall"]
+    assert data["refined"]["actions"][0]["guard"] == "goToPose"
+    assert data["refined"]["actions"][0]["predicted_success"] is True
+    assert [a["inserted"] for a in data["assertions"]] == [False]
     free = {p["id"]: p for p in data["free_parameters"]}
     assert set(free) == {"pos2.phi", "pos2.v"}
     approach, dribble = data["refined"]["actions"]
-    # the shared subgoal: approachBall's goal heading and speed are dribbleBall's start
+    # the shared subgoal: the approach's goal heading and speed are dribbleBall's start
     assert approach["params"]["phig"] == dribble["params"]["phi"] == pytest.approx(free["pos2.phi"]["value"], abs=1e-6)
     assert approach["params"]["vg"] == dribble["params"]["v"] == pytest.approx(free["pos2.v"]["value"], abs=1e-6)
     assert 0.0 <= free["pos2.v"]["value"] <= 0.3

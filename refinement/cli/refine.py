@@ -46,12 +46,19 @@ def _fmt_param(p) -> str:
     return f"{p.name}={p.value:.3f}"
 
 
-def _execution_json(outcome) -> dict:
+def _execution_json(outcome, success_models=None) -> dict:
+    from tailor.refinement.refine import predicted_success
+
     refined, simulated = outcome.refined, outcome.simulated
+    success = predicted_success(refined.sequence, success_models) if success_models else None
     actions = []
     for k, (action, predicted) in enumerate(zip(refined.sequence.actions, refined.predicted)):
         entry = {"step": action.step, "pddl": action.pddl, "action": action.action,
                  "params": {p.name: p.value for p in action.params}, "predicted": round(predicted, 4)}
+        if action.guard:  # Alg. 6: the success model it must satisfy, and whether it does at the chosen values
+            entry.update(guard=action.guard, predicted_success=success[k] if success else None)
+        if action.origin:  # inserted by subgoal assertion: which plan step it serves, and why
+            entry["origin"] = action.origin
         if simulated is not None:
             if k < len(simulated.results):
                 entry["simulated"] = round(simulated.results[k].duration, 4)
@@ -86,8 +93,10 @@ def result_json(prepared, method: str, seed: int, outcomes: dict) -> dict:
                              "greedy": round(greedy_values[p.id], 6)}
                             for p in prepared.sequence.free_parameters()],
     }
-    data["refined"] = _execution_json(outcomes["refined"])
-    data["greedy"] = _execution_json(outcomes["greedy"])
+    if prepared.assertions:
+        data["assertions"] = [a.to_json() for a in prepared.assertions]
+    data["refined"] = _execution_json(outcomes["refined"], prepared.success_models)
+    data["greedy"] = _execution_json(outcomes["greedy"], prepared.success_models)
     return versioned("refine", data)
 
 
@@ -97,9 +106,16 @@ def _print_text(prepared, method: str, outcomes: dict) -> None:
     out = sys.stdout.write
     plan = prepared.plan
     out(f"Plan ({plan.planner}) for {plan.domain}/{plan.problem}:\n{render_text(plan)}\n")
-    out("Instantiated action sequence (free parameters as [low, high]):\n")
+    asserted = " and subgoals asserted" if prepared.assertions else ""
+    out(f"Instantiated action sequence{asserted} (free parameters as [low, high]):\n")
     for a in prepared.sequence.actions:
         out(f"  {a.step} {a.action:<13} {a.pddl}\n      {' '.join(_fmt_param(p) for p in a.params)}\n")
+        if a.guard:
+            out(f"      guarded by success model {a.guard} (Alg. 6: invalid where it predicts failure)\n")
+        if a.origin:
+            out(f"      inserted: {a.origin}\n")
+    for check in prepared.assertions:
+        out(f"Subgoal assertion, step {check.step} {check.pddl}: {check.reason()}\n")
     free = prepared.sequence.free_parameters()
     names = [("greedy", "greedy (h=1)"), ("refined", f"refined (h={outcomes['refined'].refined.horizon}, {method})")]
     names = [(k, label) for k, label in names if k in outcomes]

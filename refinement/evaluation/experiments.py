@@ -5,11 +5,13 @@ parameter zero, and the horizons 1-4 (Table 5.3), for any domain whose binding n
     [evaluation]
     comparison = "score"     # situation generator of the simulator for greedy vs refined (Tables 5.1, 5.4)
     horizons = "waypoints"   # situation generator for the horizon experiment (Table 5.3); optional
+    assertion = "approach"   # situation generator for subgoal assertion (Table 6.1, `--assertion`); optional
     zero_baseline = false    # also dispatch every situation with its free parameters set to 0 (e.g. the arm's
                              # way-point velocities: stop at every way-point)
 
 Every situation goes through the real pipeline: a random belief state, Algorithm 3 on the problem's plan
-(planned once per problem), refinement, dispatch. All executions of one situation use the same simulator
+(planned once per problem), subgoal assertion (Alg. 5) where the binding names success models, refinement
+within their predicted-success regions (Alg. 6), dispatch. All executions of one situation use the same simulator
 seed (common random numbers), so their difference is the effect of the chosen subgoals, not of the noise.
 """
 
@@ -27,7 +29,7 @@ from tailor.refinement.binding import Binding
 from tailor.refinement.dispatch import dispatch
 from tailor.errors import BindingError
 from tailor.refinement.refine import refine
-from tailor.refinement.situations import Job, job_models, situation_sequence, stream_seed
+from tailor.refinement.situations import Job, asserted_situation, job_models, stream_seed
 
 EQUAL_BAND = 0.01  # |1 - t_refined / t_greedy| below this counts as "equal" (Table 5.4)
 AGREEMENT = 0.01  # analytic and ga agree when their predicted costs differ by at most 1%
@@ -37,6 +39,9 @@ ORACLE_GRID_LIMIT = 5000  # larger grids are searched coordinate-wise instead (s
 ORACLE_PASSES = 2  # coordinate-search passes over all free parameters
 ORACLE_LINE_VALUES = 9  # values per free parameter in a coordinate-search line
 FULL_CIRCLE = 2 * math.pi - 1e-9
+# s, what a failed execution costs on top of the time it ran, in the penalized means (every scenario counted):
+# a failure is as bad as waiting for one more action to time out (30 s: the mobile robot's action timeout)
+FAILURE_PENALTY_S = 30.0
 
 
 @dataclass(frozen=True)
@@ -46,6 +51,7 @@ class EvaluationPlan:
     comparison: str
     horizons: str | None
     zero_baseline: bool
+    assertion: str | None = None  # situation generator of the subgoal assertion experiment (Table 6.1)
 
 
 def evaluation_plan(binding: Binding) -> EvaluationPlan:
@@ -58,12 +64,12 @@ def evaluation_plan(binding: Binding) -> EvaluationPlan:
     if not table:
         raise fail("missing: the domain's binding names no situations to evaluate on (add an [evaluation] table)")
     for key in table:
-        if key not in ("comparison", "horizons", "zero_baseline"):
-            raise fail(f"unknown key '{key}' (expected comparison, horizons, zero_baseline)")
+        if key not in ("comparison", "horizons", "zero_baseline", "assertion"):
+            raise fail(f"unknown key '{key}' (expected comparison, horizons, zero_baseline, assertion)")
     known = binding.entry.situations
-    for key in ("comparison", "horizons"):
+    for key in ("comparison", "horizons", "assertion"):
         value = table.get(key)
-        if value is None and key == "horizons":
+        if value is None and key in ("horizons", "assertion"):
             continue
         if not isinstance(value, str) or value not in known:
             raise fail(f"{key} = {value!r} is not a situation generator of simulator {binding.simulator!r} "
@@ -71,7 +77,7 @@ def evaluation_plan(binding: Binding) -> EvaluationPlan:
     zero = table.get("zero_baseline", False)
     if not isinstance(zero, bool):
         raise fail(f"zero_baseline must be true or false, not {zero!r}")
-    return EvaluationPlan(table["comparison"], table.get("horizons"), zero)
+    return EvaluationPlan(table["comparison"], table.get("horizons"), zero, table.get("assertion"))
 
 
 def situation_seed(seed: int, index: int) -> int:
@@ -86,13 +92,14 @@ def zero_assignment(sequence: ActionSequence) -> dict[str, float]:
 def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: bool) -> dict:
     """One situation: greedy, refined (analytic and ga), optionally the zero baseline and the oracle."""
     seed = situation_seed(job.seed, index)
-    sequence = situation_sequence(job, objects)
+    sequence, success = asserted_situation(job, objects)
     models = job_models(job, sequence)
-    greedy = refine(sequence, models, horizon=1, method="analytic", seed=seed)
-    refined = refine(sequence, models, horizon=2, method="analytic", seed=seed)
+    greedy = refine(sequence, models, horizon=1, method="analytic", seed=seed, success_models=success)
+    refined = refine(sequence, models, horizon=2, method="analytic", seed=seed, success_models=success)
     # where the analytic minimization fell back to the GA everywhere, the GA run is that same run
     fell_back = refined.windows and all(w.method == "ga" for w in refined.windows)
-    genetic = refined if fell_back else refine(sequence, models, horizon=2, method="ga", seed=seed)
+    genetic = refined if fell_back else refine(sequence, models, horizon=2, method="ga", seed=seed,
+                                               success_models=success)
     g, r = dispatch(greedy.sequence, seed=seed), dispatch(refined.sequence, seed=seed)
     out = {"index": index, "seed": seed, "problem": job.plan.problem,
            "greedy": g.duration, "refined": r.duration, "greedy_ok": g.succeeded, "refined_ok": r.succeeded,
@@ -184,11 +191,11 @@ def _oracle(sequence: ActionSequence, seed: int, start: Mapping[str, float]) -> 
 def horizon_episode(job: Job, index: int, objects: dict, horizons: tuple[int, ...]) -> dict:
     """One situation, executed with each horizon (same simulator seed for all)."""
     seed = situation_seed(job.seed, index)
-    sequence = situation_sequence(job, objects)
+    sequence, success = asserted_situation(job, objects)
     models = job_models(job, sequence)
     out = {"index": index, "seed": seed, "problem": job.plan.problem}
     for h in horizons:
-        refined = refine(sequence, models, horizon=h, method="analytic", seed=seed)
+        refined = refine(sequence, models, horizon=h, method="analytic", seed=seed, success_models=success)
         result = dispatch(refined.sequence, seed=seed)
         out[f"h{h}"] = result.duration
         out[f"h{h}_ok"] = result.succeeded
@@ -223,6 +230,7 @@ def summarize_comparison(rows: list[dict]) -> dict:
     out = {
         "episodes": len(both),
         "scenarios": len(rows),
+        **_failure_summary(rows),
         "problems": sorted({r["problem"] for r in rows}),
         "failed_greedy": sum(not r["greedy_ok"] for r in rows),
         "failed_refined": sum(not r["refined_ok"] for r in rows),
@@ -250,6 +258,26 @@ def summarize_comparison(rows: list[dict]) -> dict:
     if rows and "zero" in rows[0]:
         out.update(_zero_summary(rows))
     return out
+
+
+def _failure_summary(rows: list[dict]) -> dict:
+    """Failure rates of greedy and refined side by side, and the means over every scenario with a failed run
+    counted as its elapsed time plus FAILURE_PENALTY_S (the means above hide failures: they keep only the
+    scenarios where both succeeded)."""
+    if not rows:
+        return {"failure_rate_greedy": None, "failure_rate_refined": None, "penalized_greedy_mean": None,
+                "penalized_refined_mean": None, "penalized_improvement": None,
+                "failure_penalty_s": FAILURE_PENALTY_S}
+    g = np.array([r["greedy"] + (0.0 if r["greedy_ok"] else FAILURE_PENALTY_S) for r in rows])
+    t = np.array([r["refined"] + (0.0 if r["refined_ok"] else FAILURE_PENALTY_S) for r in rows])
+    return {
+        "failure_rate_greedy": float(np.mean([not r["greedy_ok"] for r in rows])),
+        "failure_rate_refined": float(np.mean([not r["refined_ok"] for r in rows])),
+        "penalized_greedy_mean": float(g.mean()),
+        "penalized_refined_mean": float(t.mean()),
+        "penalized_improvement": float(np.mean(1.0 - t / g)),
+        "failure_penalty_s": FAILURE_PENALTY_S,
+    }
 
 
 def _zero_summary(rows: list[dict]) -> dict:

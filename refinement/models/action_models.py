@@ -20,6 +20,7 @@ from tailor.refinement.models.decision_tree import DecisionTree, LeafBox
 from tailor.errors import ModelFileError
 from tailor.refinement.models.features import compute_features, feature_spaces
 from tailor.refinement.models.model_tree import ModelTree
+from tailor.refinement.models.rules import Rule
 
 ACTION_MODEL_SCHEMA = "tailor.action_model/1"
 COLLISION_MODEL_SCHEMA = "tailor.collision_model/1"
@@ -143,6 +144,16 @@ class CollisionModel:
         """True where the action is predicted to reach its goal without failing, per row of (n, p)."""
         return self.tree.predict(self.features(params))
 
+    def leaf(self, params: np.ndarray) -> np.ndarray:
+        """The tree node (leaf) each row of (n, p) parameters reaches: where a prediction comes from."""
+        return self.tree.apply(self.features(params))
+
+    def success_rules(self) -> list[Rule]:
+        """The leaves predicting success as rules with a zero linear model: intersected with a model tree's
+        rules (App. C.3.3) they restrict the analytic minimization to the predicted-success region (Alg. 6)."""
+        n = len(self.feature_names)
+        return [Rule(box.lower, box.upper, np.zeros(n), 0.0) for box in self.tree.success_boxes(n)]
+
     def regions(self) -> list[LeafBox]:
         """The tree's leaves as boxes in feature space (lower < x <= upper), each predicting success or not."""
         return self.tree.leaf_boxes(len(self.feature_names))
@@ -195,6 +206,18 @@ def load_action_models(models_dir: Path, actions: tuple[str, ...] | None = None)
 def load_collision_model(path: Path) -> CollisionModel:
     """A success classifier, `<models_dir>/<action>.collision.json`."""
     return CollisionModel.from_json(read_json(Path(path)), str(path))
+
+
+def load_success_models(models_dir: Path, names) -> dict[str, CollisionModel]:
+    """The success classifiers `<name>.collision.json` in `models_dir` for each of `names`, keyed by name."""
+    models = {}
+    for name in sorted(set(names)):
+        path = Path(models_dir) / f"{name}{COLLISION_SUFFIX}"
+        if not path.is_file():
+            raise ModelFileError(f"no success classifier {path.name} for subgoal assertion (train it with "
+                                 "`tailor train`: [training.classifiers])", file=str(path))
+        models[name] = load_collision_model(path)
+    return models
 
 
 def read_json(path: Path) -> dict:

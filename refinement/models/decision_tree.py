@@ -115,6 +115,24 @@ class DecisionTree:
                                                      self.threshold, lambda k: self.children_left[k] == LEAF,
                                                      n_features)]
 
+    def success_boxes(self, n_features: int) -> list[LeafBox]:
+        """The leaves predicting success, each box shrunk to where `predict` (which compares features as float32)
+        surely reaches it: every point inside is predicted to succeed, also next to a split (for optimizers that
+        place values on box bounds)."""
+        out = []
+        for box in self.leaf_boxes(n_features):
+            if not box.success:
+                continue
+            with np.errstate(over="ignore"):
+                low32, high32 = box.lower.astype(np.float32), box.upper.astype(np.float32)
+            # x > lower is safe once x >= the first float32 above lower; x <= upper once x <= the last below it
+            low = np.where(low32 <= box.lower, np.nextafter(low32, np.float32(np.inf)), low32).astype(float)
+            high = np.where(high32 > box.upper, np.nextafter(high32, np.float32(-np.inf)), high32).astype(float)
+            low = np.where(np.isfinite(box.lower), low, -np.inf)
+            high = np.where(np.isfinite(box.upper), high, np.inf)
+            out.append(LeafBox(low, high, True, box.samples))
+        return out
+
     def export_text(self, feature_names: tuple[str, ...], labels: tuple[str, str] = ("Fail", "Success")) -> str:
         """Readable rules, one test per line, indented by depth (like WEKA's J48 output, Fig. 4.8)."""
         lines: list[str] = []

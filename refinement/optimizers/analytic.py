@@ -6,12 +6,17 @@ free parameter is a box in the free-parameter space with a linear cost (C.3.1; b
 the rules they violate, C.3.2). The rule sets of all terms are merged by intersecting their boxes and summing
 their linear models, dropping contradictory pairs (C.3.3), and the minimum of each merged rule is at the
 corner its gradient points away from. The best corners are checked with the true objective.
+
+A term with a predicted-success region (Alg. 6: a success classifier's leaves, axis-aligned boxes in its
+feature space) contributes those leaves as rules with a zero linear model: merged like any rule set, they cut
+every box down to where success is predicted, so the minimum is the minimum within the region.
 """
 
 from __future__ import annotations
 
 import time
 import weakref
+from dataclasses import replace
 
 import numpy as np
 
@@ -42,6 +47,33 @@ def rule_arrays(model) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     except TypeError:  # a model that cannot be weakly referenced is simply not cached
         pass
     return arrays
+
+
+class _SuccessRules:
+    """A success region seen as a rule set (zero linear models), so it merges like a model tree's rules."""
+
+    def __init__(self, region) -> None:
+        self.region = region
+
+    def rules(self):
+        return self.region.success_rules()
+
+
+_region_cache: "weakref.WeakKeyDictionary[object, _SuccessRules]" = weakref.WeakKeyDictionary()
+
+
+def region_rules(region) -> _SuccessRules:
+    """The region's rule set, one object per region so that `rule_arrays` caches its arrays."""
+    try:
+        return _region_cache[region]
+    except (KeyError, TypeError):
+        pass
+    rules = _SuccessRules(region)
+    try:
+        _region_cache[region] = rules
+    except TypeError:
+        pass
+    return rules
 
 
 def term_boxes(structure: TermStructure, model) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -88,6 +120,19 @@ def _axis_shape(n_rules: int, n_free: int, j: int, n_pieces: int) -> tuple[int, 
     return tuple(shape)
 
 
+def _inside(boxes, margin: tuple[float, ...], low: np.ndarray, high: np.ndarray):
+    """Region boxes shrunk by `margin` per free parameter (not at the ends of the range, beyond which there is
+    nothing to be robust against); boxes that vanish are dropped."""
+    if not margin or not any(margin):
+        return boxes
+    lo, hi, grad, const = boxes
+    m = np.asarray(margin, dtype=float)
+    lo = np.where(lo > low, lo + m, lo)
+    hi = np.where(hi < high, hi - m, hi)
+    keep = np.all(lo <= hi, axis=1)
+    return lo[keep], hi[keep], grad[keep], const[keep]
+
+
 def merge(first, second):
     """C.3.3: every pair of rules, boxes intersected and linear models summed; contradictory pairs dropped."""
     lo1, hi1, g1, c1 = first
@@ -107,12 +152,20 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
     low, high = objective.low, objective.high
     names = tuple(p.id for p in objective.free)
     merged = None
+    regions = 0
     for term in objective.terms:
         boxes = term_boxes(detect(term, low, high, names), term.model)
         merged = boxes if merged is None else merge(merged, boxes)
+        if term.region is not None:
+            region_term = replace(term, features=term.region_features)
+            rules = region_rules(term.region)
+            merged = merge(merged, _inside(term_boxes(detect(region_term, low, high, names), rules),
+                                           term.region_margin, low, high))
+            regions += 1
     lo, hi, grad, const = merged
     if len(lo) == 0:
-        raise NotApplicable("no rule combination covers the free-parameter ranges")
+        where = " within the predicted-success regions" if regions else ""
+        raise NotApplicable(f"no rule combination covers the free-parameter ranges{where}")
     corner = np.where(grad > 0, lo, hi)
     predicted = const + np.einsum("nd,nd->n", grad, corner)
     # an open bound inside the range is approached from inside its box; the range bounds are closed
@@ -136,6 +189,6 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
                 method="analytic",
                 evaluations=evaluations,
                 seconds=time.perf_counter() - start,
-                note=f"{len(lo)} merged rules",
+                note=f"{len(lo)} merged rules" + (f", within {regions} success region(s)" if regions else ""),
             )
     raise NotApplicable("every corner of the merged rule set is marked invalid")

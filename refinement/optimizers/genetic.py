@@ -170,5 +170,6 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
         method="ga",
         evaluations=evaluations,
         seconds=time.perf_counter() - start,
-        note=f"{generation} generations" + ("" if best_valid else "; no valid parameterization found"),
+        note=f"{generation} generations" + ("" if best_valid else "; no valid parameterization found")
+        + ("; invalid parameterizations get fitness 0" if any(t.valid is not None for t in objective.terms) else ""),
     )

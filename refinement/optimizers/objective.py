@@ -31,6 +31,11 @@ class Term:
     # theta -> (batch,) bool; False where the model marks the parameterization invalid (predicted failure)
     valid: Callable[[np.ndarray], np.ndarray] | None = None
     label: str = ""
+    # the predicted-success region behind `valid`, for the analytic optimizer: success_rules() -> list[Rule]
+    # (axis-aligned boxes with a zero linear model) over region_features(theta) (batch, n_region_features)
+    region: object | None = None
+    region_features: Callable[[np.ndarray], np.ndarray] | None = None
+    region_margin: tuple[float, ...] = ()  # per free parameter: how far inside the region a choice must lie
 
 
 @dataclass(frozen=True, eq=False)

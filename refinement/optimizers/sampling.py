@@ -1,4 +1,8 @@
-"""Random sampling of the free parameters (the third optimizer, for comparison with Sec. 5.4.2-5.4.3)."""
+"""Random sampling of the free parameters (the third optimizer, for comparison with Sec. 5.4.2-5.4.3).
+
+Where a term marks parameterizations invalid (Alg. 6: predicted failure), samples are drawn by rejection: more
+batches are drawn until SAMPLES valid ones are in hand (as Sec. 6.2 samples a thousand states from the success
+set), at most MAX_BATCHES batches."""
 
 from __future__ import annotations
 
@@ -9,21 +13,32 @@ import numpy as np
 from tailor.refinement.optimizers.objective import Objective, OptimizationResult
 
 SAMPLES = 1000
+MAX_BATCHES = 20
 
 
 def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
-    """Best valid one of SAMPLES uniform draws within the ranges (one vectorized objective call)."""
+    """Best of SAMPLES valid uniform draws within the ranges (rejection sampling; one objective call a batch)."""
     start = time.perf_counter()
     rng = np.random.default_rng(seed)
-    theta = rng.uniform(objective.low, objective.high, size=(SAMPLES, len(objective.free)))
-    cost = objective.cost(theta)
-    valid = objective.valid(theta)
+    thetas, costs, valids = [], [], []
+    n_valid = 0
+    while n_valid < SAMPLES and len(thetas) < MAX_BATCHES:
+        theta = rng.uniform(objective.low, objective.high, size=(SAMPLES, len(objective.free)))
+        valid = objective.valid(theta)
+        thetas.append(theta)
+        valids.append(valid)
+        costs.append(objective.cost(theta))
+        n_valid += int(valid.sum())
+    theta, cost, valid = np.concatenate(thetas), np.concatenate(costs), np.concatenate(valids)
     best = int(np.lexsort((cost, ~valid))[0])
+    note = "" if valid.all() else f"rejection: {int(valid.sum())} of {len(valid)} draws valid"
+    if not valid[best]:
+        note = "no valid parameterization found"
     return OptimizationResult(
         values=tuple(float(v) for v in theta[best]),
         cost=float(cost[best]),
         method="sample",
-        evaluations=SAMPLES,
+        evaluations=len(theta),
         seconds=time.perf_counter() - start,
-        note="" if valid[best] else "no valid parameterization found",
+        note=note,
     )

@@ -169,4 +169,13 @@ def waypoints_belief(rng: np.random.Generator) -> tuple[str, dict[str, dict[str,
     return "waypoints", objects
 
 
-SITUATIONS = {"score": score_belief, "waypoints": waypoints_belief}
+def approach_belief(rng: np.random.Generator) -> tuple[str, dict[str, dict[str, float]]]:
+    """A random ball approach of problem `approach` (Sec. 6.3): start and ball anywhere on the field, the
+    approach heading random, drawn as the goToPose collision classifier's experience (goToPoseAtBall)."""
+    robot, ball, call = sample_task(RANGES["goToPoseAtBall"], rng)
+    xg, yg, phig, vg = call.goal
+    return "approach", {"pos1": {"x": robot[0], "y": robot[1], "phi": robot[2], "v": robot[3]},
+                        "pos2": {"x": xg, "y": yg, "phi": phig, "v": vg}}
+
+
+SITUATIONS = {"score": score_belief, "waypoints": waypoints_belief, "approach": approach_belief}

@@ -1,0 +1,156 @@
+"""Subgoal assertion (Ch. 6, Algorithm 5): where an action's learned success classifier predicts failure from
+the start state, insert a subgoal and a second action, so the action starts where it is predicted to succeed.
+
+An action whose binding names a `success_model` (the executable action reused for a refined goal, e.g.
+navigating to an object's pose without bumping it) is checked with that classifier from its start state:
+- predicted to succeed (for some value of its free parameters): it is kept as it is, guarded (Alg. 6:
+  refinement keeps its free parameters inside the predicted-success region);
+- predicted to fail: the same executable action is used twice, start -> subgoal -> goal; the subgoal's
+  parameters are free within the binding's default ranges of the goal object's type, and the second action
+  is guarded, so refinement chooses the subgoal inside the predicted-success region (Sec. 6.2).
+Every decision is kept as an `Assertion` (which plan step, which classifier, which leaf, why), and both new
+actions carry the plan step they serve and their origin, so every transformed step leads back to the plan.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from tailor.errors import BindingError, ModelFileError
+from tailor.refinement.action_sequence import ActionSequence, ExecutableAction, Parameter
+from tailor.refinement.binding import Binding
+from tailor.refinement.instantiate import ObjectTypes, type_chain
+
+GRID_POINTS = 4096  # at most this many points over an action's free parameters decide "predicted to succeed"
+SUBGOAL = "subgoal"  # asserted subgoals are objects named subgoal<step> (subgoal<step>_<k> if that is taken)
+
+
+@dataclass(frozen=True)
+class Assertion:
+    """One check of Algorithm 5: did the classifier predict failure for plan step `step`, and what was done."""
+
+    step: int
+    pddl: str
+    action: str
+    success_model: str
+    predicted_success: bool  # from the start state, for some value of the free parameters
+    success_share: float  # share of the free-parameter grid predicted to succeed (0 or 1 when all are bound)
+    leaf: int  # the classifier's leaf reached by the instantiated parameters (the grid's first point if free)
+    leaf_samples: int  # training episodes in that leaf
+    subgoal: str = ""  # the asserted subgoal object ("" when none was inserted)
+
+    @property
+    def inserted(self) -> bool:
+        return bool(self.subgoal)
+
+    def reason(self) -> str:
+        """One line: what the classifier predicted and what assertion did about it."""
+        where = f"leaf {self.leaf} ({self.leaf_samples} training episodes)"
+        if self.inserted:
+            return (f"{self.success_model} predicts failure from the start state ({where}, success predicted for "
+                    f"none of the free values): subgoal {self.subgoal} asserted")
+        share = "" if self.success_share in (0.0, 1.0) else f" for {100 * self.success_share:.0f}% of the free values"
+        return f"{self.success_model} predicts success{share} ({where}): no subgoal; kept in the success region"
+
+    def to_json(self) -> dict:
+        return {"step": self.step, "pddl": self.pddl, "action": self.action, "success_model": self.success_model,
+                "predicted_success": self.predicted_success, "success_share": round(self.success_share, 4),
+                "leaf": self.leaf, "leaf_samples": self.leaf_samples, "inserted": self.inserted,
+                "subgoal": self.subgoal or None, "reason": self.reason()}
+
+
+@dataclass(frozen=True)
+class AssertedSequence:
+    """The sequence with asserted subgoals, and one Assertion per guarded plan step."""
+
+    sequence: ActionSequence
+    assertions: tuple[Assertion, ...]
+
+
+def success_grid(action: ExecutableAction, points: int = GRID_POINTS) -> np.ndarray:
+    """Parameter rows covering the action's free parameters with a regular grid (one row if none is free)."""
+    free = action.free_parameters()
+    per_axis = max(2, int(points ** (1.0 / len(free)))) if free else 1
+    axes = [np.linspace(p.low, p.high, per_axis) for p in free]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(free)) if free else np.zeros((1, 0))
+    rows = np.repeat(np.array([np.nan if p.free else p.value for p in action.params], dtype=float)[None], len(grid), 0)
+    columns = [k for k, p in enumerate(action.params) if p.free]
+    rows[:, columns] = grid
+    return rows
+
+
+def _subgoal_name(sequence: ActionSequence, step: int) -> str:
+    taken = {p.id.split(".", 1)[0].lower() for a in sequence.actions for p in a.params}
+    name, k = f"{SUBGOAL}{step}", 1
+    while name.lower() in taken:
+        k += 1
+        name = f"{SUBGOAL}{step}_{k}"
+    return name
+
+
+def assert_subgoals(sequence: ActionSequence, binding: Binding, success_models: Mapping[str, object],
+                    object_types: ObjectTypes | None = None) -> AssertedSequence:
+    """Algorithm 5 over every action of `sequence` whose PDDL action's binding names a success model."""
+    actions: list[ExecutableAction] = []
+    assertions: list[Assertion] = []
+    current = sequence
+    for action in sequence.actions:
+        bound = binding.action(action.pddl.strip("()").split()[0], step=f"{action.step} {action.pddl}")
+        if bound.success_model is None:
+            actions.append(action)
+            continue
+        try:
+            classifier = success_models[bound.success_model]
+        except KeyError:
+            raise ModelFileError(f"no success classifier {bound.success_model!r} loaded for step {action.step} "
+                                 f"{action.pddl}") from None
+        rows = success_grid(action)
+        success = np.asarray(classifier.predict_success(rows), dtype=bool)
+        leaf = int(classifier.leaf(rows[:1])[0])
+        samples = int(classifier.tree.samples[leaf])
+        check = Assertion(action.step, action.pddl, action.action, bound.success_model, bool(success.any()),
+                          float(success.mean()), leaf, samples)
+        if check.predicted_success:
+            actions.append(replace(action, guard=bound.success_model, guard_margin=bound.success_margin))
+        else:
+            name = _subgoal_name(current, action.step)
+            check = replace(check, subgoal=name)
+            first, second = _split(action, bound, name, binding, object_types, check)
+            actions += [first, replace(second, guard=bound.success_model, guard_margin=bound.success_margin)]
+            current = replace(current, actions=(*current.actions, first))  # the name is now taken
+        assertions.append(check)
+    return AssertedSequence(replace(sequence, actions=tuple(actions)), tuple(assertions))
+
+
+def _split(action: ExecutableAction, bound, name: str, binding: Binding, object_types: ObjectTypes | None,
+           check: Assertion) -> tuple[ExecutableAction, ExecutableAction]:
+    """start -> subgoal `name` -> goal: the subgoal's quantities free in the goal object's default ranges
+    (or the ranges the action's binding gives for subgoals)."""
+    spec = bound.spec
+    n_observed = len(spec.observed)
+    observed, internal = action.params[:n_observed], action.params[n_observed:]
+    goal_object = internal[0].id.split(".", 1)[0] if internal else name
+    types = type_chain(goal_object, binding, object_types)
+    subgoal: dict[str, Parameter] = {}
+    for quantity in spec.internal_quantities:
+        default = binding.type_range(types, quantity)
+        if quantity in bound.subgoal:
+            default = bound.subgoal[quantity], f"[actions.{bound.pddl}] subgoal"
+        if default is None:
+            raise BindingError(f"subgoal assertion for step {action.step} {action.pddl}: no default range of "
+                               f"'{quantity}' for the asserted subgoal (add it to [types.{types[0]}])",
+                               file=binding.file)
+        (low, high), _ = default
+        if not (math.isfinite(low) and math.isfinite(high)):
+            raise BindingError(f"subgoal assertion: the default range of '{quantity}' is unbounded", file=binding.file)
+        subgoal[quantity] = Parameter(f"{name}.{quantity}", "", None, low, high)
+    reaching = tuple(replace(subgoal[q], name=n) for n, q in zip(spec.internal, spec.internal_quantities))
+    leaving = tuple(replace(subgoal[q], name=n) for n, q in zip(spec.observed, spec.observed_quantities))
+    why = f"asserted for step {action.step} {action.pddl}: {check.reason()}"
+    first = replace(action, params=(*observed, *reaching), origin=f"to the subgoal; {why}")
+    second = replace(action, params=(*leaving, *internal), origin=f"from the subgoal; {why}")
+    return first, second

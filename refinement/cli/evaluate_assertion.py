@@ -1,0 +1,101 @@
+"""`tailor evaluate DOMAIN --assertion`: subgoal assertion measured in the simulator (Sec. 6.3, Table 6.1)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from tailor.errors import BindingError, TailorError
+
+PLOT_INSTANCES = 3
+
+
+def _pct(value) -> str:
+    return "-" if value is None else f"{100 * value:.1f}%"
+
+
+def _print_text(report: dict) -> None:
+    out = sys.stdout.write
+    s = report
+    out(f"Domain {s['domain']}: subgoal assertion over {s['episodes']} random '{s['situations']}' situations "
+        f"(seed {s['seed']}), each executed plain and with assertion + refinement (h=2), same simulator seed\n")
+    out(f"  success without assertion     {_pct(s['success_without'])}   (failures: "
+        f"{', '.join(f'{k} {v}' for k, v in s['failures_without'].items()) or 'none'})\n")
+    out(f"  success with assertion        {_pct(s['success_with'])}   (failures: "
+        f"{', '.join(f'{k} {v}' for k, v in s['failures_with'].items()) or 'none'})\n")
+    out(f"  collisions avoided            {_pct(s['collisions_avoided'])} of {s['collisions']} "
+        f"({_pct(s['collisions_avoided_and_succeeded'])} avoided and succeeded)\n")
+    out(f"  subgoal asserted              {_pct(s['asserted'])} of the situations\n")
+    out(f"  needless assertions           {_pct(s['needless_assertions'])} of the situations "
+        f"(plain would have succeeded), slower there by {_pct(s['needless_cost'])} on average "
+        f"(median {_pct(s['needless_cost_median'])})\n")
+    legs = ", ".join(f"{k} {v}" for k, v in s["failed_legs_with"].items()) or "none"
+    out(f"  failures with assertion where plain succeeded: {s['new_failures']} (failed action: {legs})\n")
+    ms = s["optimizer_ms_median"]
+    out(f"  optimizer                     {', '.join(s['optimizers']) or '-'}; median "
+        f"{'-' if ms is None else f'{ms:.0f}'} ms per asserted situation\n")
+    for key, title in (("table_before", "before assertion (plain)"), ("table_after", "after assertion")):
+        t = s[key]
+        out(f"\n  Table 6.1, {title}: predicted x observed (share of all situations)\n")
+        out("                       observed fail   observed success   total\n")
+        for p in ("fail", "success"):
+            f, ok = t[f"predicted_{p}_observed_fail"], t[f"predicted_{p}_observed_success"]
+            out(f"    predicted {p:<8} {_pct(f):>14} {_pct(ok):>18} {_pct(f + ok):>7}\n")
+        f = t["predicted_fail_observed_fail"] + t["predicted_success_observed_fail"]
+        out(f"    total              {_pct(f):>14} {_pct(1 - f):>18}\n")
+    if s.get("plot"):
+        out(f"\nWrote {s['plot']}\n")
+
+
+def run_assertion(args: argparse.Namespace, domain_dir, binding, plan, run_parallel, models_dir) -> int:
+    from tailor.refinement.evaluation.assertion import (
+        AssertionSetup,
+        assertion_episode,
+        assertion_seed,
+        pick_instances,
+        summarize_assertion,
+    )
+    from tailor.refinement.models.action_models import load_success_models
+    from tailor.refinement.situations import draw_situations, job_models, situation_sequence
+
+    if args.plot:
+        from tailor.refinement.outputs import check_output_file
+
+        if not args.assertion:
+            raise TailorError("--plot draws the instances of --assertion (Fig. 6.6): give --assertion too")
+        check_output_file(args.plot, ".png")
+    if plan.assertion is None:
+        raise BindingError("[evaluation] names no assertion situations (add assertion = \"<situation generator>\")",
+                           file=binding.file)
+    names = {a.success_model for a in binding.actions.values() if a.success_model}
+    if not names:
+        raise BindingError("--assertion: no action of the binding names a success_model to assert subgoals with",
+                           file=binding.file)
+    setup = AssertionSetup(load_success_models(models_dir, names))
+    seeds = [(index, assertion_seed(args.seed, index)) for index in range(args.episodes)]
+    items = draw_situations(domain_dir, binding, plan.assertion, seeds, args.seed, {}, models_dir)
+    if items:  # models loaded once up front: a missing or bad model file fails before any work
+        job, _, objects = items[0]
+        job_models(job, situation_sequence(job, objects))
+    rows = run_parallel(assertion_episode, [(job, i, objects, setup) for job, i, objects in items], args.jobs,
+                        "plain vs asserted")
+    report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
+              "situations": plan.assertion}
+    report.update(summarize_assertion(rows))
+    if args.plot:
+        from tailor.refinement.evaluation.assertion_plots import draw_instances
+
+        chosen = pick_instances(rows, PLOT_INSTANCES)
+        by_index = {i: (job, objects) for job, i, objects in items}
+        kept = [assertion_episode(by_index[r["index"]][0], r["index"], by_index[r["index"]][1], setup, keep=True)
+                for r in chosen]
+        draw_instances(args.plot, kept, binding.entry.views)
+        report["plot"] = str(args.plot)
+        report["plot_situations"] = [r["index"] for r in chosen]
+    if args.json:
+        from tailor.refinement.outputs import json_text, versioned
+
+        sys.stdout.write(json_text(versioned("evaluate_assertion", report)) + "\n")
+    else:
+        _print_text(report)
+    return 0

@@ -1,0 +1,152 @@
+"""Measure subgoal assertion in the simulator (Sec. 6.3, Table 6.1): random situations of a problem whose plan
+has an action guarded by a success classifier, each executed with the plain executable action (no assertion)
+and with assertion + refinement (h = 2), with the same simulator seed.
+
+The binding names the situations: `[evaluation] assertion = "<situation generator>"`. Reported: the shares of
+successful executions without and with assertion, the share of the plain executions' collisions (failures of
+the kind the classifier guards against; any failure where the simulator has no "collision" outcome) that
+assertion avoided, the needless assertions (a subgoal inserted where the plain action succeeded) and their
+time cost, and Table 6.1 (predicted x observed, before and after assertion).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from tailor.refinement.assertion import assert_subgoals
+from tailor.refinement.dispatch import dispatch
+from tailor.refinement.refine import refine
+from tailor.refinement.situations import Job, job_binding, job_models, situation_sequence, stream_seed
+
+COLLISION = "collision"
+REFINE_HORIZON = 2
+ASSERTION_STREAM = 6  # seed word of the assertion experiment (its situations differ from the comparison's)
+
+
+@dataclass(frozen=True)
+class AssertionSetup:
+    """What every episode needs besides its situation: the success classifiers, loaded once per process."""
+
+    success_models: dict
+    method: str = "analytic"
+
+
+def assertion_seed(seed: int, index: int) -> int:
+    return stream_seed(ASSERTION_STREAM, seed, index)
+
+
+def assertion_episode(job: Job, index: int, objects: dict, setup: AssertionSetup, keep: bool = False) -> dict:
+    """One situation: the plain action (as instantiated) and with assertion + refinement, same seed."""
+    seed = assertion_seed(job.seed, index)
+    sequence = situation_sequence(job, objects)
+    asserted = assert_subgoals(sequence, job_binding(job), setup.success_models, job.plan.object_types or None)
+    models = job_models(job, asserted.sequence)
+    plain_refined = refine(sequence, models, horizon=1, method=setup.method, seed=seed)
+    plain = dispatch(plain_refined.sequence, seed=seed)
+    inserted = any(a.inserted for a in asserted.assertions)
+    predicted_success = all(a.predicted_success for a in asserted.assertions)
+    if inserted or asserted.sequence.free_parameters():
+        refined = refine(asserted.sequence, models, horizon=REFINE_HORIZON, method=setup.method, seed=seed,
+                         success_models=setup.success_models)
+        result = dispatch(refined.sequence, seed=seed)
+    else:  # nothing asserted and nothing to choose: the same sequence, the same seed, the same execution
+        refined, result = plain_refined, plain
+    row = {"index": index, "seed": seed, "problem": job.plan.problem, "inserted": inserted,
+           "predicted_success": predicted_success,
+           "plain_ok": plain.succeeded, "plain_outcome": _outcome(plain), "plain_time": plain.duration,
+           "with_ok": result.succeeded, "with_outcome": _outcome(result), "with_time": result.duration,
+           "with_failed_leg": _failed_leg(result, refined.sequence),
+           "predicted_plain": plain_refined.predicted_total, "predicted_with": refined.predicted_total,
+           "methods": sorted({w.method for w in refined.windows}),
+           "optimizer_seconds": sum(w.seconds for w in refined.windows),
+           "reasons": [a.reason() for a in asserted.assertions]}
+    if keep:
+        row.update(plain_result=plain, with_result=result, sequence=refined.sequence, plain_sequence=sequence)
+    return row
+
+
+def _failed_leg(result, sequence) -> str | None:
+    """Which action of the executed sequence failed: "to subgoal" (reaching an asserted subgoal), "final"."""
+    for k, r in enumerate(result.results):
+        if r.outcome != "success":
+            return "to subgoal" if "to the subgoal" in sequence.actions[k].origin else "final"
+    return None
+
+
+def _outcome(result) -> str:
+    for r in result.results:
+        if r.outcome != "success":
+            return r.outcome
+    return "success"
+
+
+def _share(mask) -> float | None:
+    mask = np.asarray(mask, dtype=bool)
+    return float(mask.mean()) if len(mask) else None
+
+
+def confusion_table(predicted_success: np.ndarray, observed_success: np.ndarray) -> dict:
+    """Table 6.1: shares of all episodes, rows predicted, columns observed."""
+    n = max(1, len(predicted_success))
+    out = {}
+    for p_name, p in (("fail", False), ("success", True)):
+        for o_name, o in (("fail", False), ("success", True)):
+            out[f"predicted_{p_name}_observed_{o_name}"] = float(np.sum((predicted_success == p)
+                                                                        & (observed_success == o)) / n)
+    return out
+
+
+def summarize_assertion(rows: list[dict]) -> dict:
+    """The JSON of `tailor evaluate --assertion`: shares, avoided collisions, needless assertions, Table 6.1."""
+    plain_ok = np.array([r["plain_ok"] for r in rows], dtype=bool)
+    with_ok = np.array([r["with_ok"] for r in rows], dtype=bool)
+    inserted = np.array([r["inserted"] for r in rows], dtype=bool)
+    predicted = np.array([r["predicted_success"] for r in rows], dtype=bool)
+    outcomes = {r["plain_outcome"] for r in rows}
+    kind = COLLISION if COLLISION in outcomes else None  # without collisions in this simulator: any failure
+    collided = np.array([(r["plain_outcome"] == kind) if kind else not r["plain_ok"] for r in rows], dtype=bool)
+    still = np.array([(r["with_outcome"] == kind) if kind else not r["with_ok"] for r in rows], dtype=bool)
+    avoided = collided & ~still
+    needless = inserted & plain_ok
+    both = needless & with_ok
+    cost = [r["with_time"] / r["plain_time"] - 1.0 for r, b in zip(rows, both) if b]
+    methods = sorted({m for r in rows for m in r["methods"]})
+    seconds = [r["optimizer_seconds"] for r in rows if r["inserted"]]
+    return {
+        "episodes": len(rows),
+        "success_without": _share(plain_ok),
+        "success_with": _share(with_ok),
+        "collisions": int(collided.sum()),
+        "collisions_avoided": float(avoided.sum() / collided.sum()) if collided.any() else None,
+        "collisions_avoided_and_succeeded": float((avoided & with_ok).sum() / collided.sum()) if collided.any() else None,
+        "asserted": _share(inserted),
+        "needless_assertions": _share(needless),
+        "needless_cost": float(np.mean(cost)) if cost else None,
+        "needless_cost_median": float(np.median(cost)) if cost else None,
+        "failures_without": _counts(r["plain_outcome"] for r in rows),
+        "failures_with": _counts(r["with_outcome"] for r in rows),
+        "new_failures": int((plain_ok & ~with_ok).sum()),
+        "failed_legs_with": _counts(r["with_failed_leg"] or "success" for r in rows),
+        "table_before": confusion_table(predicted, plain_ok),
+        "table_after": confusion_table(predicted, with_ok),
+        "optimizers": methods,
+        "optimizer_ms_median": float(1000 * np.median(seconds)) if seconds else None,
+    }
+
+
+def _counts(outcomes) -> dict:
+    out: dict[str, int] = {}
+    for o in outcomes:
+        if o != "success":
+            out[o] = out.get(o, 0) + 1
+    return dict(sorted(out.items()))
+
+
+def pick_instances(rows: list[dict], count: int = 3) -> list[dict]:
+    """Fig. 6.6: one situation without assertion (success predicted) and the rest with an asserted subgoal,
+    the first such situations whose executions with assertion succeeded."""
+    plain = [r for r in rows if not r["inserted"] and r["with_ok"]][:1]
+    asserted = [r for r in rows if r["inserted"] and r["with_ok"] and not r["plain_ok"]][:count - len(plain)]
+    return plain + asserted
