@@ -170,10 +170,10 @@ def test_refine_json_carries_provenance(capsys):
     (check,) = data["assertions"]
     assert check["inserted"] and check["subgoal"] == "subgoal1" and check["step"] == 1
     assert isinstance(check["leaf"], int) and "predicts failure" in check["reason"]
-    first, second = data["actions"]
+    first, second = data["refined"]["actions"]
     assert first["step"] == second["step"] == 1 and "subgoal1" in first["origin"]
     assert second["guard"] == "goToPose" and second["predicted_success"] is True
-    assert data["optimization"][0]["method"] in ("ga", "analytic")
+    assert data["refined"]["optimization"][0]["method"] in ("ga", "analytic")
 
 
 # --- the binding ---------------------------------------------------------------------------------------------
