@@ -28,7 +28,7 @@ class ActionSpec:
     """An executable action: its parameter names per group and the object quantity each one takes.
 
     a navigation to a pose: observed (x, y, phi, v) of quantities (x, y, phi, v), internal (xg, yg, phig, vg) of
-    the same quantities of the goal object; a kitchen grip: observed base pose, internal gripper target.
+    the same quantities of the goal object; a manipulator grasp: observed base pose, internal gripper target.
     """
 
     name: str
