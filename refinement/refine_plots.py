@@ -70,8 +70,9 @@ def _draw(ax, result, layers, title: str) -> None:
     ax.set_ylabel(layers[0][1])
 
 
-def plot_executions(path: Path, views, panels: list[tuple[str, object]]) -> None:
-    """One row per view, one column per (title, SequenceResult)."""
+def plot_executions(path: Path, views, panels: list[tuple[str, object]], background=None) -> None:
+    """One row per view, one column per (title, SequenceResult); `background(ax, column)` draws under the
+    first view's trajectories (the simulator's draw_scene)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -81,6 +82,8 @@ def plot_executions(path: Path, views, panels: list[tuple[str, object]]) -> None
     fig, axes = plt.subplots(len(views), len(panels), figsize=(5.5 * len(panels), 4.6 * len(views)), squeeze=False)
     for row, view in enumerate(views):
         for col, (title, result) in enumerate(panels):
+            if row == 0 and background is not None:
+                background(axes[row, col], col)
             _draw(axes[row, col], result, view_layers(view), title if row == 0 else "")
         axes[row, 0].legend(loc="best", fontsize=8)
     _save(fig, path)
@@ -128,7 +131,13 @@ def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
         if not o.simulated.succeeded:
             title += " (failed)"
         panels.append((title, o.simulated))
-    plot_executions(path, views, panels)
+    from tailor.sims import registry
+
+    draw_scene = registry.get(prepared.sequence.simulator).draw_scene if prepared.sequence.simulator else None
+    chosen_values = [{p.id: p.value for a in o.refined.sequence.actions for p in a.params} for o in outcomes.values()]
+    background = (None if draw_scene is None
+                  else (lambda ax, col: draw_scene(ax, prepared.sequence, chosen_values[col])))
+    plot_executions(path, views, panels, background)
     written = [path]
 
     refined = outcomes["refined"].refined

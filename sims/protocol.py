@@ -133,6 +133,9 @@ class SimulatorEntry:
     views: tuple = ()  # trajectory columns worth drawing: pairs ("x", "y") or layers (("x", "y", "phi"), ...)
     feature_spaces: tuple[FeatureSpace, ...] = ()  # feature spaces of its own (Table 4.1 rows)
     scene_objects: tuple[str, ...] = ()  # the objects reset(scene) places; () = not declared (not checked)
+    # draw_scene(ax, sequence, values): draws the static world of an instantiated sequence (its scene, its
+    # free parameters' ranges and their chosen `values` by id) under the first view's trajectories in pictures
+    draw_scene: Callable[[Any, Any, Mapping[str, float]], None] | None = None
     description: str = ""
     extras: Mapping[str, Any] = field(default_factory=dict)
 

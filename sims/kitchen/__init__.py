@@ -5,6 +5,7 @@
 the kitchen's feature spaces.
 """
 
+from tailor.sims.kitchen.drawing import draw_scene
 from tailor.sims.kitchen.features import GRASP, ROUTE, SPOT
 from tailor.sims.kitchen.scenarios import SITUATIONS, run_goto, run_grip, run_put, subgoal_episode
 from tailor.sims.kitchen.simulator import KitchenSim, Noise, simulate_sequence
@@ -34,6 +35,7 @@ SIMULATOR = SimulatorEntry(
     views=(("x", "y", "phi"),),
     feature_spaces=(ROUTE, GRASP),
     scene_objects=("robot", "table {object}", "cup {object}"),
+    draw_scene=draw_scene,
     description="B21-like base with a pan/extend arm among tables (pymunk), routes through a visibility graph",
 )
 

@@ -86,7 +86,11 @@ class RouteMap:
         self.dist, self.next = dist, nxt
 
     def _visible(self, points: np.ndarray) -> np.ndarray:
-        """(n, v) bool: node visible from each point (boxes the point lies in are ignored)."""
+        """(n, v) bool: node visible from each point (boxes the point lies in are ignored); each distinct
+        point is tested once (an optimizer's population often shares one end of a route)."""
+        unique, inverse = np.unique(points, axis=0, return_inverse=True)
+        if len(unique) < len(points):
+            return self._visible(unique)[inverse.reshape(-1)]
         n, v = len(points), len(self.nodes)
         p = np.repeat(points, v, axis=0)
         q = np.tile(self.nodes, (n, 1))
@@ -111,11 +115,38 @@ class RouteMap:
         first = np.where(direct, -1, first)
         last = np.where(direct, -1, last)
         length = np.where(direct, d_direct, length)
-        turning = np.zeros(n)
-        for row in np.flatnonzero(~direct):
-            pts = self.path_points(start[row], goal[row], int(first[row]), int(last[row]))
-            turning[row] = _turning(pts)
+        turning = self._turning(start, goal, first, last, direct)
         return length, first, last, turning
+
+    def _pair_tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per node pair (i, j) on a shortest path: the turning at its inner nodes, the direction of its first
+        leg out of i and of its last leg into j (built once, on first use)."""
+        if getattr(self, "_pairs", None) is None:
+            v = len(self.nodes)
+            inner, out_dir, in_dir = np.zeros((v, v)), np.zeros((v, v)), np.zeros((v, v))
+            for i in range(v):
+                for j in range(v):
+                    if i == j or not np.isfinite(self.dist[i, j]):
+                        continue
+                    pts = self.path_points(self.nodes[i], self.nodes[j], i, j)[1:-1]
+                    inner[i, j] = _turning(pts)
+                    out_dir[i, j] = math.atan2(pts[1][1] - pts[0][1], pts[1][0] - pts[0][0])
+                    in_dir[i, j] = math.atan2(pts[-1][1] - pts[-2][1], pts[-1][0] - pts[-2][0])
+            self._pairs = (inner, out_dir, in_dir)
+        return self._pairs
+
+    def _turning(self, start, goal, first, last, direct) -> np.ndarray:
+        """Turning (rad) at the route's corners, vectorized with the pair tables."""
+        inner, out_dir, in_dir = self._pair_tables()
+        i, j = np.maximum(first, 0), np.maximum(last, 0)
+        vi, vj = self.nodes[i], self.nodes[j]
+        into_i = np.arctan2(vi[:, 1] - start[:, 1], vi[:, 0] - start[:, 0])
+        out_j = np.arctan2(goal[:, 1] - vj[:, 1], goal[:, 0] - vj[:, 0])
+        same = i == j
+        at_i = np.where(same, out_j, out_dir[i, j])
+        at_j = np.where(same, 0.0, np.abs(_wrap(out_j - in_dir[i, j])))
+        total = np.abs(_wrap(at_i - into_i)) + np.where(same, 0.0, inner[i, j]) + at_j
+        return np.where(direct, 0.0, total)
 
     def path_points(self, start, goal, first: int, last: int) -> list[tuple[float, float]]:
         pts = [(float(start[0]), float(start[1]))]
@@ -136,6 +167,10 @@ class RouteMap:
         if not np.isfinite(length[0]):
             return [tuple(start), tuple(goal)]
         return self.path_points(s[0], g[0], int(first[0]), int(last[0]))
+
+
+def _wrap(a: np.ndarray) -> np.ndarray:
+    return (a + np.pi) % (2 * np.pi) - np.pi
 
 
 def _turning(points: Sequence[tuple[float, float]]) -> float:

@@ -53,7 +53,7 @@ def belief_objects(layout: dict) -> dict[str, dict[str, float]]:
     objects: dict[str, dict[str, float]] = {
         "start": {"ox": x, "oy": y, "ophi": phi, "along": 0.0, "dist": 0.0, "heading": 0.0}}
     for name in ("table1", "table2"):
-        objects[name] = dict(zip(("x", "y", "phi"), layout[name]))
+        objects[name] = dict(zip(("ox", "oy", "ophi"), layout[name]))  # centre, direction facing it
     for i, (cup, put) in enumerate(zip(layout["cups"], layout["puts"]), start=1):
         objects[f"cup{i}"] = {"x": cup[0], "y": cup[1]}
         objects[f"p{i}"] = dict(zip(("ox", "oy", "ophi"), W.serving_frame(layout["table1"], *cup)))
@@ -145,3 +145,33 @@ def scenario2(rng: np.random.Generator) -> tuple[str, dict[str, dict[str, float]
 
 
 SITUATIONS = {"scenario1": scenario1, "scenario2": scenario2}
+
+
+BELIEF_SEEDS = {"scenario1": 1, "scenario2": 2}  # the layouts of the bundled belief files
+
+
+def belief_text(name: str) -> str:
+    """The belief file (TOML) of a bundled problem: one random layout (seed BELIEF_SEEDS[name])."""
+    seed = BELIEF_SEEDS[name]
+    _, objects = SITUATIONS[name](np.random.default_rng(seed))
+    lines = [f"# Belief state of problem `{name}`: one random layout of the kitchen (tailor.sims.kitchen.scenarios,",
+             f"# situation generator {name!r}, seed {seed}); `tailor evaluate kitchen` draws many. Spots: ox, oy, ophi",
+             "# (frame: the foot of the cup or put location on the table's serving edge, facing the table; the start:",
+             "# the robot's pose) and, for the start, its zero offsets; tables ox, oy, ophi (centre, facing direction);",
+             "# cups x, y; put locations tx, ty.",
+             "# Regenerate: python -c \"from tailor.sims.kitchen.scenarios import write_belief_files; write_belief_files()\""]
+    for obj, values in objects.items():
+        lines.append(f"[objects.{obj}]")
+        lines += [f"{key} = {round(value, 4)!r}" for key, value in values.items()]
+        lines.append("")
+    return "\n".join(lines)
+
+
+def write_belief_files(folder: str | Path = PROBLEMS_DIR) -> list[Path]:
+    """Write the bundled problems' belief files into `folder`."""
+    paths = []
+    for name in BELIEF_SEEDS:
+        path = Path(folder) / f"{name}.toml"
+        path.write_text(belief_text(name))
+        paths.append(path)
+    return paths
