@@ -53,3 +53,36 @@ def test_kitchen_sequence_real_time_factor():
         simulated += result.duration
     rtf = clock.report("scenario 1 sequences", simulated)
     assert rtf >= 1000
+
+
+@pytest.mark.benchmark
+def test_kitchen_optimizer_time_per_window():
+    """Refinement (h=2, the genetic algorithm) of random scenario-2 situations: CPU time per window and the
+    share of the sequence's (predicted) execution time all windows take; wall-clock times printed beside."""
+    import statistics
+    from types import MappingProxyType
+
+    from tailor.planner_bridge import plan_files, resolve_problem
+    from tailor.refinement import instantiate, load_action_models, load_domain_binding, refine
+    from tailor.refinement.belief import BeliefState
+    from tailor.sims.kitchen.scenarios import scenario2
+
+    domain, path = resolve_problem("kitchen", "scenario2")
+    plan, binding = plan_files(domain, path), load_domain_binding(domain.parent)
+    models = load_action_models(domain.parent / "models")
+    wall, cpu, shares = [], [], []
+    for i in range(10):
+        _, objects = scenario2(np.random.default_rng(100 + i))
+        belief = BeliefState(MappingProxyType({k: MappingProxyType(v) for k, v in objects.items()}))
+        sequence = instantiate(plan, binding, belief)
+        start = time.process_time()
+        refined = refine(sequence, models, horizon=2, method="ga", seed=i)
+        used = time.process_time() - start
+        wall += [w.seconds for w in refined.windows]
+        cpu.append(used / len(refined.windows))
+        shares.append(used / refined.predicted_total)
+    print(f"\nscenario 2, h=2: {len(wall)} windows, CPU per window median {1000 * statistics.median(cpu):.0f} ms "
+          f"(wall median {1000 * statistics.median(wall):.0f} ms); all windows {100 * statistics.mean(shares):.2f}% "
+          "of the execution time (CPU)")
+    assert statistics.median(cpu) <= 0.5
+    assert statistics.mean(shares) <= 0.01
