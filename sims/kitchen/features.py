@@ -71,7 +71,35 @@ def _grasp(params: np.ndarray) -> np.ndarray:
     return np.column_stack([pan, extension, ramp])
 
 
+def _reframe(spots: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """The same poses as spots of random other frames (offsets solved so that spot_poses is unchanged)."""
+    pose = spot_poses(spots)
+    n = len(spots)
+    ox, oy = pose[:, 0] + rng.uniform(-1.0, 1.0, n), pose[:, 1] + rng.uniform(-1.0, 1.0, n)
+    ophi = rng.uniform(-np.pi, np.pi, n)
+    c, s = np.cos(ophi), np.sin(ophi)
+    dx, dy = pose[:, 0] - ox, pose[:, 1] - oy
+    return np.column_stack([ox, oy, ophi, -s * dx + c * dy, -(c * dx + s * dy), _wrap(pose[:, 2] - ophi)])
+
+
+def _route_reframe(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    return np.column_stack([_reframe(params[:, :6], rng), _reframe(params[:, 6:12], rng)])
+
+
+def _rigid_motion(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Base frame and point rotated by one random angle and shifted by one random offset."""
+    a = rng.uniform(-np.pi, np.pi)
+    t = rng.uniform(-2.0, 2.0, 2)
+    c, s = np.cos(a), np.sin(a)
+    out = params.copy()
+    for x, y in ((0, 1), (6, 7)):
+        out[:, x] = c * params[:, x] - s * params[:, y] + t[0]
+        out[:, y] = s * params[:, x] + c * params[:, y] + t[1]
+    out[:, 2] = _wrap(params[:, 2] + a)
+    return out
+
+
 ROUTE = FeatureSpace("route", SPOT + tuple(f"{q}g" for q in SPOT), ("length", "turn_start", "turn_goal", "turning"),
-                     _route, "the frame each pose is written in")
+                     _route, "the frame each pose is written in", _route_reframe)
 GRASP = FeatureSpace("grasp", SPOT + ("px", "py"), ("pan", "extension", "ramp"), _grasp,
-                     "rigid motions of base and point together")
+                     "rigid motions of base and point together", _rigid_motion)
