@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import json
 
-import pytest
-
 from tailor.planner_bridge import plan_files, resolve_problem
 from tailor.refinement import instantiate, load_domain_binding
 from tailor.refinement.belief import load_belief

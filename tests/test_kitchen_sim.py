@@ -19,7 +19,10 @@ from tailor.sims.kitchen.simulator import BRAKE, KitchenSim, Noise
 T1, T2 = W.TABLE1, W.TABLE2
 
 
-def _sim(pose, tables=None, cups=None, holding=None, noise=Noise.off(), seed=0):
+QUIET = Noise.off()
+
+
+def _sim(pose, tables=None, cups=None, holding=None, noise=QUIET, seed=0):
     sim = KitchenSim(seed, noise)
     sim.place(pose, tables or {}, cups or {}, holding)
     return sim

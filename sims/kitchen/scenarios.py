@@ -16,6 +16,7 @@ Situations "scenario1" and "scenario2" give the belief values of the problems of
 from __future__ import annotations
 
 import math
+from itertools import pairwise
 from pathlib import Path
 
 import numpy as np
@@ -31,7 +32,7 @@ PROBLEMS_DIR = Path(__file__).resolve().parents[2] / "domains" / "kitchen" / "pr
 def _alongs(rng: np.random.Generator, n: int) -> list[float]:
     while True:
         values = sorted(float(v) for v in rng.uniform(-W.CUP_ALONG, W.CUP_ALONG, n))
-        if all(b - a >= W.CUP_SEPARATION for a, b in zip(values, values[1:])):
+        if all(b - a >= W.CUP_SEPARATION for a, b in pairwise(values)):
             return [float(v) for v in rng.permutation(values)]
 
 

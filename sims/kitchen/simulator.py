@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from itertools import pairwise
 
 import numpy as np
 import pymunk
@@ -247,8 +248,8 @@ class KitchenSim:
         v_cmd, w_cmd = self.v_cmd, self.w_cmd
         for _ in range(STEPS_PER_CONTROL):
             dv, dw = v_cmd - v, w_cmd - w
-            v += _A_STEP if dv > _A_STEP else -_A_STEP if dv < -_A_STEP else dv
-            w += _ALPHA_STEP if dw > _ALPHA_STEP else -_ALPHA_STEP if dw < -_ALPHA_STEP else dw
+            v += _A_STEP if dv > _A_STEP else max(dv, -_A_STEP)
+            w += _ALPHA_STEP if dw > _ALPHA_STEP else max(dw, -_ALPHA_STEP)
             vx, vy = v * math.cos(phi), v * math.sin(phi)
             if stepped:
                 _set_velocity(base, (vx, vy))
@@ -325,7 +326,7 @@ class KitchenSim:
         gx, gy, gphi = W.spot_pose(*goal)
         x0, y0 = self._xy
         path = self.routes.path((x0, y0), (gx, gy))
-        lengths = [math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(path, path[1:])]
+        lengths = [math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in pairwise(path)]
         k, arrived = 0, False
         max_ticks = round(TIMEOUT * CONTROL_HZ)
         while True:
@@ -354,7 +355,6 @@ class KitchenSim:
                         continue
                     break
                 s = max(0.0, min(length, s))
-                remaining = length - s + sum(lengths[k + 1:])
                 ahead, j = s + LOOKAHEAD, k
                 while ahead > lengths[j] and j < len(lengths) - 1:
                     ahead -= lengths[j]
