@@ -63,3 +63,21 @@ def test_evaluate_situations_option(capsys):
     assert report["comparison"] == "scenario2" and report["problems"] == ["scenario2"]
     assert [row["action"] for row in report["per_action"]] == ["goToPose", "grip", "goToPose", "put"] * 2
     assert report["episodes"] == 1 and report["refined_mean"] < report["greedy_mean"]
+
+
+def test_refine_plot_draws_the_scene_under_both_executions(tmp_path, monkeypatch):
+    from dataclasses import replace
+
+    entry = registry.get("kitchen")
+    calls = []
+
+    def spy(ax, sequence, values):
+        calls.append(sorted(k for k in values if k.startswith("p1.") and k[3:] in ("along", "dist", "heading")))
+        entry.draw_scene(ax, sequence, values)
+
+    real_get = registry.get
+    monkeypatch.setattr(registry, "get", lambda name: replace(entry, draw_scene=spy) if name == "kitchen" else real_get(name))
+    picture = tmp_path / "F.png"
+    assert main(["refine", "kitchen", "scenario1", "--plot", str(picture)]) == 0
+    assert picture.stat().st_size > 0
+    assert calls == [["p1.along", "p1.dist", "p1.heading"]] * 2  # greedy and refined panels
