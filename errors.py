@@ -76,6 +76,12 @@ class PlannerUnavailableError(PlannerError):
 
 
 # --- refinement -----------------------------------------------------------------------------------------
+class UsageError(TailorError):
+    """A command-line value only the domain can refute (e.g. a situation generator its simulator lacks)."""
+
+    exit_code = 2
+
+
 class BeliefError(TailorError):
     """A belief-state file is missing or invalid."""
 

@@ -99,7 +99,7 @@ class ActionSequence:
     domain: str
     problem: str
     actions: tuple[ExecutableAction, ...]
-    scene: Mapping[str, tuple[float, ...]]  # e.g. {"robot": (x, y, phi, v), "cup": (x, y)}
+    scene: Mapping[str, tuple[float, ...]]  # e.g. {"robot": (x, y, phi, v), "box": (x, y)}
     simulator: str = ""  # the registered simulator its actions run in
 
     def free_parameters(self) -> tuple[Parameter, ...]:

@@ -20,6 +20,7 @@ from tailor.refinement.binding import DEFAULT_TYPE, Binding, PredicateBinding
 from tailor.sims.protocol import GROUPS
 from tailor.errors import BindingError, EmptyRangeError
 
+OBJECT_PLACEHOLDER = "{object}"  # in a predicate's `scene`: one scene object per PDDL object it places
 ObjectTypes = Mapping[str, "str | Sequence[str]"]  # object -> its type, or its type and ancestors
 
 
@@ -140,6 +141,12 @@ def _compose(obj: str, quantity: str, facts: Sequence[_Fact], types: Sequence[st
     return value, low, high
 
 
+def scene_name(template: str, obj: str) -> str:
+    """The scene object a fact places: the binding's `scene` name, or, for a template with "{object}" (one
+    scene object per PDDL object, e.g. "crate {object}"), that name with the fact's object filled in."""
+    return template.replace(OBJECT_PLACEHOLDER, obj)
+
+
 def _scene(plan: AbstractPlan, binding: Binding, belief: BeliefState,
            initial_state: Iterable[Sequence[str]]) -> Mapping[str, tuple[float, ...]]:
     """The scene objects placed by initial facts (robot pose, object positions), read from the belief state."""
@@ -159,9 +166,10 @@ def _scene(plan: AbstractPlan, binding: Binding, belief: BeliefState,
                                file=binding.file)
         values = tuple(belief.value(objects[0], q, needed_by=f"{text} in the initial state")
                        for q in predicate.read)
-        if placed_by.get(predicate.scene, text) != text:
-            raise BindingError(f"scene object '{predicate.scene}' placed twice in the initial state: "
-                               f"{placed_by[predicate.scene]} and {text}", file=binding.file)
-        scene.setdefault(predicate.scene, values)
-        placed_by.setdefault(predicate.scene, text)
+        name = scene_name(predicate.scene, objects[0])
+        if placed_by.get(name, text) != text:
+            raise BindingError(f"scene object '{name}' placed twice in the initial state: "
+                               f"{placed_by[name]} and {text}", file=binding.file)
+        scene.setdefault(name, values)
+        placed_by.setdefault(name, text)
     return MappingProxyType(scene)

@@ -57,16 +57,17 @@ def _draw(ax, result, layers, title: str) -> None:
     ax.set_ylabel(layers[0][1])
 
 
-def plot_executions(path: Path, views, panels: list[tuple[str, object]]) -> None:
-    """One row per view, one column per (title, SequenceResult), written to `path`."""
+def plot_executions(path: Path, views, panels: list[tuple[str, object]], background=None) -> None:
+    """One row per view, one column per (title, SequenceResult), written to `path`; `background(ax, column)`
+    draws under the first view's trajectories (the simulator's draw_scene)."""
     import matplotlib.pyplot as plt
 
-    fig = executions_figure(views, panels)
+    fig = executions_figure(views, panels, background)
     _save(fig, path)
     plt.close(fig)
 
 
-def executions_figure(views, panels: list[tuple[str, object]]):
+def executions_figure(views, panels: list[tuple[str, object]], background=None):
     """The figure of `plot_executions`: a start marker and the subgoals reached in each panel, the legend in
     the first panel of each row."""
     import matplotlib
@@ -78,6 +79,8 @@ def executions_figure(views, panels: list[tuple[str, object]]):
     fig, axes = plt.subplots(len(views), len(panels), figsize=(5.5 * len(panels), 4.6 * len(views)), squeeze=False)
     for row, view in enumerate(views):
         for col, (title, result) in enumerate(panels):
+            if row == 0 and background is not None:
+                background(axes[row, col], col)
             _draw(axes[row, col], result, view_layers(view), title if row == 0 else "")
         axes[row, 0].legend(loc="best", fontsize=8)
     return fig
@@ -158,7 +161,13 @@ def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
         if not o.simulated.succeeded:
             title += " (failed)"
         panels.append((title, o.simulated))
-    plot_executions(path, views, panels)
+    from tailor.sims import registry
+
+    draw_scene = registry.get(prepared.sequence.simulator).draw_scene if prepared.sequence.simulator else None
+    chosen_values = [{p.id: p.value for a in o.refined.sequence.actions for p in a.params} for o in outcomes.values()]
+    background = (None if draw_scene is None
+                  else (lambda ax, col: draw_scene(ax, prepared.sequence, chosen_values[col])))
+    plot_executions(path, views, panels, background)
     written = [path]
 
     refined = outcomes["refined"].refined

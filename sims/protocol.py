@@ -28,7 +28,7 @@ class ActionSpec:
     """An executable action: its parameter names per group and the object quantity each one takes.
 
     a navigation to a pose: observed (x, y, phi, v) of quantities (x, y, phi, v), internal (xg, yg, phig, vg) of
-    the same quantities of the goal object; a kitchen grip: observed base pose, internal gripper target.
+    the same quantities of the goal object; a manipulator grasp: observed base pose, internal gripper target.
     """
 
     name: str
@@ -133,6 +133,9 @@ class SimulatorEntry:
     views: tuple = ()  # trajectory columns worth drawing: pairs ("x", "y") or layers (("x", "y", "phi"), ...)
     feature_spaces: tuple[FeatureSpace, ...] = ()  # feature spaces of its own (Table 4.1 rows)
     scene_objects: tuple[str, ...] = ()  # the objects reset(scene) places; () = not declared (not checked)
+    # draw_scene(ax, sequence, values): draws the static world of an instantiated sequence (its scene, its
+    # free parameters' ranges and their chosen `values` by id) under the first view's trajectories in pictures
+    draw_scene: Callable[[Any, Any, Mapping[str, float]], None] | None = None
     description: str = ""
     extras: Mapping[str, Any] = field(default_factory=dict)
     team: Any = None  # a tailor.sims.team.TeamScene for the coordination experiments (Ch. 7), or None

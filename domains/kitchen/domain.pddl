@@ -1,25 +1,31 @@
 ; Service robotics (Sec. 5.5, Fig. 5.5, Fig. 5.11): a B21 moves cups between tables with goto, grip and put.
+; A spot is a place where the B21 may stand: its start pose, or in front of a table to grip one cup (pickup)
+; or to put one down (dropoff). Each visit to a table is its own spot, so each has its own free pose
+; (Fig. 5.12: position along the table's edge, distance to it, heading), chosen by subgoal refinement.
 (define (domain kitchen)
   (:requirements :strips :typing)
-  (:types location cup)
+  (:types spot furniture cup)
   (:predicates
-    (robot ?l - location)          ; the B21 stands at l (its start pose or in front of a table)
-    (table ?l - location)          ; l is a table cups can be put on
-    (on ?c - cup ?l - location)    ; cup c stands on table l
+    (robot ?s - spot)              ; the B21 stands at spot s
+    (table ?t - furniture)          ; t is a table cups can stand on
+    (serves ?s - spot ?t - furniture) ; spot s lies in front of table t
+    (on ?c - cup ?t - furniture)   ; cup c stands on table t
+    (pickup ?s - spot ?c - cup)    ; from spot s the B21 can grip cup c (40-80 cm from the table's edge)
+    (dropoff ?s - spot ?c - cup)   ; from spot s the B21 can put cup c at its put location
     (holding ?c - cup)             ; the B21 holds c in its gripper
     (handempty))                   ; the gripper is free
 
   (:action goto
-    :parameters (?from ?to - location)
+    :parameters (?from ?to - spot)
     :precondition (robot ?from)
     :effect (and (robot ?to) (not (robot ?from))))
 
   (:action grip
-    :parameters (?c - cup ?l - location)
-    :precondition (and (robot ?l) (table ?l) (on ?c ?l) (handempty))
-    :effect (and (holding ?c) (not (on ?c ?l)) (not (handempty))))
+    :parameters (?c - cup ?s - spot ?t - furniture)
+    :precondition (and (robot ?s) (table ?t) (serves ?s ?t) (on ?c ?t) (pickup ?s ?c) (handempty))
+    :effect (and (holding ?c) (not (on ?c ?t)) (not (handempty))))
 
   (:action put
-    :parameters (?c - cup ?l - location)
-    :precondition (and (robot ?l) (table ?l) (holding ?c))
-    :effect (and (on ?c ?l) (handempty) (not (holding ?c)))))
+    :parameters (?c - cup ?s - spot ?t - furniture)
+    :precondition (and (robot ?s) (table ?t) (serves ?s ?t) (holding ?c) (dropoff ?s ?c))
+    :effect (and (on ?c ?t) (handempty) (not (holding ?c)))))

@@ -27,6 +27,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="of these, how many are also searched in the simulator (default 100)")
     parser.add_argument("--horizon-episodes", type=whole_number(0), default=100, metavar="N",
                         help="situations run with horizons 1-4 (Table 5.3; default 100)")
+    parser.add_argument("--situations", metavar="NAME", default=None,
+                        help="a situation generator of the domain's simulator to evaluate on (greedy vs refined and "
+                             "the horizons) instead of the binding's [evaluation] ones, e.g. another scenario")
     parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed of situations and simulator")
     parser.add_argument("--jobs", type=worker_count, default=1, metavar="J",
                         help="worker processes (default 1; at most the number of CPUs)")
@@ -74,6 +77,15 @@ def _print_text(report: dict) -> None:
     out(f"  optimizer median time        analytic {_fmt(s['analytic_ms_median'])} ms, ga {_fmt(s['ga_ms_median'])} ms; "
         f"agree within 1% in {_pct(s['analytic_ga_agree'])}% "
         f"(analytic fell back to ga {s['analytic_fallbacks']} times)\n")
+    if s.get("window_ms_median") is not None:
+        out(f"  optimizer per window (h=2)   median {_fmt(s['window_ms_median'])} ms; all windows of a sequence take "
+            f"{_pct(s['optimizer_share'])}% of its execution time on average\n")
+    if s.get("per_action"):
+        out("\nPer action (Table 5.2), mean duration (s) over the situations where both succeeded:\n")
+        out("  problem          step  action              greedy (h=1)  refined (h=2)\n")
+        for row in s["per_action"]:
+            out(f"  {row['problem']:<16} {row['step']:>4}  {row['action']:<18} {_fmt(row['greedy_mean']):>13}"
+                f"  {_fmt(row['refined_mean']):>13}\n")
     w = report.get("horizons")
     if w:
         out(f"\nHorizons (Table 5.3) over random '{report['horizon_situations']}' situations, {w['episodes']} "
@@ -116,6 +128,16 @@ def _evaluate(args: argparse.Namespace) -> int:
         from tailor.refinement.cli.evaluate_assertion import run_assertion
 
         return run_assertion(args, domain_dir, binding, plan, run_in_workers, source.path)
+    if args.situations is not None:
+        from dataclasses import replace
+
+        from tailor.errors import UsageError
+
+        known = binding.entry.situations
+        if args.situations not in known:
+            raise UsageError(f"--situations {args.situations!r} is not a situation generator of simulator "
+                             f"{binding.simulator!r} (known: {', '.join(known) or 'none'})")
+        plan = replace(plan, comparison=args.situations, horizons=args.situations)
     planned: dict = {}  # each problem the situations need, planned once
 
     def situations(generator: str, count: int) -> list:

@@ -106,9 +106,12 @@ def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: 
            "greedy_outcome": outcome_of(g), "refined_outcome": outcome_of(r),
            "predicted_greedy": greedy.predicted_total, "predicted_refined": refined.predicted_total,
            "analytic_seconds": sum(w.seconds for w in refined.windows),
+           "analytic_window_seconds": [w.seconds for w in refined.windows],
            "analytic_method": ",".join(w.method for w in refined.windows),
            "ga_seconds": sum(w.seconds for w in genetic.windows),
-           "analytic_cost": refined.predicted_total, "ga_cost": genetic.predicted_total}
+           "analytic_cost": refined.predicted_total, "ga_cost": genetic.predicted_total,
+           "greedy_actions": [[a.action, a.duration] for a in g.results],
+           "refined_actions": [[a.action, a.duration] for a in r.results]}
     if zero:
         z = dispatch(sequence.bind(zero_assignment(sequence)), seed=seed)
         out["zero"], out["zero_ok"] = z.duration, z.succeeded
@@ -251,10 +254,15 @@ def summarize_comparison(rows: list[dict]) -> dict:
         "oracle_ratio_per_episode": _mean([r["refined"] / r["oracle"] for r in oracle_rows]),
         "greedy_oracle_ratio": _ratio(oracle_rows, "greedy"),
         "analytic_ms_median": float(np.median(analytic_ms)) if len(rows) else None,
+        "window_ms_median": (float(1000 * np.median([w for r in rows for w in r.get("analytic_window_seconds", [])]))
+                             if any(r.get("analytic_window_seconds") for r in rows) else None),
+        "optimizer_share": (_mean([r["analytic_seconds"] / r["refined"] for r in both if r["refined"] > 0])
+                            if both else None),
         "ga_ms_median": float(np.median(ga_ms)) if len(rows) else None,
         "analytic_fallbacks": sum("analytic" not in r["analytic_method"] for r in rows),
         "analytic_ga_agree": float(np.mean(agree)) if rows else None,
     }
+    out["per_action"] = _per_action(both)
     if rows and "zero" in rows[0]:
         out.update(_zero_summary(rows))
     return out
@@ -278,6 +286,21 @@ def _failure_summary(rows: list[dict]) -> dict:
         "penalized_improvement": float(np.mean(1.0 - t / g)),
         "failure_penalty_s": FAILURE_PENALTY_S,
     }
+
+
+def _per_action(both: list[dict]) -> list[dict]:
+    """Table 5.2: the mean duration of each action of each problem's plan, greedy and refined (Eq. 5.4), over
+    the situations where both executions succeeded."""
+    table = []
+    for problem in sorted({r["problem"] for r in both}):
+        rows = [r for r in both if r["problem"] == problem and "greedy_actions" in r]
+        if not rows:
+            continue
+        for k, (action, _) in enumerate(rows[0]["refined_actions"]):
+            table.append({"problem": problem, "step": k + 1, "action": action,
+                          "greedy_mean": _mean([r["greedy_actions"][k][1] for r in rows]),
+                          "refined_mean": _mean([r["refined_actions"][k][1] for r in rows])})
+    return table
 
 
 def _zero_summary(rows: list[dict]) -> dict:

@@ -1,7 +1,12 @@
-; Scenario 1 (Sec. 5.5, Fig. 5.11): from its start pose the B21 carries one cup from table1 to table2.
+; Scenario 1 (Sec. 5.5, Fig. 5.11): from its start the B21 carries one cup from table1 to table2: goto, grip,
+; goto, put. p1 is where it stands to grip cup1, d1 where it stands to put it down.
 (define (problem scenario1)
   (:domain kitchen)
-  (:objects start table1 table2 - location
+  (:objects start p1 d1 - spot
+            table1 table2 - furniture
             cup1 - cup)
-  (:init (robot start) (table table1) (table table2) (on cup1 table1) (handempty))
+  (:init (robot start) (handempty)
+         (table table1) (table table2)
+         (serves p1 table1) (serves d1 table2)
+         (on cup1 table1) (pickup p1 cup1) (dropoff d1 cup1))
   (:goal (on cup1 table2)))

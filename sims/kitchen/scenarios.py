@@ -1,0 +1,178 @@
+"""The kitchen's random layouts (Fig. 5.11(a)), experience scenarios (Sec. 4.1) and situations (Sec. 5.5).
+
+A layout displaces, uniformly along documented axes: table1 along room A's north wall (+-TABLE1_SHIFT),
+table2 along room B's east wall (+-TABLE2_SHIFT), each cup along table1 (+-CUP_ALONG from its centre) and into
+it (CUP_INSET), each put location likewise on table2, and the robot's start within START_REGION with any
+heading. Two cups (or put locations) lie CUP_SEPARATION apart along their table.
+
+Experience scenarios (the instant environment modification of Sec. 4.1):
+- "goToPose": from the start, a pickup spot or a dropoff spot of a random layout, to a pickup or dropoff spot
+  (the legs of both scenarios' plans), every free offset uniform in its Fig. 5.12 range;
+- "grip": the base at a random pickup spot, gripping the cup there;
+- "put": the base at a random dropoff spot with a cup in the gripper, putting it at the put location.
+Situations "scenario1" and "scenario2" give the belief values of the problems of the same names.
+"""
+
+from __future__ import annotations
+
+import math
+from itertools import pairwise
+from pathlib import Path
+
+import numpy as np
+
+from tailor.sims.episode import ActionCall, Episode
+from tailor.sims.kitchen import world as W
+from tailor.sims.kitchen.simulator import KitchenSim, Noise
+
+SAMPLING_STREAM = 1  # second seed word: a scenario's draws are independent of the simulator's noise
+PROBLEMS_DIR = Path(__file__).resolve().parents[2] / "domains" / "kitchen" / "problems"
+
+
+def _alongs(rng: np.random.Generator, n: int) -> list[float]:
+    while True:
+        values = sorted(float(v) for v in rng.uniform(-W.CUP_ALONG, W.CUP_ALONG, n))
+        if all(b - a >= W.CUP_SEPARATION for a, b in pairwise(values)):
+            return [float(v) for v in rng.permutation(values)]
+
+
+def random_layout(rng: np.random.Generator, cups: int) -> dict:
+    """Tables, cups, put locations and the robot's start of one random episode."""
+    t1 = (W.TABLE1[0] + float(rng.uniform(-W.TABLE1_SHIFT, W.TABLE1_SHIFT)), W.TABLE1[1], W.TABLE1[2])
+    t2 = (W.TABLE2[0], W.TABLE2[1] + float(rng.uniform(-W.TABLE2_SHIFT, W.TABLE2_SHIFT)), W.TABLE2[2])
+    cup_points = [W.table_point(t1, a, float(rng.uniform(*W.CUP_INSET))) for a in _alongs(rng, cups)]
+    put_points = [W.table_point(t2, a, float(rng.uniform(*W.CUP_INSET))) for a in _alongs(rng, cups)]
+    (x0, x1), (y0, y1) = W.START_REGION
+    start = (float(rng.uniform(x0, x1)), float(rng.uniform(y0, y1)), float(rng.uniform(-math.pi, math.pi)))
+    return {"table1": t1, "table2": t2, "cups": cup_points, "puts": put_points, "start": start}
+
+
+def belief_objects(layout: dict) -> dict[str, dict[str, float]]:
+    """The belief values of a layout: start (a spot with zero offsets), tables, cups, pickup spots p<i> and
+    dropoff spots d<i> (their frames, and the put location)."""
+    x, y, phi = layout["start"]
+    objects: dict[str, dict[str, float]] = {
+        "start": {"ox": x, "oy": y, "ophi": phi, "along": 0.0, "dist": 0.0, "heading": 0.0}}
+    for name in ("table1", "table2"):
+        objects[name] = dict(zip(("ox", "oy", "ophi"), layout[name]))  # centre, direction facing it
+    for i, (cup, put) in enumerate(zip(layout["cups"], layout["puts"]), start=1):
+        objects[f"cup{i}"] = {"x": cup[0], "y": cup[1]}
+        objects[f"p{i}"] = dict(zip(("ox", "oy", "ophi"), W.serving_frame(layout["table1"], *cup)))
+        objects[f"d{i}"] = {**dict(zip(("ox", "oy", "ophi"), W.serving_frame(layout["table2"], *put))),
+                            "tx": put[0], "ty": put[1]}
+    return objects
+
+
+def _offsets(rng: np.random.Generator) -> tuple[float, float, float]:
+    return (float(rng.uniform(*W.SPOT_ALONG)), float(rng.uniform(*W.SPOT_DIST)), float(rng.uniform(*W.SPOT_HEADING)))
+
+
+def _sim(seed: int, layout: dict, pose, holding: str | None = None, noise: Noise | None = None) -> KitchenSim:
+    sim = KitchenSim(seed, Noise() if noise is None else noise)
+    cups = {f"cup{i}": c for i, c in enumerate(layout["cups"], start=1)}
+    sim.place(pose, {"table1": layout["table1"], "table2": layout["table2"]}, cups, holding)
+    return sim
+
+
+def sample_goto(rng: np.random.Generator) -> tuple[dict, tuple[float, float, float], tuple[float, ...]]:
+    """A layout, a start pose (start, pickup or dropoff spot) and a goal spot (pickup or dropoff)."""
+    layout = random_layout(rng, 1)
+    pickup = (*W.serving_frame(layout["table1"], *layout["cups"][0]), *_offsets(rng))
+    dropoff = (*W.serving_frame(layout["table2"], *layout["puts"][0]), *_offsets(rng))
+    kind = int(rng.integers(3))  # start -> pickup, pickup -> dropoff, dropoff -> pickup
+    start, goal = ((layout["start"], pickup), (W.spot_pose(*pickup), dropoff),
+                   (W.spot_pose(*dropoff), pickup))[kind]
+    return layout, start, goal
+
+
+def run_goto(seed: int, noise: Noise | None = None) -> Episode:
+    """One random goToPose leg (see the module doc)."""
+    layout, start, goal = sample_goto(np.random.default_rng((seed, SAMPLING_STREAM)))
+    return _sim(seed, layout, start, noise=noise).run(ActionCall("goToPose", goal))
+
+
+def run_grip(seed: int, noise: Noise | None = None) -> Episode:
+    """One random grip from a pickup spot (see the module doc)."""
+    rng = np.random.default_rng((seed, SAMPLING_STREAM))
+    layout = random_layout(rng, 1)
+    cup = layout["cups"][0]
+    pose = W.spot_pose(*W.serving_frame(layout["table1"], *cup), *_offsets(rng))
+    return _sim(seed, layout, pose, noise=noise).run(ActionCall("grip", cup))
+
+
+def run_put(seed: int, noise: Noise | None = None) -> Episode:
+    """One random put from a dropoff spot, the cup in the gripper (see the module doc)."""
+    rng = np.random.default_rng((seed, SAMPLING_STREAM))
+    layout = random_layout(rng, 1)
+    put = layout["puts"][0]
+    pose = W.spot_pose(*W.serving_frame(layout["table2"], *put), *_offsets(rng))
+    return _sim(seed, layout, pose, holding="cup1", noise=noise).run(ActionCall("put", put))
+
+
+def subgoal_episode(action: str, params: np.ndarray, seed: int) -> Episode:
+    """An episode of `action` from a refined subgoal: params = start spot (6), then the action's goal.
+    The layout around it is drawn from the seed (only the furniture near the path matters)."""
+    p = [float(v) for v in params]
+    rng = np.random.default_rng((seed, SAMPLING_STREAM))
+    layout = random_layout(rng, 1)
+    pose = W.spot_pose(*p[:6])
+    if action == "goToPose":
+        return _sim(seed, layout, pose).run(ActionCall(action, tuple(p[6:12])))
+    point = (p[6], p[7])
+    table = "table1" if action == "grip" else "table2"
+    layout[table] = _table_under(point, layout[table])
+    if action == "grip":
+        layout["cups"] = [point]
+        return _sim(seed, layout, pose).run(ActionCall(action, point))
+    return _sim(seed, layout, pose, holding="cup1").run(ActionCall(action, point))
+
+
+def _table_under(point, table):
+    """The table moved along its wall so that it stands under `point` (as in the situation it came from)."""
+    x, y, phi = table
+    if abs(math.cos(phi)) < 0.5:  # table along a north/south wall: shift in x
+        return (point[0], y, phi)
+    return (x, point[1], phi)
+
+
+def scenario1(rng: np.random.Generator) -> tuple[str, dict[str, dict[str, float]]]:
+    """Scenario 1 (Fig. 5.11): one cup from table1 to table2, in a random layout."""
+    return "scenario1", belief_objects(random_layout(rng, 1))
+
+
+def scenario2(rng: np.random.Generator) -> tuple[str, dict[str, dict[str, float]]]:
+    """Scenario 2: two cups from table1 to table2, one at a time, in a random layout."""
+    return "scenario2", belief_objects(random_layout(rng, 2))
+
+
+SITUATIONS = {"scenario1": scenario1, "scenario2": scenario2}
+
+
+BELIEF_SEEDS = {"scenario1": 1, "scenario2": 2}  # the layouts of the bundled belief files
+
+
+def belief_text(name: str) -> str:
+    """The belief file (TOML) of a bundled problem: one random layout (seed BELIEF_SEEDS[name])."""
+    seed = BELIEF_SEEDS[name]
+    _, objects = SITUATIONS[name](np.random.default_rng(seed))
+    lines = [f"# Belief state of problem `{name}`: one random layout of the kitchen (tailor.sims.kitchen.scenarios,",
+             f"# situation generator {name!r}, seed {seed}); `tailor evaluate kitchen` draws many. Spots: ox, oy, ophi",
+             "# (frame: the foot of the cup or put location on the table's serving edge, facing the table; the start:",
+             "# the robot's pose) and, for the start, its zero offsets; tables ox, oy, ophi (centre, facing direction);",
+             "# cups x, y; put locations tx, ty.",
+             "# Regenerate: python -c \"from tailor.sims.kitchen.scenarios import write_belief_files; write_belief_files()\""]
+    for obj, values in objects.items():
+        lines.append(f"[objects.{obj}]")
+        lines += [f"{key} = {round(value, 4)!r}" for key, value in values.items()]
+        lines.append("")
+    return "\n".join(lines)
+
+
+def write_belief_files(folder: str | Path = PROBLEMS_DIR) -> list[Path]:
+    """Write the bundled problems' belief files into `folder`."""
+    paths = []
+    for name in BELIEF_SEEDS:
+        path = Path(folder) / f"{name}.toml"
+        path.write_text(belief_text(name))
+        paths.append(path)
+    return paths

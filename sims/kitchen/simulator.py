@@ -1,0 +1,463 @@
+"""KitchenSim: the B21-like robot, tables and cups in a pymunk space stepped at a fixed rate (headless).
+
+The base is a kinematic body: each physics step its [v, phidot] moves toward the (noisy) command by at most
+A_MAX / ALPHA_MAX per second within V_MAX / W_MAX (unicycle model). Walls, the island and the tables are static
+boxes; cups are small dynamic bodies standing on the tables (they do not collide with the table tops) that a
+closed gripper carries. The arm's two joints (pan, extension) are integrated at the control rate.
+
+Actions (Table 2.1): `goToPose` (goal: a spot, ox, oy, ophi, along, dist, heading; world.spot_pose) plans the
+shortest route round the furniture (navigation.RouteMap on the scene's furniture), follows it by pure pursuit
+(turning in place where the route bends sharply), brakes to stop at the goal position and turns in place to
+the goal heading. `grip` (goal: the cup's x, y) and `put` (goal: the put location's x, y) pan and extend the
+arm to the point (for grip, the cup the arm's camera finds within CUP_SEARCH of it, seen relative to the base
+with the position noise; for put, the point relative to the believed base pose) (each joint a velocity ramp within its speed and acceleration limits), close (grip) or open
+(put) the gripper in GRIPPER_TIME, and tuck the arm back (pan 0, extension EXT_REST).
+
+Outcomes (Episode.outcome), judged on the true state:
+- "success": goToPose within POS_TOL, HEADING_TOL of the goal pose at rest; grip/put with the arm tucked;
+- "collision": the base touches a wall, the island or a table;
+- "out_of_reach": the arm cannot reach the point (bearing beyond PAN_LIMIT, extension beyond EXT_MAX) or
+  the base is not 40-80 cm (SPOT_DIST, +-REACH_TOLERANCE) from the serving edge of the table at the point;
+- "missed": the gripper closed more than GRIP_TOLERANCE from any cup; "not_holding": put without a cup;
+- "cup_dropped": put released the cup off every table;
+- "timeout": TIMEOUT simulated seconds passed.
+Timing: physics at PHYSICS_HZ, control at CONTROL_HZ, believed state logged at LOG_HZ.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from itertools import pairwise
+
+import numpy as np
+import pymunk
+
+from tailor.errors import SimError
+from tailor.sims.episode import ActionCall, Episode, SequenceResult, run_in_sequence
+from tailor.sims.kitchen import world as W
+from tailor.sims.kitchen.navigation import RouteMap
+
+PHYSICS_HZ = 100  # Hz
+CONTROL_HZ = 20  # Hz (divides PHYSICS_HZ)
+LOG_HZ = 10  # Hz (divides CONTROL_HZ)
+DT = 1.0 / PHYSICS_HZ
+DT_CONTROL = 1.0 / CONTROL_HZ
+STEPS_PER_CONTROL = PHYSICS_HZ // CONTROL_HZ
+CONTROLS_PER_LOG = CONTROL_HZ // LOG_HZ
+
+POS_TOL = 0.08  # m, goToPose: base centre to the goal position (success, true state)
+ARRIVE_TOL = 0.05  # m, goToPose stops driving when the believed position is this close
+HEADING_TOL = 0.05  # rad
+SPEED_TOL = 0.05  # m/s
+TURN_RATE_TOL = 0.1  # rad/s
+LOOKAHEAD = 0.5  # m, pure-pursuit carrot distance along the route
+TURN_IN_PLACE = 0.8  # rad, heading error beyond which the base stops to turn
+K_TURN = 2.5  # 1/s, commanded turn rate per rad of heading error
+V_CREEP = 0.05  # m/s, slowest approach speed
+BRAKE = 0.8  # fraction of A_MAX (ALPHA_MAX) planned for braking
+PAN_TOL = 0.01  # rad, a joint has arrived within these tolerances ...
+EXT_TOL = 0.005  # m
+GRIP_TOLERANCE = 0.06  # m, gripper to cup centre for a successful grip (the open gripper's catch)
+CUP_SEARCH = 0.1  # m, grip finds a cup this close to its goal point with the arm's camera
+REACH_TOLERANCE = 0.05  # m, slack of the 40-80 cm precondition
+TIMEOUT = 60.0  # s
+
+ACTIONS = ("goToPose", "grip", "put")
+GOAL_SIZES = {"goToPose": 6, "grip": 2, "put": 2}
+STATE_COLUMNS = ("ox", "oy", "ophi", "along", "dist", "heading", "v", "pan", "ext")  # believed; pose as a spot
+TRAJECTORY_COLUMNS = ("t", "x", "y", "phi", "v", "pan", "ext", "gripper_x", "gripper_y")  # true state
+_NOISE_BLOCK = 512
+
+FURNITURE, CUPS, BASE, QUERY = 0b0001, 0b0010, 0b0100, 0b1000  # collision categories
+_FURNITURE_QUERY = pymunk.ShapeFilter(categories=QUERY, mask=FURNITURE)  # furniture meets only queries
+_set_velocity = pymunk.Body.velocity.fset
+_set_angular_velocity = pymunk.Body.angular_velocity.fset
+_set_position = pymunk.Body.position.fset
+_A_STEP = W.A_MAX * DT
+_ALPHA_STEP = W.ALPHA_MAX * DT
+
+
+@dataclass(frozen=True)
+class Noise:
+    """Seeded noise: relative on the executed motor commands (base and arm joints), and on the believed
+    base pose and object positions."""
+
+    motor: float = 0.03
+    position: float = 0.01  # m
+    heading: float = math.radians(1.0)  # rad
+
+    @classmethod
+    def off(cls) -> Noise:
+        return cls(0.0, 0.0, 0.0)
+
+
+def _ramp(q: float, qd: float, goal: float, v_max: float, a_max: float) -> float:
+    """The joint velocity for the next control period: toward the goal along a velocity ramp, never past it."""
+    e = goal - q
+    step = a_max * DT_CONTROL
+    # the fastest speed from which braking by `step` each period stops within |e| (discrete sqrt(2 a e))
+    brake = step * (math.sqrt(0.25 + 2.0 * abs(e) / (step * DT_CONTROL)) - 0.5)
+    want = math.copysign(min(v_max, brake, abs(e) / DT_CONTROL), e)
+    return qd + max(-step, min(step, want - qd))
+
+
+class KitchenSim:
+    """The kitchen with the robot; `run` executes one action as an Episode, `run_sequence` several."""
+
+    state_columns = STATE_COLUMNS
+
+    def __init__(self, seed: int, noise: Noise = Noise()):
+        self.noise = noise
+        self.seed = int(seed)
+        self.rng = np.random.default_rng(seed)
+        self._draws: list[list[float]] = []
+        self.space = pymunk.Space()
+        self.space.damping = 0.05  # cups pushed over the floor or table come to rest
+        self.fixed = [*W.walls(), W.island()]
+        for box in self.fixed:
+            self._add_box(box)
+        self.base = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        shape = pymunk.Circle(self.base, W.BASE_RADIUS)
+        shape.filter = pymunk.ShapeFilter(categories=BASE, mask=CUPS)
+        self.space.add(self.base, shape)
+        self.tables: dict[str, W.Box] = {}
+        self._table_shapes: list[pymunk.Shape] = []
+        self.cups: dict[str, pymunk.Body] = {}
+        self.held: str | None = None
+        self.routes = RouteMap([*self.fixed])
+        self.time = 0.0
+        self._xy = (0.0, 0.0)  # true base position (mirrored into the body)
+        self.v = self.w = self.phi = 0.0
+        self.v_cmd = self.w_cmd = 0.0
+        self.pan, self.ext = 0.0, W.EXT_REST
+        self._next_sample = 0.0
+
+    def _add_box(self, box: W.Box) -> pymunk.Shape:
+        shape = pymunk.Poly(self.space.static_body, box.corners())
+        shape.filter = pymunk.ShapeFilter(categories=FURNITURE, mask=QUERY)
+        self.space.add(shape)
+        return shape
+
+    # --- state ------------------------------------------------------------------------------------------
+    def reset(self, scene: Mapping[str, Sequence[float]]) -> None:
+        """The protocol's reset: {"robot": (ox, oy, ophi, along, dist, heading) (a spot), "table NAME": (x, y,
+        phi), "cup NAME": (x, y)}; the robot at rest, the arm tucked, the gripper empty."""
+        if not isinstance(scene, Mapping) or "robot" not in scene:
+            raise SimError("the kitchen scene needs a robot (ox, oy, ophi, along, dist, heading)")
+        tables, cups = {}, {}
+        for key, values in scene.items():
+            values = tuple(float(v) for v in values)
+            kind, _, name = key.partition(" ")
+            if key == "robot":
+                if len(values) != 6:
+                    raise SimError(f"the kitchen scene's robot is a spot (ox, oy, ophi, along, dist, heading), got {values}")
+            elif kind == "table" and name and len(values) == 3:
+                tables[name] = values
+            elif kind == "cup" and name and len(values) == 2:
+                cups[name] = values
+            else:
+                raise SimError(f"unknown kitchen scene object {key!r} with {len(values)} values (expected robot, "
+                               "'table NAME' (x, y, phi), 'cup NAME' (x, y))")
+        self.place(W.spot_pose(*scene["robot"]), tables, cups)
+
+    def place(self, pose: tuple[float, float, float], tables: Mapping[str, Sequence[float]],
+              cups: Mapping[str, Sequence[float]], holding: str | None = None) -> None:
+        """Base at pose (x, y, phi) at rest, tables (x, y, phi), cups (x, y) at rest; `holding` a cup's name
+        puts that cup in the (tucked) gripper."""
+        x, y, phi = (float(q) for q in pose)
+        values = [x, y, phi, *(float(v) for t in tables.values() for v in t), *(float(v) for c in cups.values() for v in c)]
+        if not all(math.isfinite(v) for v in values):
+            raise SimError(f"kitchen scene values must be finite, got {values}")
+        if holding is not None and holding not in cups:
+            raise SimError(f"holding unknown cup {holding!r}")
+        for shape in self._table_shapes:
+            self.space.remove(shape)
+        self.tables = {name: W.table_box(*t) for name, t in tables.items()}
+        self._table_shapes = [self._add_box(box) for box in self.tables.values()]
+        for body in self.cups.values():
+            self.space.remove(body, *body.shapes)
+        self.cups = {}
+        for name, (cx, cy) in cups.items():
+            body = pymunk.Body(W.CUP_MASS, pymunk.moment_for_circle(W.CUP_MASS, 0, W.CUP_RADIUS))
+            body.position = (float(cx), float(cy))
+            shape = pymunk.Circle(body, W.CUP_RADIUS)
+            shape.filter = pymunk.ShapeFilter(categories=CUPS, mask=CUPS | BASE)
+            self.space.add(body, shape)
+            self.cups[name] = body
+        self.routes = RouteMap([*self.fixed, *self.tables.values()])
+        self.base.position, self.base.angle = (x, y), phi
+        self._xy = (x, y)
+        self.base.velocity, self.base.angular_velocity = (0.0, 0.0), 0.0
+        self.space.reindex_shapes_for_body(self.base)
+        self.phi, self.v, self.w, self.v_cmd, self.w_cmd = phi, 0.0, 0.0, 0.0, 0.0
+        self.pan, self.ext, self.held = 0.0, W.EXT_REST, holding
+        self._carry()
+        self.time = 0.0
+
+    def gripper(self) -> tuple[float, float]:
+        """The gripper's true position."""
+        x, y = self._xy
+        sx, sy = x + W.SHOULDER_OFFSET * math.cos(self.phi), y + W.SHOULDER_OFFSET * math.sin(self.phi)
+        a = self.phi + self.pan
+        return sx + self.ext * math.cos(a), sy + self.ext * math.sin(a)
+
+    def true_state(self) -> tuple[float, ...]:
+        """(x, y, phi, v, pan, ext, gripper_x, gripper_y)."""
+        x, y = self._xy
+        return (x, y, W.wrap(self.phi), self.v, self.pan, self.ext, *self.gripper())
+
+    def _draw(self) -> list[float]:
+        if not self._draws:
+            self._draws = self.rng.standard_normal((_NOISE_BLOCK, 8)).tolist()
+            self._draws.reverse()
+        return self._draws.pop()
+
+    def _believe(self, true: Sequence[float], e: Sequence[float]) -> tuple[float, float, float]:
+        n = self.noise
+        return true[0] + n.position * e[0], true[1] + n.position * e[1], W.wrap(true[2] + n.heading * e[2])
+
+    def collides(self) -> bool:
+        """The base overlaps a wall, the island or a table."""
+        return self.space.point_query_nearest(self._xy, W.BASE_RADIUS - 1e-6, _FURNITURE_QUERY) is not None
+
+    # --- dynamics ---------------------------------------------------------------------------------------
+    def command(self, v_cmd: float, w_cmd: float, e: Sequence[float] = (0.0, 0.0)) -> None:
+        m = self.noise.motor
+        self.v_cmd = max(-W.V_MAX, min(W.V_MAX, v_cmd * (1.0 + m * e[0])))
+        self.w_cmd = max(-W.W_MAX, min(W.W_MAX, w_cmd * (1.0 + m * e[1])))
+
+    def _advance(self) -> None:
+        """One control period of physics steps: the base accelerates toward its command within the limits.
+
+        The base's unicycle motion is integrated here at PHYSICS_HZ; pymunk is stepped with it only while the
+        base is near a free cup or a cup is sliding (contacts are possible); otherwise it only receives the base
+        pose at the end of the period (stepping it would move nothing else)."""
+        base = self.base
+        v, w, phi = self.v, self.w, self.phi
+        x, y = self._xy
+        if not (v != 0.0 or w != 0.0 or self.v_cmd != 0.0 or self.w_cmd != 0.0):
+            if self._contacts_possible():
+                for _ in range(STEPS_PER_CONTROL):
+                    self.space.step(DT)
+            self.time += DT_CONTROL
+            self._carry()
+            return
+        stepped = self._contacts_possible()
+        v_cmd, w_cmd = self.v_cmd, self.w_cmd
+        for _ in range(STEPS_PER_CONTROL):
+            dv, dw = v_cmd - v, w_cmd - w
+            v += _A_STEP if dv > _A_STEP else max(dv, -_A_STEP)
+            w += _ALPHA_STEP if dw > _ALPHA_STEP else max(dw, -_ALPHA_STEP)
+            vx, vy = v * math.cos(phi), v * math.sin(phi)
+            if stepped:
+                _set_velocity(base, (vx, vy))
+                _set_angular_velocity(base, w)
+                self.space.step(DT)
+            x += vx * DT
+            y += vy * DT
+            phi += w * DT
+        if not stepped:
+            _set_position(base, (x, y))
+        self.v, self.w, self.phi, self._xy = v, w, phi, (x, y)
+        self.time += DT_CONTROL
+        self._carry()
+
+    def _contacts_possible(self) -> bool:
+        """A free cup lies within reach of the base's next control period, or is still sliding."""
+        x, y = self._xy
+        reach = W.BASE_RADIUS + W.CUP_RADIUS + W.V_MAX * DT_CONTROL + 0.05
+        for name, body in self.cups.items():
+            if name == self.held:
+                continue
+            cx, cy = body.position
+            if (cx - x) ** 2 + (cy - y) ** 2 <= reach * reach or body.velocity != (0.0, 0.0):
+                return True
+        return False
+
+    def _carry(self) -> None:
+        if self.held is not None:
+            body = self.cups[self.held]
+            _set_position(body, self.gripper())
+            _set_velocity(body, (0.0, 0.0))
+
+    # --- actions ----------------------------------------------------------------------------------------
+    def run(self, call: ActionCall) -> Episode:
+        """Execute one action from the current state until it ends; the Episode logs the believed state."""
+        return self._execute(call, None)
+
+    def run_sequence(self, calls: Sequence[ActionCall]) -> SequenceResult:
+        """Dispatch actions back to back; stop at the first failure."""
+        self._next_sample = self.time
+        return run_in_sequence(self._execute, calls, lambda: self.time, TRAJECTORY_COLUMNS)
+
+    def _execute(self, call: ActionCall, trajectory: list | None) -> Episode:
+        goal = _check_call(call)
+        self._log_t: list[float] = []
+        self._log: list[tuple[float, ...]] = []
+        self._ticks = 0
+        self._trajectory = trajectory
+        true = self.true_state()
+        believed = self._believe(true, self._draw())
+        params = np.array([*believed, 0.0, 0.0, 0.0, *goal], dtype=float)
+        if call.action == "goToPose":
+            outcome = self._go_to_pose(goal)
+        else:
+            outcome = self._arm(call.action, goal, believed)
+        return Episode(call.action, params, np.array(self._log_t),
+                       np.array(self._log, dtype=float).reshape(-1, len(STATE_COLUMNS)), STATE_COLUMNS, outcome,
+                       self._ticks / CONTROL_HZ, self.seed)
+
+    def _tick(self) -> tuple[tuple[float, ...], list[float], tuple[float, float, float]]:
+        """Record the start of a control period: trajectory sample, believed state, log row."""
+        true = self.true_state()
+        if self._trajectory is not None and self.time >= self._next_sample - 1e-9:
+            self._trajectory.append((self.time, *true))
+            self._next_sample += 1.0 / LOG_HZ
+        e = self._draw()
+        believed = self._believe(true, e)
+        if self._ticks % CONTROLS_PER_LOG == 0:
+            self._log_t.append(self._ticks / CONTROL_HZ)
+            self._log.append((*believed, 0.0, 0.0, 0.0, true[3], true[4], true[5]))
+        return true, e, believed
+
+    def _go_to_pose(self, goal: Sequence[float]) -> str:
+        gx, gy, gphi = W.spot_pose(*goal)
+        x0, y0 = self._xy
+        path = self.routes.path((x0, y0), (gx, gy))
+        lengths = [math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in pairwise(path)]
+        k, arrived = 0, False
+        max_ticks = round(TIMEOUT * CONTROL_HZ)
+        while True:
+            true, e, (x, y, phi) = self._tick()
+            if self.collides():
+                return "collision"
+            if (math.hypot(true[0] - gx, true[1] - gy) <= POS_TOL and abs(W.wrap(true[2] - gphi)) <= HEADING_TOL
+                    and abs(self.v) <= SPEED_TOL and abs(self.w) <= TURN_RATE_TOL and arrived):
+                return "success"
+            if self._ticks >= max_ticks:
+                return "timeout"
+            if not arrived and math.hypot(gx - x, gy - y) <= ARRIVE_TOL:
+                arrived = True
+            if arrived:
+                err = W.wrap(gphi - phi)
+                rate = min(W.W_MAX, K_TURN * abs(err), math.sqrt(2.0 * BRAKE * W.ALPHA_MAX * abs(err)))
+                self.command(0.0, math.copysign(rate, err), e[3:5])
+            else:
+                # project onto the current leg, move on to the next leg once past this one's end
+                while True:
+                    (ax, ay), (bx, by) = path[k], path[k + 1]
+                    length = lengths[k]
+                    s = ((x - ax) * (bx - ax) + (y - ay) * (by - ay)) / length if length > 0 else length
+                    if s >= length and k < len(lengths) - 1:
+                        k += 1
+                        continue
+                    break
+                s = max(0.0, min(length, s))
+                ahead, j = s + LOOKAHEAD, k
+                while ahead > lengths[j] and j < len(lengths) - 1:
+                    ahead -= lengths[j]
+                    j += 1
+                (ax, ay), (bx, by) = path[j], path[j + 1]
+                f = min(1.0, ahead / lengths[j]) if lengths[j] > 0 else 1.0
+                cx, cy = ax + f * (bx - ax), ay + f * (by - ay)
+                err = W.wrap(math.atan2(cy - y, cx - x) - phi)
+                rate = max(-W.W_MAX, min(W.W_MAX, K_TURN * err))
+                speed = W.V_MAX * max(0.0, 1.0 - abs(err) / TURN_IN_PLACE)
+                speed = min(speed, max(V_CREEP, math.sqrt(2.0 * BRAKE * W.A_MAX * math.hypot(gx - x, gy - y))))
+                self.command(speed, rate, e[3:5])
+            self._advance()
+            self._ticks += 1
+
+    def _arm(self, action: str, goal: Sequence[float], base: tuple[float, float, float]) -> str:
+        """grip / put: reach the point, close / open the gripper, tuck the arm."""
+        e = self._draw()
+        bx, by, bphi = base
+        tx, ty = goal
+        if action == "grip":  # the arm's camera sees the cup nearest the point, relative to the base
+            near = [(math.hypot(b.position[0] - tx, b.position[1] - ty), b) for b in self.cups.values()]
+            gap, body = min(near, default=(math.inf, None), key=lambda g: g[0])
+            if gap <= CUP_SEARCH:
+                bx, by, bphi = self._xy[0], self._xy[1], self.phi
+                tx, ty = body.position
+        tx, ty = tx + self.noise.position * e[0], ty + self.noise.position * e[1]
+        sx, sy = bx + W.SHOULDER_OFFSET * math.cos(bphi), by + W.SHOULDER_OFFSET * math.sin(bphi)
+        pan = W.wrap(math.atan2(ty - sy, tx - sx) - bphi)
+        ext = math.hypot(tx - sx, ty - sy)
+        self.command(0.0, 0.0)
+        if action == "put" and self.held is None:
+            return "not_holding"
+        if abs(pan) > W.PAN_LIMIT or not (W.EXT_REST <= ext <= W.EXT_MAX) or not self._base_at_table(goal):
+            self._tick()
+            return "out_of_reach"
+        outcome = self._move_arm(pan, ext)
+        if outcome:
+            return outcome
+        for _ in range(round(W.GRIPPER_TIME * CONTROL_HZ)):
+            self._tick()
+            self._advance()
+            self._ticks += 1
+        gx, gy = self.gripper()
+        if action == "grip":
+            near = [(math.hypot(b.position[0] - gx, b.position[1] - gy), n) for n, b in self.cups.items()]
+            gap, name = min(near, default=(math.inf, None), key=lambda g: g[0])
+            if gap > GRIP_TOLERANCE:
+                self._tick()
+                return "missed"
+            self.held = name
+        else:
+            self.held = None
+            if not any(box.contains(gx, gy) for box in self.tables.values()):
+                self._tick()
+                return "cup_dropped"
+        return self._move_arm(0.0, W.EXT_REST) or "success"
+
+    def _base_at_table(self, point: Sequence[float]) -> bool:
+        """The grip precondition: the base SPOT_DIST from the serving edge of the table at `point`."""
+        x, y = self._xy
+        for box in self.tables.values():
+            if box.distance(point[0], point[1]) <= W.CUP_RADIUS:
+                c, s = math.cos(box.angle), math.sin(box.angle)
+                edge = box.cx - c * box.hx, box.cy - s * box.hx  # middle of the serving edge
+                d = c * (edge[0] - x) + s * (edge[1] - y)  # base centre in front of the edge
+                return W.SPOT_DIST[0] - REACH_TOLERANCE <= d <= W.SPOT_DIST[1] + REACH_TOLERANCE
+        return False
+
+    def _move_arm(self, pan_goal: float, ext_goal: float) -> str | None:
+        """Both joints along velocity ramps to the goal; None once there, "timeout" otherwise."""
+        pan_rate = ext_rate = 0.0
+        max_ticks = round(TIMEOUT * CONTROL_HZ)
+        while True:
+            _, e, _ = self._tick()
+            if (abs(self.pan - pan_goal) <= PAN_TOL and abs(self.ext - ext_goal) <= EXT_TOL
+                    and abs(pan_rate) <= W.PAN_ACCELERATION * DT_CONTROL
+                    and abs(ext_rate) <= W.EXT_ACCELERATION * DT_CONTROL):
+                return None
+            if self._ticks >= max_ticks:
+                return "timeout"
+            pan_rate = _ramp(self.pan, pan_rate, pan_goal, W.PAN_SPEED, W.PAN_ACCELERATION)
+            ext_rate = _ramp(self.ext, ext_rate, ext_goal, W.EXT_SPEED, W.EXT_ACCELERATION)
+            m = self.noise.motor
+            self.pan += pan_rate * (1.0 + m * e[5]) * DT_CONTROL
+            self.ext += ext_rate * (1.0 + m * e[6]) * DT_CONTROL
+            self._advance()
+            self._ticks += 1
+
+
+def _check_call(call: ActionCall) -> tuple[float, ...]:
+    if call.action not in ACTIONS:
+        raise SimError(f"unknown kitchen action {call.action!r}; known: {', '.join(ACTIONS)}")
+    goal = tuple(float(g) for g in call.goal)
+    if len(goal) != GOAL_SIZES[call.action] or not all(math.isfinite(g) for g in goal):
+        raise SimError(f"{call.action}: goal must be {GOAL_SIZES[call.action]} finite numbers, got {call.goal}")
+    return goal
+
+
+def simulate_sequence(pose: tuple[float, float, float], tables: Mapping[str, Sequence[float]],
+                      cups: Mapping[str, Sequence[float]], calls: Sequence[ActionCall], seed: int,
+                      noise: Noise | None = None) -> SequenceResult:
+    """Execute actions in a fresh simulator placed at (pose, tables, cups)."""
+    sim = KitchenSim(seed, Noise() if noise is None else noise)
+    sim.place(pose, tables, cups)
+    return sim.run_sequence(list(calls))
