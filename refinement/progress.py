@@ -27,11 +27,34 @@ def showing_progress(enabled: bool = True) -> Iterator[None]:
         _SHOWING.reset(token)
 
 
+class _NoBar:
+    """What `progress_bar` gives where no bar is shown: no tqdm object at all, since tqdm's first instance in a
+    process creates a multiprocessing lock (a semaphore), which a worker killed by SIGTERM would leak."""
+
+    def __enter__(self) -> "_NoBar":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        return None
+
+    def update(self, n: int = 1) -> None:
+        return None
+
+    def set_postfix_str(self, *args, **kwargs) -> None:
+        return None
+
+    def close(self) -> None:
+        return None
+
+
 def progress_bar(**kwargs):
-    """A tqdm bar on stderr, shown on a terminal inside `showing_progress()` and disabled elsewhere."""
+    """A tqdm bar on stderr, shown on a terminal inside `showing_progress()`; elsewhere a stand-in that does
+    nothing (the optimizers run thousands of times inside worker processes)."""
+    if not _SHOWING.get():
+        return kwargs["iterable"] if "iterable" in kwargs else _NoBar()
     from tqdm import tqdm
 
-    return tqdm(file=sys.stderr, disable=None if _SHOWING.get() else True, **kwargs)
+    return tqdm(file=sys.stderr, disable=None, **kwargs)
 
 
 def run_in_workers(function, items, jobs: int, desc: str, progress: bool = True, unit: str = "ep") -> list:
