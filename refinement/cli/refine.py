@@ -89,8 +89,9 @@ def result_json(prepared, method: str, seed: int, outcomes: dict) -> dict:
         "domain": prepared.plan.domain, "problem": prepared.plan.problem, "planner": prepared.plan.planner,
         "optimizer": method, "horizon": refined.horizon, "seed": seed, "models": str(prepared.task.models_dir),
         "plan": prepared.plan.to_json(),
-        "free_parameters": [{"id": p.id, "low": p.low, "high": p.high, "value": round(chosen[p.id], 6),
-                             "greedy": round(greedy_values[p.id], 6)}
+        # full precision: the printed values reproduce the prediction (an optimum may lie on a split of a tree)
+        "free_parameters": [{"id": p.id, "low": p.low, "high": p.high, "value": chosen[p.id],
+                             "greedy": greedy_values[p.id]}
                             for p in prepared.sequence.free_parameters()],
     }
     if prepared.assertions:
