@@ -240,7 +240,7 @@ def test_evaluate_assertion_json_has_the_issue_keys(capsys):
     for key in ("episodes", "success_without", "success_with", "collisions_avoided", "needless_assertions",
                 "needless_cost", "table_before", "table_after"):
         assert key in data
-    assert data["episodes"] == 3 and data["situations"] == "approach"
+    assert data["episodes"] == 3 and data["generator"] == "approach"
 
 
 def test_success_margin_keeps_choices_off_the_edge_of_the_region(soccer):

@@ -17,7 +17,7 @@ def _pct(value) -> str:
 def _print_text(report: dict) -> None:
     out = sys.stdout.write
     s = report
-    out(f"Domain {s['domain']}: subgoal assertion over {s['episodes']} random '{s['situations']}' situations "
+    out(f"Domain {s['domain']}: subgoal assertion over {s['episodes']} random '{s['generator']}' situations "
         f"(seed {s['seed']}), each executed plain and with assertion + refinement (h=2), same simulator seed\n")
     out(f"  success without assertion     {_pct(s['success_without'])}   (failures: "
         f"{', '.join(f'{k} {v}' for k, v in s['failures_without'].items()) or 'none'})\n")
@@ -80,7 +80,7 @@ def run_assertion(args: argparse.Namespace, domain_dir, binding, plan, run_paral
     rows = run_parallel(assertion_episode, [(job, i, objects, setup) for job, i, objects in items], args.jobs,
                         "plain vs asserted")
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
-              "situations": plan.assertion}
+              "generator": plan.assertion}
     report.update(summarize_assertion(rows))
     if args.plot:
         from tailor.refinement.evaluation.assertion_plots import draw_instances
