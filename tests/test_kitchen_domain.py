@@ -19,11 +19,11 @@ def _sequence(problem: str):
 
 def test_free_parameters_are_the_spots_at_the_tables_in_fig_5_12_ranges():
     sequence = _sequence("scenario1")
-    assert [a.action for a in sequence.actions] == ["goToPose", "grip", "goToPose", "put"]
+    assert [a.action for a in sequence.actions] == ["navigate", "grip", "navigate", "put"]
     free = {p.id: (p.low, p.high) for p in sequence.free_parameters()}
     assert free == {f"{s}.{q}": r for s in ("p1", "d1")
                     for q, r in (("along", (-0.5, 0.5)), ("dist", (0.4, 0.8)), ("heading", (-1.0, 1.0)))}
-    # grip's observed group is the spot it stands at, shared with the goToPose that reaches it
+    # grip's observed group is the spot it stands at, shared with the navigate that reaches it
     goto, grip = sequence.actions[0], sequence.actions[1]
     assert [p.id for p in goto.params[6:]] == [p.id for p in grip.params[:6]]
 
@@ -61,7 +61,7 @@ def test_evaluate_situations_option(capsys):
                  "--horizon-episodes", "0", "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["comparison"] == "scenario2" and report["problems"] == ["scenario2"]
-    assert [row["action"] for row in report["per_action"]] == ["goToPose", "grip", "goToPose", "put"] * 2
+    assert [row["action"] for row in report["per_action"]] == ["navigate", "grip", "navigate", "put"] * 2
     assert report["episodes"] == 1 and report["refined_mean"] < report["greedy_mean"]
 
 

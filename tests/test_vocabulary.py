@@ -43,10 +43,18 @@ def test_the_check_sees_the_core_and_would_fail_on_a_robot_name():
     assert SOCCER.search('RANGES["goToPose"]') and SOCCER.search("dribbleBall")
 
 
-def test_the_arm_package_does_not_borrow_the_soccer_robot():
-    for path in sorted((ROOT / "sims" / "arm").rglob("*.py")):
-        text = path.read_text(encoding="utf-8")
-        assert "sims.soccer" not in text, f"{path} imports the soccer robot"
+def test_the_other_robots_do_not_borrow_the_soccer_robot():
+    """The arm's and the kitchen's packages and domains neither import the soccer robot nor use its words (its
+    action names included: the kitchen base's action is `navigate`)."""
+    found = []
+    for robot in ("arm", "kitchen"):
+        paths = [*(ROOT / "sims" / robot).rglob("*.py"), *(ROOT / "domains" / robot).rglob("*.toml"),
+                 *(ROOT / "domains" / robot).rglob("*.pddl"), *(ROOT / "domains" / robot / "models").glob("*.json")]
+        for path in sorted(paths):
+            for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+                if "sims.soccer" in line or SOCCER.search(line):
+                    found.append(f"{path.relative_to(ROOT)}:{number}: {line.strip()}")
+    assert not found, "soccer vocabulary in another robot:\n" + "\n".join(found)
 
 
 IMPORT = re.compile(r"^\s*(?:from|import)\s+(tailor\.[\w.]+)", re.M)

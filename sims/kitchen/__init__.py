@@ -1,6 +1,6 @@
 """The kitchen simulator (pymunk, top view): a B21-like robot fetching cups between tables (Sec. 5.5).
 
-`SIMULATOR` is what the package registers (entry point `tailor.simulators: kitchen`): goToPose, grip and put
+`SIMULATOR` is what the package registers (entry point `tailor.simulators: kitchen`): navigate, grip and put
 (Table 2.1), the simulator factory, the experience scenarios, the random situations of scenarios 1 and 2, and
 the kitchen's feature spaces.
 """
@@ -19,7 +19,7 @@ def _create(seed: int, noise: Noise | None = None) -> KitchenSim:
 SIMULATOR = SimulatorEntry(
     name="kitchen",
     actions={
-        "goToPose": ActionSpec("goToPose", "kitchen", observed=SPOT, internal=tuple(f"{q}g" for q in SPOT),
+        "navigate": ActionSpec("navigate", "kitchen", observed=SPOT, internal=tuple(f"{q}g" for q in SPOT),
                                observed_quantities=SPOT, internal_quantities=SPOT),
         "grip": ActionSpec("grip", "kitchen", observed=SPOT, internal=("cx", "cy"),
                            observed_quantities=SPOT, internal_quantities=("x", "y")),
@@ -27,7 +27,7 @@ SIMULATOR = SimulatorEntry(
                           observed_quantities=SPOT, internal_quantities=("tx", "ty")),
     },
     create=_create,
-    scenarios={"goToPose": Scenario("goToPose", "goToPose", run_goto, run_goto.__doc__ or ""),
+    scenarios={"navigate": Scenario("navigate", "navigate", run_goto, run_goto.__doc__ or ""),
                "grip": Scenario("grip", "grip", run_grip, run_grip.__doc__ or ""),
                "put": Scenario("put", "put", run_put, run_put.__doc__ or "")},
     situations=SITUATIONS,

@@ -1,6 +1,6 @@
 """The kitchen's own feature spaces (Table 4.1 rows for its actions).
 
-"route" (goToPose): the shortest route from the start pose to the goal pose round the divider and the island
+"route" (navigate): the shortest route from the start pose to the goal pose round the divider and the island
 (navigation.nominal_map, world.nominal_obstacles: the furniture that can lengthen a route), described by its length, the turn needed at the start to face the route's first leg, the turn
 at the goal from the last leg to the goal heading, and the turning at the route's corners. Invariant to
 the frame a pose is written in (a spot with zero offsets is the pose itself).

@@ -3,7 +3,7 @@
 Why a visibility graph: the kitchen's obstacles are a handful of boxes, so the graph of their grown corners
 has a few dozen nodes and gives the exact shortest path in the configuration space of the round base (each
 box grown by the base radius and a clearance); a grid would be coarser and slower. The same routes serve the
-simulator's goToPose (planned on the scene's actual furniture) and the `route` features of its action model
+simulator's navigate (planned on the scene's actual furniture) and the `route` features of its action model
 (on the nominal map), vectorized over many start/goal pairs for the optimizers.
 """
 

@@ -6,7 +6,7 @@ it (CUP_INSET), each put location likewise on table2, and the robot's start with
 heading. Two cups (or put locations) lie CUP_SEPARATION apart along their table.
 
 Experience scenarios (the instant environment modification of Sec. 4.1):
-- "goToPose": from the start, a pickup spot or a dropoff spot of a random layout, to a pickup or dropoff spot
+- "navigate": from the start, a pickup spot or a dropoff spot of a random layout, to a pickup or dropoff spot
   (the legs of both scenarios' plans), every free offset uniform in its Fig. 5.12 range;
 - "grip": the base at a random pickup spot, gripping the cup there;
 - "put": the base at a random dropoff spot with a cup in the gripper, putting it at the put location.
@@ -86,9 +86,9 @@ def sample_goto(rng: np.random.Generator) -> tuple[dict, tuple[float, float, flo
 
 
 def run_goto(seed: int, noise: Noise | None = None) -> Episode:
-    """One random goToPose leg (see the module doc)."""
+    """One random navigate leg (see the module doc)."""
     layout, start, goal = sample_goto(np.random.default_rng((seed, SAMPLING_STREAM)))
-    return _sim(seed, layout, start, noise=noise).run(ActionCall("goToPose", goal))
+    return _sim(seed, layout, start, noise=noise).run(ActionCall("navigate", goal))
 
 
 def run_grip(seed: int, noise: Noise | None = None) -> Episode:
@@ -116,7 +116,7 @@ def subgoal_episode(action: str, params: np.ndarray, seed: int) -> Episode:
     rng = np.random.default_rng((seed, SAMPLING_STREAM))
     layout = random_layout(rng, 1)
     pose = W.spot_pose(*p[:6])
-    if action == "goToPose":
+    if action == "navigate":
         return _sim(seed, layout, pose).run(ActionCall(action, tuple(p[6:12])))
     point = (p[6], p[7])
     table = "table1" if action == "grip" else "table2"

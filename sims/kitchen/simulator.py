@@ -5,7 +5,7 @@ A_MAX / ALPHA_MAX per second within V_MAX / W_MAX (unicycle model). Walls, the i
 boxes; cups are small dynamic bodies standing on the tables (they do not collide with the table tops) that a
 closed gripper carries. The arm's two joints (pan, extension) are integrated at the control rate.
 
-Actions (Table 2.1): `goToPose` (goal: a spot, ox, oy, ophi, along, dist, heading; world.spot_pose) plans the
+Actions (Table 2.1): `navigate` (goal: a spot, ox, oy, ophi, along, dist, heading; world.spot_pose) plans the
 shortest route round the furniture (navigation.RouteMap on the scene's furniture), follows it by pure pursuit
 (turning in place where the route bends sharply), brakes to stop at the goal position and turns in place to
 the goal heading. `grip` (goal: the cup's x, y) and `put` (goal: the put location's x, y) pan and extend the
@@ -14,7 +14,7 @@ with the position noise; for put, the point relative to the believed base pose) 
 (put) the gripper in GRIPPER_TIME, and tuck the arm back (pan 0, extension EXT_REST).
 
 Outcomes (Episode.outcome), judged on the true state:
-- "success": goToPose within POS_TOL, HEADING_TOL of the goal pose at rest; grip/put with the arm tucked;
+- "success": navigate within POS_TOL, HEADING_TOL of the goal pose at rest; grip/put with the arm tucked;
 - "collision": the base touches a wall, the island or a table;
 - "out_of_reach": the arm cannot reach the point (bearing beyond PAN_LIMIT, extension beyond EXT_MAX) or
   the base is not 40-80 cm (SPOT_DIST, +-REACH_TOLERANCE) from the serving edge of the table at the point;
@@ -47,8 +47,8 @@ DT_CONTROL = 1.0 / CONTROL_HZ
 STEPS_PER_CONTROL = PHYSICS_HZ // CONTROL_HZ
 CONTROLS_PER_LOG = CONTROL_HZ // LOG_HZ
 
-POS_TOL = 0.08  # m, goToPose: base centre to the goal position (success, true state)
-ARRIVE_TOL = 0.05  # m, goToPose stops driving when the believed position is this close
+POS_TOL = 0.08  # m, navigate: base centre to the goal position (success, true state)
+ARRIVE_TOL = 0.05  # m, navigate stops driving when the believed position is this close
 HEADING_TOL = 0.05  # rad
 SPEED_TOL = 0.05  # m/s
 TURN_RATE_TOL = 0.1  # rad/s
@@ -64,8 +64,8 @@ CUP_SEARCH = 0.1  # m, grip finds a cup this close to its goal point with the ar
 REACH_TOLERANCE = 0.05  # m, slack of the 40-80 cm precondition
 TIMEOUT = 60.0  # s
 
-ACTIONS = ("goToPose", "grip", "put")
-GOAL_SIZES = {"goToPose": 6, "grip": 2, "put": 2}
+ACTIONS = ("navigate", "grip", "put")
+GOAL_SIZES = {"navigate": 6, "grip": 2, "put": 2}
 STATE_COLUMNS = ("ox", "oy", "ophi", "along", "dist", "heading", "v", "pan", "ext")  # believed; pose as a spot
 TRAJECTORY_COLUMNS = ("t", "x", "y", "phi", "v", "pan", "ext", "gripper_x", "gripper_y")  # true state
 _NOISE_BLOCK = 512
@@ -301,7 +301,7 @@ class KitchenSim:
         true = self.true_state()
         believed = self._believe(true, self._draw())
         params = np.array([*believed, 0.0, 0.0, 0.0, *goal], dtype=float)
-        if call.action == "goToPose":
+        if call.action == "navigate":
             outcome = self._go_to_pose(goal)
         else:
             outcome = self._arm(call.action, goal, believed)
