@@ -23,10 +23,12 @@ def plan_files(
     planner: str = DEFAULT_PLANNER,
     timeout: float | None = None,
     memory_gb: float | None = MEMORY_LIMIT_GB,
+    process=None,
 ) -> AbstractPlan:
     """Plan the PDDL pair: the same files give the same plan on every run (it runs in a child process with a
     fixed hash seed, see planner_bridge.worker); `timeout` limits parsing, compiling and search together, in
-    seconds, and `memory_gb` the planner's address space (None: no limit).
+    seconds, and `memory_gb` the planner's address space (None: no limit). `process` is a planner child kept
+    for many requests (worker.PlannerProcess, with its own memory limit); by default a new one per call.
 
     Raises the errors of tailor.errors: InputFileError, PDDLSyntaxError, PDDLSemanticError, NoPlanError,
     PlannerTimeoutError, PlannerUnavailableError (and PlannerError itself for an engine's failure, or when the
@@ -39,6 +41,8 @@ def plan_files(
             raise ValueError(f"the {name} must be positive and finite (None for no limit), not {limit}")
     domain, problem = Path(domain), Path(problem)
     check_files(domain, problem)  # bad files fail here, fast, before a child process is started
+    if process is not None:
+        return process.plan(domain, problem, canonical(planner), timeout)
     return plan_in_worker(domain, problem, canonical(planner), timeout, memory_gb)
 
 

@@ -21,7 +21,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from tailor.errors import ArgumentTypeError, ArgumentValueError, BeliefError
+from tailor.errors import ArgumentTypeError, ArgumentValueError, BeliefError, TailorError
 from tailor.planner_bridge import DEFAULT_PLANNER, AbstractPlan
 from tailor.refinement.action_sequence import ActionSequence
 from tailor.refinement.refine import RefinedSequence
@@ -220,24 +220,23 @@ def _belief_table(belief: Mapping) -> dict:
 def _plan_files(domain, problem, planner: str, timeout: float | None) -> AbstractPlan:
     """Plan a PDDL pair in the session's planner process (started on first use, ended at exit)."""
     global _PLANNER
-    from tailor.planner_bridge import resolve_problem
-    from tailor.planner_bridge.reading import check_files
-    from tailor.planner_bridge.solving import canonical
+    from tailor.planner_bridge import plan_files, resolve_problem
     from tailor.planner_bridge.worker import PlannerProcess
 
     _check(domain, (str, Path), "domain")
     _check(problem, (str, Path), "problem")
     if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, (int, float))):
         raise ArgumentTypeError(f"timeout must be a number of seconds or None, not {type(timeout).__name__}")
-    if timeout is not None and not (timeout > 0 and math.isfinite(timeout)):
-        raise ArgumentValueError(f"timeout must be positive and finite (None for no limit), not {timeout}")
     domain_file, problem_file = resolve_problem(domain, problem)
-    check_files(domain_file, problem_file)  # bad files fail here, before the planner process is asked
     with _PLANNER_LOCK:
         if _PLANNER is None:
             _PLANNER = PlannerProcess()
             atexit.register(_PLANNER.close)
-        return _PLANNER.plan(domain_file, problem_file, canonical(planner), timeout)
-
+        try:
+            return plan_files(domain_file, problem_file, planner, timeout, process=_PLANNER)
+        except ValueError as exc:  # plan_files' check of the timeout: the API's error names the argument
+            if isinstance(exc, TailorError):
+                raise
+            raise ArgumentValueError(str(exc)) from None
 
 __all__ = ["Refinement", "plan", "refine", "dispatch"]

@@ -127,7 +127,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     if args.assertion or args.plot:
         from tailor.refinement.cli.evaluate_assertion import run_assertion
 
-        return run_assertion(args, domain_dir, binding, plan, run_in_workers, source.path)
+        return run_assertion(args, domain_dir, binding, plan, source.path)
     if args.situations is not None:
         from dataclasses import replace
 

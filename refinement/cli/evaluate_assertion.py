@@ -47,7 +47,7 @@ def _print_text(report: dict) -> None:
         out(f"\nWrote {s['plot']}\n")
 
 
-def run_assertion(args: argparse.Namespace, domain_dir, binding, plan, run_parallel, models_dir) -> int:
+def run_assertion(args: argparse.Namespace, domain_dir, binding, plan, models_dir) -> int:
     from tailor.refinement.evaluation.assertion import (
         AssertionSetup,
         assertion_episode,
@@ -56,6 +56,7 @@ def run_assertion(args: argparse.Namespace, domain_dir, binding, plan, run_paral
         summarize_assertion,
     )
     from tailor.refinement.models.action_models import load_success_models
+    from tailor.refinement.progress import run_in_workers
     from tailor.refinement.situations import draw_situations, job_models, situation_sequence
 
     if args.plot:
@@ -77,8 +78,8 @@ def run_assertion(args: argparse.Namespace, domain_dir, binding, plan, run_paral
     if items:  # models loaded once up front: a missing or bad model file fails before any work
         job, _, objects = items[0]
         job_models(job, situation_sequence(job, objects))
-    rows = run_parallel(assertion_episode, [(job, i, objects, setup) for job, i, objects in items], args.jobs,
-                        "plain vs asserted")
+    rows = run_in_workers(assertion_episode, [(job, i, objects, setup) for job, i, objects in items], args.jobs,
+                          "plain vs asserted")
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
               "generator": plan.assertion}
     report.update(summarize_assertion(rows))

@@ -212,13 +212,15 @@ def run(args: argparse.Namespace) -> int:
         from tailor.refinement.outputs import check_output_file
 
         check_output_file(args.plot, ".png")
-    from tailor.planner_bridge import resolve_problem
+    from dataclasses import replace
+
     from tailor.refinement.model_store import resolve_models
 
     log = logging.getLogger(__name__)
     started = time.perf_counter()
-    source = resolve_models(resolve_problem(args.domain, args.problem)[0].parent, args.models)
-    task = resolve_task(args.domain, args.problem, args.belief, source.path)
+    task = resolve_task(args.domain, args.problem, args.belief)
+    source = resolve_models(task.domain_dir, args.models)
+    task = replace(task, models=source.path)
     prepared = prepare(task, args.planner, args.timeout)
     log.debug("planned, instantiated and loaded the models in %.2f s", time.perf_counter() - started)
     simulate = args.simulate or bool(args.plot)

@@ -29,6 +29,7 @@ import pymunk
 from tailor.sims.arm import world as W
 from tailor.sims.arm.profile import synchronize
 from tailor.sims.episode import ActionCall, Episode, SequenceResult, run_in_sequence
+from tailor.sims.noise import NormalRows
 from tailor.errors import SimError
 
 PHYSICS_HZ = 100  # Hz, fixed physics step
@@ -52,7 +53,6 @@ INTEGRAL_LIMIT = 0.05  # rad s, anti-windup bound of the integrated position err
 ACTIONS = ("reach",)
 STATE_COLUMNS = ("theta_a", "omega_a", "theta_b", "omega_b", "tip_x", "tip_y")  # logged believed state
 TRAJECTORY_COLUMNS = ("t", *STATE_COLUMNS)  # the true state of a dispatched sequence
-_NOISE_BLOCK = 512  # control ticks of noise drawn at once (4 sensing + 2 motor values per tick)
 
 
 @dataclass(frozen=True)
@@ -81,7 +81,7 @@ class ArmSim:
         self.noise = noise
         self.seed = int(seed)
         self.rng = np.random.default_rng(seed)
-        self._draws: list[list[float]] = []
+        self._noise = NormalRows(self.rng, 6)  # 4 sensing + 2 motor values per control tick
         self.time = 0.0
         self.place(0.0, 0.0, 0.0, 0.0)
 
@@ -133,10 +133,7 @@ class ArmSim:
 
     def _draw(self) -> list[float]:
         """Six standard normal numbers for one control tick (4 sensing, 2 motor), drawn in blocks."""
-        if not self._draws:
-            self._draws = self.rng.standard_normal((_NOISE_BLOCK, 6)).tolist()
-            self._draws.reverse()
-        return self._draws.pop()
+        return self._noise.next()
 
     def _believe(self, true: Sequence[float], e: Sequence[float]) -> tuple[float, float, float, float]:
         n = self.noise

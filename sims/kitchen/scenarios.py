@@ -93,20 +93,22 @@ def run_goto(seed: int, noise: Noise | None = None) -> Episode:
 
 def run_grip(seed: int, noise: Noise | None = None) -> Episode:
     """One random grip from a pickup spot (see the module doc)."""
-    rng = np.random.default_rng((seed, SAMPLING_STREAM))
-    layout = random_layout(rng, 1)
-    cup = layout["cups"][0]
-    pose = W.spot_pose(*W.serving_frame(layout["table1"], *cup), *_offsets(rng))
-    return _sim(seed, layout, pose, noise=noise).run(ActionCall("grip", cup))
+    return _at_table(seed, noise, "grip", "table1", "cups")
 
 
 def run_put(seed: int, noise: Noise | None = None) -> Episode:
     """One random put from a dropoff spot, the cup in the gripper (see the module doc)."""
+    return _at_table(seed, noise, "put", "table2", "puts", holding="cup1")
+
+
+def _at_table(seed: int, noise: Noise | None, action: str, table: str, places: str,
+              holding: str | None = None) -> Episode:
+    """`action` at the first of a random layout's `places` on `table`, from a random spot before it."""
     rng = np.random.default_rng((seed, SAMPLING_STREAM))
     layout = random_layout(rng, 1)
-    put = layout["puts"][0]
-    pose = W.spot_pose(*W.serving_frame(layout["table2"], *put), *_offsets(rng))
-    return _sim(seed, layout, pose, holding="cup1", noise=noise).run(ActionCall("put", put))
+    place = layout[places][0]
+    pose = W.spot_pose(*W.serving_frame(layout[table], *place), *_offsets(rng))
+    return _sim(seed, layout, pose, holding=holding, noise=noise).run(ActionCall(action, place))
 
 
 def subgoal_episode(action: str, params: np.ndarray, seed: int) -> Episode:

@@ -38,6 +38,7 @@ from tailor.errors import SimError
 from tailor.sims.episode import ActionCall, Episode, SequenceResult, run_in_sequence
 from tailor.sims.kitchen import world as W
 from tailor.sims.kitchen.navigation import RouteMap
+from tailor.sims.noise import NormalRows
 
 PHYSICS_HZ = 100  # Hz
 CONTROL_HZ = 20  # Hz (divides PHYSICS_HZ)
@@ -68,7 +69,6 @@ ACTIONS = ("navigate", "grip", "put")
 GOAL_SIZES = {"navigate": 6, "grip": 2, "put": 2}
 STATE_COLUMNS = ("ox", "oy", "ophi", "along", "dist", "heading", "v", "pan", "ext")  # believed; pose as a spot
 TRAJECTORY_COLUMNS = ("t", "x", "y", "phi", "v", "pan", "ext", "gripper_x", "gripper_y")  # true state
-_NOISE_BLOCK = 512
 
 FURNITURE, CUPS, BASE, QUERY = 0b0001, 0b0010, 0b0100, 0b1000  # collision categories
 _FURNITURE_QUERY = pymunk.ShapeFilter(categories=QUERY, mask=FURNITURE)  # furniture meets only queries
@@ -112,7 +112,7 @@ class KitchenSim:
         self.noise = noise
         self.seed = int(seed)
         self.rng = np.random.default_rng(seed)
-        self._draws: list[list[float]] = []
+        self._noise = NormalRows(self.rng, 8)
         self.space = pymunk.Space()
         self.space.damping = 0.05  # cups pushed over the floor or table come to rest
         self.fixed = [*W.walls(), W.island()]
@@ -209,10 +209,7 @@ class KitchenSim:
         return (x, y, W.wrap(self.phi), self.v, self.pan, self.ext, *self.gripper())
 
     def _draw(self) -> list[float]:
-        if not self._draws:
-            self._draws = self.rng.standard_normal((_NOISE_BLOCK, 8)).tolist()
-            self._draws.reverse()
-        return self._draws.pop()
+        return self._noise.next()
 
     def _believe(self, true: Sequence[float], e: Sequence[float]) -> tuple[float, float, float]:
         n = self.noise
