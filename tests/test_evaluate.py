@@ -60,7 +60,7 @@ def test_the_evaluation_plan_is_data_in_the_binding():
     for table, message in (("", r"\[evaluation\] missing"),
                            ('[evaluation]\ncomparison = "tour"\n',
                             r"\[evaluation\] comparison = 'tour' is not a situation generator of simulator 'soccer' "
-                            r"\(known: score, waypoints, approach\)"),
+                            r"\(known: score, score_anywhere, waypoints, approach\)"),
                            ('[evaluation]\ncomparison = "score"\nhorizon = "waypoints"\n',
                             r"\[evaluation\] unknown key 'horizon'"),
                            ('[evaluation]\ncomparison = "score"\nzero_baseline = 1\n',

@@ -139,21 +139,21 @@ def test_each_warning_fires_on_its_own_condition_only():
         r["models"][action]["mae_constant"] = 2 * r["models"][action]["mae"]
 
     def at_chance(r):  # predicts failure for a random half, whatever happens
-        r["collision"]["confusion"]["counts"] = {"predicted_fail_observed_fail": 80, "predicted_fail_observed_success":
+        r["classifiers"]["goToPose"]["confusion"]["counts"] = {"predicted_fail_observed_fail": 80, "predicted_fail_observed_success":
                                                  420, "predicted_success_observed_fail": 80,
                                                  "predicted_success_observed_success": 420}
-        r["collision"]["accuracy"] = 0.5
+        r["classifiers"]["goToPose"]["accuracy"] = 0.5
 
     def one_outcome(r):
-        r["collision"]["confusion"]["counts"] = {"predicted_fail_observed_fail": 0, "predicted_fail_observed_success":
+        r["classifiers"]["goToPose"]["confusion"]["counts"] = {"predicted_fail_observed_fail": 0, "predicted_fail_observed_success":
                                                  10, "predicted_success_observed_fail": 0,
                                                  "predicted_success_observed_success": 990}
 
     def few_failures(r):
-        r["collision"]["outcomes"] = {"collision": 3, "success": 5997}
+        r["classifiers"]["goToPose"]["outcomes"] = {"collision": 3, "success": 5997}
 
     def few_fresh(r):
-        r["collision"]["confusion"]["episodes"] = 20
+        r["classifiers"]["goToPose"]["confusion"]["episodes"] = 20
 
     cases = {few_test_episodes: f"duration model of {action}: MAE measured on only 6 held-out episodes",
              no_better_than_the_median: f"duration model of {action}: MAE",

@@ -64,6 +64,7 @@ def check_outputs(out, report: dict, episodes: int, fresh: int) -> None:
     assert c["action"] == "goToPose"
     assert 0.0 <= c["accuracy"] <= 1.0 and 0.0 <= c["false_success"] <= 1.0 and c["fresh_episodes"] == fresh
     assert collision.predict_success(params).dtype == bool
+    assert collision.feature_set == "pose_walls"  # the soccer robot's own space: it sees the walls
     text = (out / "training" / "report.txt").read_text()
     for action in models:
         assert f"Rules of {action}" in text

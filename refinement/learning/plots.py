@@ -17,6 +17,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from tailor.refinement.models.action_models import ActionModel, CollisionModel  # noqa: E402
+from tailor.refinement.models.features import POSE_PARAMETERS, feature_space  # noqa: E402
 from tailor.refinement.refine_plots import tidy_polar  # noqa: E402
 
 # the situation of Fig. 4.7: goal 1.5 m straight ahead, robot standing, arriving at rest
@@ -164,7 +165,12 @@ def plot_collision_region(model: CollisionModel, path: Target) -> None:
     _save(fig, path, layout=False)
 
 
-POSE_SPACES = ("pose", "pose_delta")  # the feature spaces the Fig. 4.7 / 4.8 pictures are drawn in
+POSE_SPACES = ("pose", "pose_delta")  # the duration models' feature spaces Fig. 4.7 is drawn in (goal heading)
+
+
+def _posed(feature_set: str) -> bool:
+    """Whether Fig. 4.8 applies to a classifier: its feature space reads a start and a goal pose."""
+    return feature_space(feature_set).parameters == POSE_PARAMETERS
 
 
 def caption(name: str) -> str:
@@ -186,7 +192,7 @@ def training_plots(simulator: str, models: Mapping[str, ActionModel],
     if posed:
         plots["angle_at_polar.png"] = lambda p: plot_angle_at(posed, p)
     for action, classifier in classifiers.items():
-        if classifier.feature_set in POSE_SPACES:
+        if _posed(classifier.feature_set):
             plots[f"{action}.success_region.png"] = lambda p, c=classifier: plot_collision_region(c, p)
     return plots
 

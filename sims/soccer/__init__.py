@@ -6,6 +6,7 @@ their pose parameters (Table 2.1), the simulator factory, the experience scenari
 """
 
 from tailor.sims.protocol import ActionSpec, Scenario, SimulatorEntry
+from tailor.sims.soccer.walls import POSE_WALLS
 from tailor.sims.soccer.actions import ACTION_FUNCTIONS, approachBall, dribbleBall, goToPose
 from tailor.sims.soccer.scenarios import RANGES, SITUATIONS, subgoal_episode
 from tailor.sims.soccer.simulator import Noise, SoccerSim, simulate_sequence
@@ -29,6 +30,7 @@ SIMULATOR = SimulatorEntry(
     views=((("x", "y", "phi"), ("ball_x", "ball_y")),),  # the field from above: robot with heading, and ball
     subgoal_episode=subgoal_episode,
     team=TEAM,
+    feature_spaces=(POSE_WALLS,),
     description="RoboCup mid-size field, Pioneer-like robot with a ball guide, a ball (pymunk)",
 )
 

@@ -15,7 +15,9 @@ near the start, which make durations hard to predict: at R_DRIBBLE = 0.7 m the l
 by 5.8% of the mean duration, at 0.4 m by about 4%. Only a rolling ball is pressed into the V (by its rolling
 friction), so the robot never turns on the spot: the rotational command is the curvature times the current
 speed, at least V_CREEP_DRIBBLE on an arc. Braking never exceeds A_DRIBBLE_BRAKE, below the ball's own
-rolling deceleration, so the ball is not lost ahead.
+rolling deceleration, so the ball is not lost ahead, and the speed never exceeds the profile braked at that
+bound (a function of the distance to go): braking relative to the sensed speed alone let a run of same-signed
+noise draws keep the robot at full speed into its last arc, where the ball was lost.
 """
 
 from __future__ import annotations
@@ -45,7 +47,7 @@ DRIBBLE = Follower(
     decel_plan=A_DRIBBLE_PLAN, decel_limit=A_DRIBBLE_BRAKE, final_straight=FINAL_STRAIGHT,
     corridor_heading=math.radians(50.0), corridor_width=0.1, corridor_slope=0.3, corridor_extra=0.3,
     r_line=0.5, line_gain_max=20.0, capture_radial=0.2, capture_heading=0.6, capture_angle=2.0 * math.pi,
-    box=(-_HX, _HX, -_HY, _HY),
+    box=(-_HX, _HX, -_HY, _HY), bounded_braking=True,
 )
 
 

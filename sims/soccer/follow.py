@@ -56,6 +56,10 @@ class Follower:
     box: tuple[float, float, float, float]  # the region (xmin, xmax, ymin, ymax) the axle's path stays in
     lead_time: float = 0.1  # s, an arc after a straight is begun this early (the motors lag the command)
     control_period: float = 0.05  # s, the period decel_limit is spread over (the simulator's)
+    # the speed command also stays below the profile braked at decel_limit (a function of the distance to go,
+    # not of the sensed speed): without it, braking "decel_limit below the believed speed" is a random walk
+    # under sensing and motor noise, which a run of same-signed draws turns into no braking at all
+    bounded_braking: bool = False
 
     def pre_pose(self, goal: Pose) -> Pose:
         """The pose on the goal line final_straight behind the (axle) goal, where the Dubins path ends."""
@@ -105,9 +109,11 @@ class Follower:
             return None
         error, to_go, side = arc
         to_goal = to_go + self.final_straight
-        v_target = max(min(self.w_plan * self.radius, profile_speed(to_goal, vg, self.v_top, self.decel_plan)),
-                       self.v_creep)
-        return self.limited(v_target, side * max(0.0, v) / self.radius + K_TRACK * error, v)
+        arc_speed = self.w_plan * self.radius
+        v_target = max(min(arc_speed, profile_speed(to_goal, vg, self.v_top, self.decel_plan)), self.v_creep)
+        bound = (max(min(arc_speed, profile_speed(to_goal, vg, self.v_top, self.decel_limit)), self.v_creep)
+                 if self.bounded_braking else None)
+        return self.limited(v_target, side * max(0.0, v) / self.radius + K_TRACK * error, v, bound)
 
     def line_command(self, along: float, lateral: float, heading_error: float, v: float, vg: float
                      ) -> tuple[float, float]:
@@ -115,8 +121,11 @@ class Follower:
         damped line follower whose settling length shrinks with the distance to the goal."""
         gain = min(self.line_gain_max, 4.0 / max(-along, 1e-3))
         curvature = clip(-gain * gain * lateral - 2.0 * gain * math.sin(heading_error), 1.0 / self.r_line)
-        v_target = min(profile_speed(-along, vg, self.v_top, self.decel_plan), self.w_plan / max(abs(curvature), 1e-6))
-        return self.limited(v_target, curvature * min(max(0.0, v), v_target), v)
+        turn_speed = self.w_plan / max(abs(curvature), 1e-6)
+        v_target = min(profile_speed(-along, vg, self.v_top, self.decel_plan), turn_speed)
+        bound = (min(profile_speed(-along, vg, self.v_top, self.decel_limit), turn_speed)
+                 if self.bounded_braking else None)
+        return self.limited(v_target, curvature * min(max(0.0, v), v_target), v, bound)
 
     def command(self, start: Pose, v: float, goal: Pose, vg: float,
                 choose_path: Callable[[Pose, Pose], DubinsPath]) -> tuple[float, float]:
@@ -126,15 +135,21 @@ class Follower:
 
     def path_command(self, path: DubinsPath, v: float, vg: float) -> tuple[float, float]:
         """[v, phidot] along the first segment of `path`, a Dubins path from the axle to the pre-pose (mode 3)."""
-        v_target, curvature = self._along_path(path, v, vg)
-        return self.limited(v_target, curvature * max(0.0, v), v)  # the actual speed: braking lags v_target
+        v_target, curvature = self._along_path(path, v, vg, self.decel_plan)
+        bound = self._along_path(path, v, vg, self.decel_limit)[0] if self.bounded_braking else None
+        return self.limited(v_target, curvature * max(0.0, v), v, bound)  # the actual speed: braking lags v_target
 
-    def limited(self, v_target: float, w: float, v: float) -> tuple[float, float]:
-        """The command within the braking bound (per control period) and the rotational limit."""
-        return max(v_target, v - self.decel_limit * self.control_period, 0.0), clip(w, self.w_limit)
+    def limited(self, v_target: float, w: float, v: float, bound: float | None = None) -> tuple[float, float]:
+        """The command within the braking bound (per control period) and the rotational limit; with `bound`
+        (bounded_braking: the profile braked at decel_limit), never above it."""
+        braked = v - self.decel_limit * self.control_period
+        if bound is not None and braked > bound:
+            braked = bound
+        return max(v_target, braked, 0.0), clip(w, self.w_limit)
 
-    def _along_path(self, path: DubinsPath, v: float, vg: float) -> tuple[float, float]:
-        """Target speed and curvature on the first segment of a Dubins path ending at the pre-pose."""
+    def _along_path(self, path: DubinsPath, v: float, vg: float, decel: float) -> tuple[float, float]:
+        """Target speed (braking at `decel` for every arc and the end) and curvature on the first segment of a
+        Dubins path ending at the pre-pose."""
         curvature = path.curvature(0)
         span = min(CORRECTION_MAX, max(CORRECTION_MIN, CORRECTION_SHARE * path.lengths[1]))
         if curvature != 0.0 and path.word[1] == "S" and path.lengths[1] > span:
@@ -143,13 +158,13 @@ class Follower:
             curvature = math.copysign(min(abs(curvature), path.lengths[0] / path.radius / span), curvature)
         elif curvature == 0.0 and path.lengths[0] < self.lead_time * v:
             curvature = path.curvature(1) * (1.0 - path.lengths[0] / (self.lead_time * v))
-        v_target = profile_speed(path.length + self.final_straight, vg, self.v_top, self.decel_plan)
+        v_target = profile_speed(path.length + self.final_straight, vg, self.v_top, decel)
         arc_speed = self.w_plan * path.radius
         travelled = -self.lead_time * v  # the arc is begun this early
         for seg in range(3):  # slow down for the current and each upcoming arc in time
             if path.word[seg] != "S" and path.lengths[seg] > MIN_SEGMENT:
                 slack = max(0.0, travelled)
-                v_target = min(v_target, math.sqrt(arc_speed * arc_speed + 2.0 * self.decel_plan * slack))
+                v_target = min(v_target, math.sqrt(arc_speed * arc_speed + 2.0 * decel * slack))
             travelled += path.lengths[seg]
         if curvature != 0.0:
             v_target = max(v_target, self.v_creep)

@@ -140,23 +140,29 @@ def _point(rng: np.random.Generator, margin: float = MARGIN) -> tuple[float, flo
             float(rng.uniform(FIELD_Y[0] + margin, FIELD_Y[1] - margin)))
 
 
-def _points(rng: np.random.Generator, n: int) -> list[tuple[float, float]]:
-    """n random positions on the field, each at least MIN_GAP from the one before."""
-    points = [_point(rng)]
+def _points(rng: np.random.Generator, n: int, margin: float = MARGIN) -> list[tuple[float, float]]:
+    """n random positions on the field, `margin` inside its lines, each at least MIN_GAP from the one before."""
+    points = [_point(rng, margin)]
     while len(points) < n:
-        p = _point(rng)
+        p = _point(rng, margin)
         if math.dist(p, points[-1]) >= MIN_GAP:
             points.append(p)
     return points
 
 
-def score_belief(rng: np.random.Generator) -> tuple[str, dict[str, dict[str, float]]]:
+def score_belief(rng: np.random.Generator, margin: float = MARGIN) -> tuple[str, dict[str, dict[str, float]]]:
     """A random situation of problem `score`: robot at rest at pos1, the ball at pos2, the target pose pos3."""
-    robot, ball, target = _points(rng, 3)
+    robot, ball, target = _points(rng, 3, margin)
     heading = lambda: float(rng.uniform(-math.pi, math.pi))  # noqa: E731
     return "score", {"pos1": {"x": robot[0], "y": robot[1], "phi": heading(), "v": 0.0},
                      "pos2": {"x": ball[0], "y": ball[1]},
                      "pos3": {"x": target[0], "y": target[1], "phi": heading(), "v": 0.0}}
+
+
+def score_anywhere_belief(rng: np.random.Generator) -> tuple[str, dict[str, dict[str, float]]]:
+    """A situation of problem `score` drawn anywhere on the field: as score_belief, but the robot, ball and
+    target may lie on the very lines (1 m from the walls), where the walls shape the approach and the dribble."""
+    return score_belief(rng, margin=0.0)
 
 
 def waypoints_belief(rng: np.random.Generator) -> tuple[str, dict[str, dict[str, float]]]:
@@ -178,4 +184,5 @@ def approach_belief(rng: np.random.Generator) -> tuple[str, dict[str, dict[str, 
                         "pos2": {"x": xg, "y": yg, "phi": phig, "v": vg}}
 
 
-SITUATIONS = {"score": score_belief, "waypoints": waypoints_belief, "approach": approach_belief}
+SITUATIONS = {"score": score_belief, "score_anywhere": score_anywhere_belief, "waypoints": waypoints_belief,
+              "approach": approach_belief}
