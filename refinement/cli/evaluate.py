@@ -69,8 +69,8 @@ def _print_text(report: dict) -> None:
     out(f"Domain {report['domain']}: greedy vs refined over {s['scenarios']} random '{report['comparison']}' "
         f"situations (seed {report['seed']}; problems {', '.join(s['problems'])}); {s['episodes']} where greedy "
         f"and refined both succeeded (failed: greedy {s['failed_greedy']}, refined {s['failed_refined']})\n")
-    if s.get("filter"):
-        f = s["filter"]
+    if s.get("filter_decisions"):
+        f = s["filter_decisions"]
         out(f"  meta filter (Sec. 5.5.4)     refined {f['refined']}, greedy kept {f['kept_greedy']} "
             f"(not judged, refined: {f['not_judged']})\n")
     out(f"  failure rate greedy / refined {_pct(s['failure_rate_greedy'])}% / {_pct(s['failure_rate_refined'])}%\n")

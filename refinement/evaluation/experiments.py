@@ -287,7 +287,7 @@ def summarize_comparison(rows: list[dict]) -> dict:
     out["per_action"] = _per_action(both)
     if any("filter" in r for r in rows):
         decisions = [r["filter"] for r in rows if "filter" in r]
-        out["filter"] = {"refined": sum(d["refine"] for d in decisions),
+        out["filter_decisions"] = {"refined": sum(d["refine"] for d in decisions),
                          "kept_greedy": sum(not d["refine"] for d in decisions),
                          "not_judged": sum(d["prediction"] is None for d in decisions)}
     if rows and "zero" in rows[0]:
