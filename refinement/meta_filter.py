@@ -3,9 +3,10 @@ makes its execution faster ("better"); elsewhere keep the greedy parameterizatio
 
 The meta model judges a situation by the features its action models see in the first refinement window at the
 greedy (h = 1) parameterization: the same invariant features (Table 4.1) the duration models learned from, so
-a situation translated, rotated or mirrored is judged alike, and any domain gets them without code. In the
-ball approach they say how well robot, ball and target line up (the greedy approach heading against the
-direction of the dribble) and how close the robot starts to the ball: what the dissertation's tree splits on.
+a situation translated, rotated or mirrored is judged alike, and any domain gets them without code. For a
+chain of navigation actions they say how well start, subgoal and goal line up (the greedy heading at the
+subgoal against the direction of the next leg) and how far apart they are: what the dissertation's tree
+splits on.
 
 The decision is per situation, "refine or keep greedy", so it composes with however the refined sequence is
 computed (horizon, optimizer, any other objective): `decide` needs only the greedy sequence.
@@ -26,7 +27,7 @@ BETTER = "better"  # the class where refinement is applied
 @dataclass(frozen=True)
 class WindowFeatures:
     """The features the action models of the first window see: `signature` names each action and its feature
-    space, `names` each value ("1.goToPose.dist")."""
+    space, `names` each value ("<step>.<action>.<feature>", e.g. "1.reach.dist")."""
 
     signature: tuple[tuple[str, str], ...]
     names: tuple[str, ...]

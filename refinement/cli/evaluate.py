@@ -48,11 +48,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "refinement unfiltered vs filtered by it on --fresh-episodes others (Tables 5.4-5.6)")
     parser.add_argument("--fresh-episodes", type=whole_number(1), default=None, metavar="M",
                         help="with --meta: fresh situations it is measured on (default: as many as --episodes)")
+    parser.add_argument("--worse-cost", type=positive_number, default=None, metavar="C",
+                        help="with --meta: weight of a worse episode in the tree (its cost matrix; default: chosen "
+                             "by cross-validation among 1, 2, 3, 5)")
     parser.add_argument("--out", metavar="DIR", default=None,
                         help="with --meta: write DIR/models/meta.json (default: beside --models / $TAILOR_MODELS, "
                              "or the user data folder with copies of the bundled models)")
     add_filter_arguments(parser)
 
+
+
+def positive_number(text: str) -> float:
+    """A finite number above 0 (argparse type)."""
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"must be a positive number, not {text}")
+    return value
 
 
 def _fmt(value, pattern="{:.2f}") -> str:
@@ -149,8 +165,8 @@ def _evaluate(args: argparse.Namespace) -> int:
         from tailor.refinement.cli.evaluate_meta import run_meta
 
         return run_meta(args, domain_dir, binding, plan, source)
-    if args.fresh_episodes is not None or args.out is not None:
-        raise UsageError("--fresh-episodes and --out belong to --meta")
+    if args.fresh_episodes is not None or args.out is not None or args.worse_cost is not None:
+        raise UsageError("--fresh-episodes, --worse-cost and --out belong to --meta")
     if args.assertion or args.plot:
         from tailor.refinement.cli.evaluate_assertion import run_assertion
 

@@ -57,6 +57,13 @@ def _print_text(report: dict) -> None:
         f"episodes {t['labels']['better']} / {t['labels']['equal']} / {t['labels']['worse']}\n")
     out(f"  tree: {t['leaves']} leaves, cost of a worse episode {t['cost']:g}, at least {t['min_samples_leaf']} "
         f"episodes a leaf (chosen by {t['cv_folds']}-fold cross-validation)\n")
+    out("  cross-validated on the training situations (filtered: refine where \"better\" is predicted):\n")
+    out(f"    {'cost':>5} {'leaf':>5} {'improvement':>12} {'worse':>7} {'refined':>8} {'accuracy':>9}"
+        f"   (unfiltered: improvement {_pct(t['unfiltered_improvement'])})\n")
+    for c in t["candidates"]:
+        mark = "  <- chosen" if (c["cost"], c["min_samples_leaf"]) == (t["cost"], t["min_samples_leaf"]) else ""
+        out(f"    {c['cost']:>5g} {c['min_samples_leaf']:>5} {_pct(c['improvement']):>12} {_pct(c['worse_share']):>7}"
+            f" {_pct(c['refined_share']):>8} {_pct(c['accuracy']):>9}{mark}\n")
     _table(out, f"Fresh situations, {f['episodes']} ({f['not_judged']} not judged: another first window):",
            f["unfiltered"], f["filtered"])
     floor = f["floor"]
@@ -140,7 +147,7 @@ def run_meta(args: argparse.Namespace, domain_dir: Path, binding, plan, source) 
                                 "meta: training episodes", progress)
     fresh_rows = run_in_workers(meta_episode, [(j, i, o, META_HORIZON) for j, i, o in fresh_items], args.jobs,
                                 "meta: fresh episodes", progress)
-    training = learn_meta_model(train_rows, META_HORIZON, seed=args.seed)
+    training = learn_meta_model(train_rows, META_HORIZON, seed=args.seed, cost=args.worse_cost)
     fresh = fresh_report(training.model, fresh_rows)
     model = training.model
     report_in_model = {k: v for k, v in training.report.items() if k != "candidates"}

@@ -33,9 +33,9 @@ from tailor.refinement.dispatch import dispatch
 from tailor.errors import BindingError
 from tailor.refinement.refine import refine
 from tailor.refinement.meta_filter import decide
+from tailor.refinement.models.meta_model import EQUAL_BAND  # "equal" within 1% (Table 5.4), as the meta model's
 from tailor.refinement.situations import Job, asserted_situation, job_meta_model, job_models, stream_seed
 
-EQUAL_BAND = 0.01  # |1 - t_refined / t_greedy| below this counts as "equal" (Table 5.4)
 AGREEMENT = 0.01  # analytic and ga agree when their predicted costs differ by at most 1%
 ORACLE_ANGLES = 36  # grid of the simulated search: a free parameter spanning a full circle (10 degree steps) ...
 ORACLE_VALUES = 4  # ... any other free parameter: values spread over its range

@@ -22,9 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from tailor.errors import DataError
-from tailor.refinement.evaluation.experiments import EQUAL_BAND
 from tailor.refinement.models.decision_tree import LabelTree
-from tailor.refinement.models.meta_model import MetaModel
+from tailor.refinement.models.meta_model import EQUAL_BAND, MetaModel
 
 CLASSES = ("better", "equal", "worse")  # Table 5.4's +, 0, -
 BETTER, EQUAL, WORSE = range(3)
@@ -92,9 +91,10 @@ def _classifier(cost: float, leaf: int, seed: int):
                                   random_state=seed)
 
 
-def choose_hyperparameters(X: np.ndarray, y: np.ndarray, gain: np.ndarray, seed: int) -> tuple[float, int, list]:
+def choose_hyperparameters(X: np.ndarray, y: np.ndarray, gain: np.ndarray, seed: int,
+                           costs: tuple[float, ...] = COSTS) -> tuple[float, int, list]:
     """(cost, min_samples_leaf) by stratified cross-validation (see the module docstring), and every
-    candidate's cross-validated filtered mean improvement and worse share."""
+    candidate's cross-validated filtered mean improvement, worse share and accuracy."""
     from sklearn.model_selection import KFold, StratifiedKFold
 
     folds = CV_FOLDS if np.bincount(y, minlength=3)[np.bincount(y, minlength=3) > 0].min() >= CV_FOLDS else None
@@ -103,16 +103,18 @@ def choose_hyperparameters(X: np.ndarray, y: np.ndarray, gain: np.ndarray, seed:
     splits = list(splitter.split(X, y))
     unfiltered = float(gain.mean())
     candidates = []
-    for cost in COSTS:
+    for cost in costs:
         for leaf in MIN_SAMPLES_LEAF:
-            refine = np.zeros(len(y), dtype=bool)
+            predicted = np.zeros(len(y), dtype=int)
             for train, test in splits:
                 tree = _classifier(cost, leaf, seed).fit(X[train], y[train])
-                refine[test] = tree.predict(X[test]) == BETTER
+                predicted[test] = tree.predict(X[test])
+            refine = predicted == BETTER
             filtered = filtered_gain(gain, refine)
             worse = float(np.mean(refine & (y == WORSE)))
             candidates.append({"cost": cost, "min_samples_leaf": leaf, "improvement": float(filtered.mean()),
-                               "worse_share": worse, "refined_share": float(refine.mean())})
+                               "worse_share": worse, "refined_share": float(refine.mean()),
+                               "accuracy": float(np.mean(predicted == y))})
     keeping = [c for c in candidates if c["improvement"] >= unfiltered]
     best = (min(keeping, key=lambda c: (c["worse_share"], -c["improvement"])) if keeping
             else max(candidates, key=lambda c: (c["improvement"], -c["worse_share"])))
@@ -148,13 +150,14 @@ def confusion(actual: np.ndarray, predicted: np.ndarray) -> dict:
             "correct": share(sum(counts[k][k] for k in range(len(CLASSES))))}
 
 
-def learn_meta_model(rows: list[dict], horizon: int, seed: int = 0) -> MetaTraining:
+def learn_meta_model(rows: list[dict], horizon: int, seed: int = 0, cost: float | None = None) -> MetaTraining:
     """The meta model of the episodes `rows` (meta_episodes.meta_episode), its hyperparameters chosen by
-    cross-validation and its tree fitted on all of them."""
+    cross-validation (`cost`: the weight of a worse episode fixed, only the leaf size chosen) and its tree
+    fitted on all of them (subtrees predicting one class merged into one leaf)."""
     window, names, X, y, gain = training_set(rows)
-    cost, leaf, candidates = choose_hyperparameters(X, y, gain, seed)
+    cost, leaf, candidates = choose_hyperparameters(X, y, gain, seed, COSTS if cost is None else (float(cost),))
     estimator = _classifier(cost, leaf, seed).fit(X, y)
-    tree = label_tree(estimator, X, y)
+    tree = label_tree(estimator, X, y).simplified()
     report = {"episodes": int(len(y)), "labels": {c: int(np.sum(y == k)) for k, c in enumerate(CLASSES)},
               "equal_band": EQUAL_BAND, "cost": cost, "min_samples_leaf": leaf, "leaves": tree.n_leaves,
               "unfiltered_improvement": float(gain.mean()), "candidates": candidates,

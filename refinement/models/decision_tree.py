@@ -232,6 +232,40 @@ class LabelTree:
         """The class name predicted for each row of X (n, f)."""
         return np.array(self.classes, dtype=object)[self.label[self.apply(X)]]
 
+    def simplified(self) -> LabelTree:
+        """The same predictions with every subtree whose leaves all predict one class replaced by one leaf (its
+        counts those of the subtree's root): fewer, readable rules."""
+        verdict: dict[int, int | None] = {}
+
+        def visit(node: int) -> int | None:
+            if self.children_left[node] == LEAF:
+                verdict[node] = int(self.label[node])
+            else:
+                left, right = visit(self.children_left[node]), visit(self.children_right[node])
+                verdict[node] = left if left is not None and left == right else None
+            return verdict[node]
+
+        visit(0)
+        keep: list[int] = []
+        new_index: dict[int, int] = {}
+        stack = [0]
+        while stack:  # preorder walk that stops at uniform subtrees
+            node = stack.pop()
+            new_index[node] = len(keep)
+            keep.append(node)
+            if verdict[node] is None:
+                stack += [int(self.children_right[node]), int(self.children_left[node])]
+        leaf = [verdict[k] is not None for k in keep]
+        return LabelTree(
+            children_left=np.array([LEAF if lf else new_index[int(self.children_left[k])] for k, lf in zip(keep, leaf)]),
+            children_right=np.array([LEAF if lf else new_index[int(self.children_right[k])] for k, lf in zip(keep, leaf)]),
+            feature=np.array([LEAF if lf else int(self.feature[k]) for k, lf in zip(keep, leaf)]),
+            threshold=np.array([0.0 if lf else float(self.threshold[k]) for k, lf in zip(keep, leaf)]),
+            label=np.array([int(self.label[k]) if verdict[k] is None else verdict[k] for k in keep]),
+            counts=np.array([self.counts[k] for k in keep], dtype=np.int64).reshape(len(keep), len(self.classes)),
+            classes=self.classes,
+        )
+
     def export_text(self, feature_names: tuple[str, ...]) -> str:
         """Readable rules like WEKA's J48 output: one test per line, indented by depth, each leaf with its class
         and its training examples per class."""

@@ -19,6 +19,9 @@ from tailor.refinement.models.action_models import META_FILE, read_json
 from tailor.refinement.models.decision_tree import LabelTree
 
 META_MODEL_SCHEMA = "tailor.meta_model/1"
+# |1 - t_refined / t_greedy| within this counts as "equal" (Table 5.4): the meta model's labels and the better /
+# equal / worse counts of `tailor evaluate` use this one tolerance
+EQUAL_BAND = 0.01
 
 
 @dataclass(frozen=True, eq=False)
