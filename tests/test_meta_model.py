@@ -212,3 +212,24 @@ def test_evaluate_filter_and_tiny_meta_run(tmp_path, capsys):
     model = load_meta_model(out / "models")  # beside copies of the action models it judges
     assert model.window == WINDOW and (out / "models" / "goToPose.json").is_file()
     assert report["rules"] == model.rules_text().splitlines()
+
+
+def test_simplified_tree_merges_agreeing_leaves():
+    counts = np.array([[5, 2, 3], [4, 0, 1], [1, 2, 2], [0, 0, 0]][:3], dtype=np.int64)
+    tree = LabelTree(np.array([1, -1, -1]), np.array([2, -1, -1]), np.array([0, -1, -1]), np.array([0.5, 0.0, 0.0]),
+                     np.array([0, 0, 0]), counts, CLASSES)
+    simple = tree.simplified()
+    assert simple.n_leaves == 1 and simple.counts.tolist() == [[5, 2, 3]]
+    assert simple.export_text(("a",)) == ": better (5/2/3)"
+    X = np.array([[0.0], [1.0]])
+    assert list(simple.predict(X)) == list(tree.predict(X)) == ["better", "better"]
+    mixed = LabelTree(tree.children_left, tree.children_right, tree.feature, tree.threshold, np.array([0, 0, 2]),
+                      counts, CLASSES)
+    assert mixed.simplified().n_leaves == 2 and list(mixed.predict(X)) == ["better", "worse"]
+
+
+def test_meta_options_belong_to_meta(capsys):
+    assert main(["evaluate", "soccer", "--episodes", "2", "--fresh-episodes", "3"]) == 2
+    assert "belong to --meta" in capsys.readouterr().err
+    assert main(["evaluate", "soccer", "--meta", "--episodes", "5"]) == 2
+    assert "at least 20" in capsys.readouterr().err

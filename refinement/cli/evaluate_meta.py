@@ -55,7 +55,7 @@ def _print_text(report: dict) -> None:
         f"{f['situations'][0]}-{f['situations'][1] - 1}\n")
     out(f"  labels: better / equal / worse beyond +-{100 * report['equal_band']:.0f}% of the greedy time; training "
         f"episodes {t['labels']['better']} / {t['labels']['equal']} / {t['labels']['worse']}\n")
-    out(f"  tree: {t['leaves']} leaves, cost of a worse episode {t['cost']:g}, at least {t['min_samples_leaf']} "
+    out(f"  tree: {t['leaves']} {'leaf' if t['leaves'] == 1 else 'leaves'}, cost of a worse episode {t['cost']:g}, at least {t['min_samples_leaf']} "
         f"episodes a leaf (chosen by {t['cv_folds']}-fold cross-validation)\n")
     out("  cross-validated on the training situations (filtered: refine where \"better\" is predicted):\n")
     out(f"    {'cost':>5} {'leaf':>5} {'improvement':>12} {'worse':>7} {'refined':>8} {'accuracy':>9}"

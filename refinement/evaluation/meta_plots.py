@@ -18,6 +18,21 @@ def _top_features(estimator, n: int = 2) -> list[int]:
     return order[:n]
 
 
+def _draw_rules(ax, model, classes: list[str]) -> None:
+    """The stored tree's rules as text, each leaf coloured by the class it predicts."""
+    lines = model.rules_text().splitlines()
+    ax.axis("off")
+    size = max(5.0, min(9.0, 300.0 / max(len(lines), 1)))
+    step = 1.0 / (max(len(lines), 1) + 1)
+    for k, line in enumerate(lines):
+        leaf = next((c for c in classes if f": {c} (" in line), None)
+        ax.text(0.0, 1.0 - (k + 1) * step, line, family="monospace", fontsize=size, va="center",
+                color=COLORS[leaf] if leaf else "black", transform=ax.transAxes)
+    ax.set_title(f"Meta action model: does refinement (h={model.horizon}) make execution better, equal or worse "
+                 f"than greedy?\n{model.tree.n_leaves} leaves; training episodes per leaf: better/equal/worse",
+                 fontsize=9, loc="left")
+
+
 def draw_meta_model(path: Path, training, fresh_rows: list[dict]) -> Path:
     """The tree (left) and its predictions over its two most important features (right)."""
     import matplotlib
@@ -25,18 +40,14 @@ def draw_meta_model(path: Path, training, fresh_rows: list[dict]) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap
-    from sklearn.tree import plot_tree
 
     from tailor.refinement.learning.meta_learning import episode_label
     from tailor.refinement.refine_plots import _save
 
     model, estimator = training.model, training.estimator
     classes = list(model.tree.classes)
-    fig, (left, right) = plt.subplots(1, 2, figsize=(17, 7), gridspec_kw={"width_ratios": [1.6, 1]})
-    plot_tree(estimator, ax=left, feature_names=list(model.feature_names), class_names=classes, filled=True,
-              impurity=False, proportion=False, fontsize=6, max_depth=4)
-    left.set_title(f"Meta action model: does refinement (h={model.horizon}) make execution better, equal or worse? "
-                   f"({model.tree.n_leaves} leaves; depth 4 shown)", fontsize=9)
+    fig, (left, right) = plt.subplots(1, 2, figsize=(16, 7.5), gridspec_kw={"width_ratios": [1.25, 1]})
+    _draw_rules(left, model, classes)
     top = _top_features(estimator)
     if len(top) < 2:
         top = (top + [0, 1])[:2]
