@@ -233,3 +233,19 @@ def test_meta_options_belong_to_meta(capsys):
     assert "belong to --meta" in capsys.readouterr().err
     assert main(["evaluate", "soccer", "--meta", "--episodes", "5"]) == 2
     assert "at least 20" in capsys.readouterr().err
+
+
+def test_meta_model_must_sit_beside_the_models_it_judges(tmp_path):
+    from tailor.errors import OutputFileError
+    from tailor.refinement.cli.evaluate_meta import _check_companions
+
+    target = tmp_path / "models"
+    target.mkdir()
+    assert [p.name for p in _check_companions(target, SOCCER / "models")] == sorted(
+        p.name for p in (SOCCER / "models").glob("*.json") if p.name != "meta.json")
+    shutil.copy(SOCCER / "models" / "goToPose.json", target / "goToPose.json")  # the same file: not copied again
+    assert "goToPose.json" not in [p.name for p in _check_companions(target, SOCCER / "models")]
+    (target / "goToPose.json").write_text("{}")  # another model of the same name
+    with pytest.raises(OutputFileError, match="holds another goToPose.json"):
+        _check_companions(target, SOCCER / "models")
+    assert _check_companions(SOCCER / "models", SOCCER / "models") == []
