@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tailor.errors import ModelFileError
+from tailor.errors import ModelFileError, TailorError
 from tailor.refinement.models.action_models import META_FILE, read_json
 from tailor.refinement.models.decision_tree import LabelTree
 
@@ -73,10 +73,8 @@ class MetaModel:
         signature = tuple((w["action"], w["feature_set"]) for w in window)
         try:
             expected = tuple(f"{k + 1}.{a}.{n}" for k, (a, space) in enumerate(signature) for n in feature_names(space))
-        except ModelFileError:
-            raise
-        except Exception as exc:  # an unknown feature space
-            raise ModelFileError(f"'window': {exc}", file=source) from None
+        except TailorError as exc:  # an unknown feature space
+            raise ModelFileError(f"'window': {exc.message}", file=source) from None
         names = data.get("feature_names")
         if not isinstance(names, list) or tuple(names) != expected:
             raise ModelFileError(f"feature_names {names!r} do not match the window's feature spaces "
