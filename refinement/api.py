@@ -40,6 +40,7 @@ class Refinement:
     refined: RefinedSequence  # every parameter bound, with its predicted durations
     models: Path  # the folder the action models came from
     assertions: tuple = ()  # the assert stage's decisions (tailor.refinement.assertion), with their provenance
+    filter: object = None  # the meta filter's decision (tailor.refinement.meta_filter.MetaDecision) when it ran
 
     @property
     def sequence(self) -> ActionSequence:
@@ -65,6 +66,7 @@ class Refinement:
     def to_json(self) -> dict:
         return {"plan": self.plan.to_json(), "models": str(self.models), "horizon": self.refined.horizon,
                 "assertions": [a.to_json() for a in self.assertions],
+                "filter": None if self.filter is None else self.filter.to_json(),
                 "free_parameters": [{"id": pid, "low": low, "high": high, "value": self.chosen[pid]}
                                     for pid, (low, high) in self.free.items()],
                 "sequence": self.sequence.to_json(), "predicted_s": list(self.refined.predicted),
@@ -88,7 +90,7 @@ def plan(domain, problem=None, *, planner: str = DEFAULT_PLANNER, timeout: float
 
 def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 2, optimizer: str = "analytic",
            seed: int = 0, models: str | Path | None = None, planner: str = DEFAULT_PLANNER,
-           timeout: float | None = None, assertion: bool = True) -> Refinement:
+           timeout: float | None = None, assertion: bool = True, filter: bool | None = None) -> Refinement:
     """Plan (unless `plan` is given: ours, or a SequentialPlan / PartialOrderPlan of any UP engine),
     instantiate (Alg. 3), assert subgoals where a success model predicts failure (Alg. 5; unless `assertion`
     is False) and refine over `horizon` actions (Sec. 5.4; 1 is greedy), as `tailor refine` does.
@@ -96,7 +98,10 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     `domain` is a bundled name, a domain folder or its domain.pddl (the binding `actions.toml` beside it says
     how its actions execute); `problem` a PDDL file, a problem name or a unified-planning Problem; `belief`
     the continuous values `{object: {quantity: value}}`, a belief file, or None for the problem's own file.
-    `models` is a model folder (default: as the CLI, see model_store)."""
+    `models` is a model folder (default: as the CLI, see model_store). `filter` (default: the binding's
+    `[evaluation] filter`): refine only where the meta action model `models/meta.json` predicts that refinement
+    makes execution faster, else keep the greedy (h = 1) parameterization (Sec. 5.5.4); `.filter` says which
+    and why."""
     from tailor.planner_bridge import resolve_domain_dir, resolve_problem
     from tailor.refinement.belief import belief_path_for, load_belief, parse_belief
     from tailor.refinement.binding import load_domain_binding
@@ -112,6 +117,8 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     _check(horizon, int, "horizon")
     if not isinstance(assertion, bool):
         raise ArgumentTypeError(f"assertion must be bool, not {type(assertion).__name__}")
+    if filter is not None and not isinstance(filter, bool):
+        raise ArgumentTypeError(f"filter must be bool or None, not {type(filter).__name__}")
     if horizon < 1:
         raise ArgumentValueError(f"horizon must be at least 1, not {horizon}")
     if optimizer not in OPTIMIZERS:
@@ -146,15 +153,33 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
                                 f"not {type(belief).__name__}")
     sequence = instantiate(abstract, binding, belief_state)
     source = resolve_models(domain_dir, models)
+    if filter is None:
+        from tailor.refinement.evaluation.experiments import binding_filter
+
+        filter = binding_filter(binding)
+    meta = None
+    if filter:
+        from tailor.refinement.models.meta_model import load_meta_model
+
+        meta = load_meta_model(source.path)
     success_models, assertions = {}, ()
     if assertion:
         success_models = success_models_in(source.path, binding, sequence)
         asserted = assert_task(sequence, binding, success_models, abstract)
         sequence, assertions = asserted.sequence, asserted.assertions
     action_models = load_action_models(source.path, tuple(sorted({a.action for a in sequence.actions})))
+    decision = None
+    if meta is not None and horizon > 1 and sequence.actions:  # refine, or keep greedy (Sec. 5.5.4)
+        from tailor.refinement.meta_filter import decide
+
+        greedy = refine_sequence(sequence, action_models, horizon=1, method=optimizer, seed=seed,
+                                 success_models=success_models)
+        decision = decide(meta, greedy.sequence, action_models)
+        if not decision.refine:
+            return Refinement(abstract, sequence, greedy, source.path, tuple(assertions), decision)
     refined = refine_sequence(sequence, action_models, horizon=horizon, method=optimizer, seed=seed,
                               success_models=success_models)
-    return Refinement(abstract, sequence, refined, source.path, tuple(assertions))
+    return Refinement(abstract, sequence, refined, source.path, tuple(assertions), decision)
 
 
 def dispatch(refined, seed: int = 0) -> SequenceResult:

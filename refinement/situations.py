@@ -54,6 +54,16 @@ def job_models(job: Job, sequence: ActionSequence):
     return _CACHE[key]
 
 
+def job_meta_model(job: Job):
+    """The meta action model beside the job's action models (models/meta.json), loaded once per process."""
+    from tailor.refinement.models.meta_model import load_meta_model
+
+    key = ("meta", str(job.task.models_dir))
+    if key not in _CACHE:
+        _CACHE[key] = load_meta_model(job.task.models_dir)
+    return _CACHE[key]
+
+
 def job_success_models(job: Job, sequence: ActionSequence) -> dict:
     """The success classifiers the binding names for the sequence's actions, loaded once per process."""
     from tailor.refinement.pipeline import success_models_for

@@ -74,6 +74,18 @@ def add_models_argument(parser: argparse.ArgumentParser) -> None:
                              "(default: $TAILOR_MODELS/<domain> where it exists, else the domain's bundled models)")
 
 
+def add_filter_arguments(parser: argparse.ArgumentParser) -> None:
+    """`--filter` / `--no-filter`: refine only where the meta action model (models/meta.json) predicts that
+    refinement makes execution faster, keeping greedy elsewhere (Sec. 5.5.4); default: the binding's
+    `[evaluation] filter`."""
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--filter", dest="filter", action="store_true", default=None,
+                       help="refine only where the meta action model (models/meta.json) predicts it makes "
+                            "execution faster; keep greedy elsewhere (default: the binding's [evaluation] filter)")
+    group.add_argument("--no-filter", dest="filter", action="store_false",
+                       help="refine every situation, whatever the binding says")
+
+
 def announce_models(command: str, source) -> None:
     """The one line that says which models a command uses: a note on stderr (stdout may be JSON; -q hides it)."""
     import logging

@@ -7,6 +7,7 @@ import sys
 
 from tailor.refinement.cli.arguments import (
     add_backend_arguments,
+    add_filter_arguments,
     add_models_argument,
     announce_models,
     backend_session,
@@ -40,8 +41,34 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="measure subgoal assertion instead (Table 6.1): random situations of the binding's "
                              "[evaluation] assertion generator, plain vs with assertion + refinement")
     parser.add_argument("--plot", metavar="FILE.png",
-                        help="with --assertion: draw three instances with their asserted subgoals (Fig. 6.6)")
+                        help="with --assertion: draw three instances with their asserted subgoals (Fig. 6.6); "
+                             "with --meta: the meta model's tree and regions (Fig. 5.16)")
+    parser.add_argument("--meta", action="store_true",
+                        help="learn the meta action model (Sec. 5.5.4) from --episodes situations and measure "
+                             "refinement unfiltered vs filtered by it on --fresh-episodes others (Tables 5.4-5.6)")
+    parser.add_argument("--fresh-episodes", type=whole_number(1), default=None, metavar="M",
+                        help="with --meta: fresh situations it is measured on (default: as many as --episodes)")
+    parser.add_argument("--worse-cost", type=positive_number, default=None, metavar="C",
+                        help="with --meta: weight of a worse episode in the tree (its cost matrix; default: chosen "
+                             "by cross-validation among 1, 2, 3, 5)")
+    parser.add_argument("--out", metavar="DIR", default=None,
+                        help="with --meta: write DIR/models/meta.json (default: beside --models / $TAILOR_MODELS, "
+                             "or the user data folder with copies of the bundled models)")
+    add_filter_arguments(parser)
 
+
+
+def positive_number(text: str) -> float:
+    """A finite number above 0 (argparse type)."""
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"must be a positive number, not {text}")
+    return value
 
 
 def _fmt(value, pattern="{:.2f}") -> str:
@@ -58,6 +85,10 @@ def _print_text(report: dict) -> None:
     out(f"Domain {report['domain']}: greedy vs refined over {s['scenarios']} random '{report['comparison']}' "
         f"situations (seed {report['seed']}; problems {', '.join(s['problems'])}); {s['episodes']} where greedy "
         f"and refined both succeeded (failed: greedy {s['failed_greedy']}, refined {s['failed_refined']})\n")
+    if s.get("filter_decisions"):
+        f = s["filter_decisions"]
+        out(f"  meta filter (Sec. 5.5.4)     refined {f['refined']}, greedy kept {f['kept_greedy']} "
+            f"(not judged, refined: {f['not_judged']})\n")
     out(f"  failure rate greedy / refined {_pct(s['failure_rate_greedy'])}% / {_pct(s['failure_rate_refined'])}%\n")
     out(f"  penalized mean, all scenarios {_fmt(s['penalized_greedy_mean'])} s / {_fmt(s['penalized_refined_mean'])} s "
         f"(a failure counts its time + {s['failure_penalty_s']:.0f} s; improvement {_pct(s['penalized_improvement'])}%)\n")
@@ -124,14 +155,24 @@ def _evaluate(args: argparse.Namespace) -> int:
     binding = load_domain_binding(domain_dir)
     source = resolve_models(domain_dir, args.models)
     plan = evaluation_plan(binding)
+    from tailor.errors import UsageError
+
+    if args.meta:
+        if args.assertion:
+            raise UsageError("--meta and --assertion are two experiments: give one")
+        if args.episodes < 20:
+            raise UsageError(f"--meta needs at least 20 --episodes to learn from, not {args.episodes}")
+        from tailor.refinement.cli.evaluate_meta import run_meta
+
+        return run_meta(args, domain_dir, binding, plan, source)
+    if args.fresh_episodes is not None or args.out is not None or args.worse_cost is not None:
+        raise UsageError("--fresh-episodes, --worse-cost and --out belong to --meta")
     if args.assertion or args.plot:
         from tailor.refinement.cli.evaluate_assertion import run_assertion
 
         return run_assertion(args, domain_dir, binding, plan, source.path)
     if args.situations is not None:
         from dataclasses import replace
-
-        from tailor.errors import UsageError
 
         known = binding.entry.situations
         if args.situations not in known:
@@ -145,15 +186,20 @@ def _evaluate(args: argparse.Namespace) -> int:
         return draw_situations(domain_dir, binding, generator, seeds, args.seed, planned, source.path)
 
     items = situations(plan.comparison, args.episodes)
+    use_filter = plan.filter if args.filter is None else args.filter
+    if use_filter:  # a missing or bad meta model fails before any work
+        from tailor.refinement.models.meta_model import load_meta_model
+
+        load_meta_model(source.path)
     if items:  # the models are loaded here once, so a missing or bad model file fails before any work
         job, _, objects = items[0]
         job_models(job, situation_sequence(job, objects))
     announce_models("evaluate", source)
-    rows = run_in_workers(comparison_episode, [(job, i, objects, i < args.oracle_episodes, plan.zero_baseline)
-                                              for job, i, objects in items], args.jobs, "greedy vs refined",
-                          getattr(args, "progress", True))
+    rows = run_in_workers(comparison_episode, [(job, i, objects, i < args.oracle_episodes, plan.zero_baseline,
+                                                use_filter) for job, i, objects in items], args.jobs,
+                          "greedy vs refined", getattr(args, "progress", True))
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
-              "models": str(source.path), "comparison": plan.comparison}
+              "models": str(source.path), "comparison": plan.comparison, "filter": use_filter}
     report.update(summarize_comparison(rows))
     report["situations"] = situation_rows(rows, {i: objects for _, i, objects in items})
     if plan.horizons and args.horizon_episodes:

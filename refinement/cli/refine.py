@@ -12,7 +12,13 @@ import math
 import sys
 import time
 
-from tailor.refinement.cli.arguments import add_models_argument, announce_models, positive_seconds, whole_number
+from tailor.refinement.cli.arguments import (
+    add_filter_arguments,
+    add_models_argument,
+    announce_models,
+    positive_seconds,
+    whole_number,
+)
 
 HELP = "refine the free parameters of a plan for the fastest predicted execution, optionally simulate it"
 
@@ -37,6 +43,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="draw greedy and refined trajectories side by side (simulates them); also "
                              "FILE_polar.png (the first free parameter a full-circle angle) or FILE_costs.png: "
                              "the predicted time over that parameter; every file written is named")
+    add_filter_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
 
 
@@ -76,7 +83,7 @@ def _execution_json(outcome, success_models=None) -> dict:
     return data
 
 
-def result_json(prepared, method: str, seed: int, outcomes: dict) -> dict:
+def result_json(prepared, method: str, seed: int, outcomes: dict, decision=None) -> dict:
     """Schema tailor.refine/1: the plan, the free parameters with their ranges and chosen values, and the
     refined and greedy executions in the same structure."""
     from tailor.refinement.outputs import versioned
@@ -96,12 +103,14 @@ def result_json(prepared, method: str, seed: int, outcomes: dict) -> dict:
     }
     if prepared.assertions:
         data["assertions"] = [a.to_json() for a in prepared.assertions]
+    if decision is not None:  # the meta filter (Sec. 5.5.4): refined, or greedy kept
+        data["filter"] = decision.to_json()
     data["refined"] = _execution_json(outcomes["refined"], prepared.success_models)
     data["greedy"] = _execution_json(outcomes["greedy"], prepared.success_models)
     return versioned("refine", data)
 
 
-def _print_text(prepared, method: str, outcomes: dict) -> None:
+def _print_text(prepared, method: str, outcomes: dict, decision=None) -> None:
     from tailor.planner_bridge import render_text
 
     out = sys.stdout.write
@@ -117,6 +126,8 @@ def _print_text(prepared, method: str, outcomes: dict) -> None:
             out(f"      inserted: {a.origin}\n")
     for check in prepared.assertions:
         out(f"Subgoal assertion, step {check.step} {check.pddl}: {check.reason()}\n")
+    if decision is not None:
+        out(f"Meta filter (Sec. 5.5.4): {decision.reason}\n")
     free = prepared.sequence.free_parameters()
     names = [("greedy", "greedy (h=1)"), ("refined", f"refined (h={outcomes['refined'].refined.horizon}, {method})")]
     names = [(k, label) for k, label in names if k in outcomes]
@@ -204,6 +215,25 @@ def _nothing_to_refine(prepared, args: argparse.Namespace, simulate: bool) -> in
     return 0
 
 
+def _meta_model(args: argparse.Namespace, task, source):
+    """The meta action model when the filter is on (--filter, else the binding's [evaluation] filter)."""
+    use = args.filter
+    if use is None:
+        from tailor.refinement.evaluation.experiments import binding_filter
+        from tailor.refinement.pipeline import load_binding
+
+        use = binding_filter(load_binding(task))
+    if not use:
+        return None
+    from tailor.refinement.models.meta_model import load_meta_model
+
+    meta = load_meta_model(source.path)
+    if meta.horizon != args.horizon and args.horizon > 1:
+        logging.getLogger(__name__).warning("the meta model judges refinement with h=%d, not the h=%d asked for",
+                                            meta.horizon, args.horizon)
+    return meta
+
+
 def run(args: argparse.Namespace) -> int:
     from tailor.refinement.pipeline import GREEDY_HORIZON, prepare, refine_and_dispatch, resolve_task
     from tailor.refinement.progress import showing_progress
@@ -221,6 +251,7 @@ def run(args: argparse.Namespace) -> int:
     task = resolve_task(args.domain, args.problem, args.belief)
     source = resolve_models(task.domain_dir, args.models)
     task = replace(task, models=source.path)
+    meta = _meta_model(args, task, source)  # a missing or bad meta model fails before planning
     prepared = prepare(task, args.planner, args.timeout)
     log.debug("planned, instantiated and loaded the models in %.2f s", time.perf_counter() - started)
     simulate = args.simulate or bool(args.plot)
@@ -231,9 +262,16 @@ def run(args: argparse.Namespace) -> int:
 
         check_scene(prepared.sequence, prepared.binding.file)
     method, seed = args.optimizer, args.seed
+    decision = None
     with showing_progress(getattr(args, "progress", True)):  # the genetic algorithm takes seconds per window
-        outcomes = {"greedy": refine_and_dispatch(prepared, GREEDY_HORIZON, method, seed, simulate),
-                    "refined": refine_and_dispatch(prepared, args.horizon, method, seed, simulate)}
+        outcomes = {"greedy": refine_and_dispatch(prepared, GREEDY_HORIZON, method, seed, simulate)}
+        if meta is not None and args.horizon > GREEDY_HORIZON:  # refine, or keep greedy (Sec. 5.5.4)
+            from tailor.refinement.meta_filter import decide
+
+            decision = decide(meta, outcomes["greedy"].refined.sequence, prepared.models)
+        refined = decision is None or decision.refine
+        outcomes["refined"] = (refine_and_dispatch(prepared, args.horizon, method, seed, simulate) if refined
+                               else outcomes["greedy"])
     log.debug("refined greedy and with h=%d%s in %.2f s", args.horizon,
               " and simulated both" if simulate else "", time.perf_counter() - started)
     announce_models("refine", source)  # once the models have made their predictions: an error stays one line
@@ -247,11 +285,11 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         from tailor.refinement.outputs import json_text
 
-        sys.stdout.write(json_text(result_json(prepared, args.optimizer, args.seed, outcomes)) + "\n")
+        sys.stdout.write(json_text(result_json(prepared, args.optimizer, args.seed, outcomes, decision)) + "\n")
         if args.plot:  # stdout holds the JSON only
             logging.getLogger(__name__).info("wrote %s", ", ".join(str(path) for path in written))
     else:
-        _print_text(prepared, args.optimizer, outcomes)
+        _print_text(prepared, args.optimizer, outcomes, decision)
         if args.plot:
             sys.stdout.write("".join(f"Wrote {path}\n" for path in written))
     return 0

@@ -8,6 +8,9 @@ parameter zero, and the horizons 1-4 (Table 5.3), for any domain whose binding n
     assertion = "approach"   # situation generator for subgoal assertion (Table 6.1, `--assertion`); optional
     zero_baseline = false    # also dispatch every situation with its free parameters set to 0 (e.g. the arm's
                              # way-point velocities: stop at every way-point)
+    filter = false           # refine only where the meta action model (models/meta.json) predicts "better"
+                             # (Sec. 5.5.4), in `tailor refine`, `tailor evaluate` and `tailor.refine`; the
+                             # commands' --filter / --no-filter override it
 
 Every situation goes through the real pipeline: a random belief state, Algorithm 3 on the problem's plan
 (planned once per problem), subgoal assertion (Alg. 5) where the binding names success models, refinement
@@ -29,9 +32,10 @@ from tailor.refinement.binding import Binding
 from tailor.refinement.dispatch import dispatch
 from tailor.errors import BindingError
 from tailor.refinement.refine import refine
-from tailor.refinement.situations import Job, asserted_situation, job_models, stream_seed
+from tailor.refinement.meta_filter import decide
+from tailor.refinement.models.meta_model import EQUAL_BAND  # "equal" within 1% (Table 5.4), as the meta model's
+from tailor.refinement.situations import Job, asserted_situation, job_meta_model, job_models, stream_seed
 
-EQUAL_BAND = 0.01  # |1 - t_refined / t_greedy| below this counts as "equal" (Table 5.4)
 AGREEMENT = 0.01  # analytic and ga agree when their predicted costs differ by at most 1%
 ORACLE_ANGLES = 36  # grid of the simulated search: a free parameter spanning a full circle (10 degree steps) ...
 ORACLE_VALUES = 4  # ... any other free parameter: values spread over its range
@@ -52,6 +56,7 @@ class EvaluationPlan:
     horizons: str | None
     zero_baseline: bool
     assertion: str | None = None  # situation generator of the subgoal assertion experiment (Table 6.1)
+    filter: bool = False  # refine only where the meta action model predicts "better" (Sec. 5.5.4)
 
 
 def evaluation_plan(binding: Binding) -> EvaluationPlan:
@@ -64,8 +69,8 @@ def evaluation_plan(binding: Binding) -> EvaluationPlan:
     if not table:
         raise fail("missing: the domain's binding names no situations to evaluate on (add an [evaluation] table)")
     for key in table:
-        if key not in ("comparison", "horizons", "zero_baseline", "assertion"):
-            raise fail(f"unknown key '{key}' (expected comparison, horizons, zero_baseline, assertion)")
+        if key not in ("comparison", "horizons", "zero_baseline", "assertion", "filter"):
+            raise fail(f"unknown key '{key}' (expected comparison, horizons, zero_baseline, assertion, filter)")
     known = binding.entry.situations
     for key in ("comparison", "horizons", "assertion"):
         value = table.get(key)
@@ -77,7 +82,16 @@ def evaluation_plan(binding: Binding) -> EvaluationPlan:
     zero = table.get("zero_baseline", False)
     if not isinstance(zero, bool):
         raise fail(f"zero_baseline must be true or false, not {zero!r}")
-    return EvaluationPlan(table["comparison"], table.get("horizons"), zero, table.get("assertion"))
+    return EvaluationPlan(table["comparison"], table.get("horizons"), zero, table.get("assertion"),
+                          binding_filter(binding))
+
+
+def binding_filter(binding: Binding) -> bool:
+    """The binding's `[evaluation] filter` (default false): refine only where the meta model predicts "better"."""
+    value = dict(binding.evaluation).get("filter", False)
+    if not isinstance(value, bool):
+        raise BindingError(f"[evaluation] filter must be true or false, not {value!r}", file=binding.file)
+    return value
 
 
 def situation_seed(seed: int, index: int) -> int:
@@ -89,29 +103,35 @@ def zero_assignment(sequence: ActionSequence) -> dict[str, float]:
     return {p.id: min(max(0.0, p.low), p.high) for p in sequence.free_parameters()}
 
 
-def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: bool) -> dict:
-    """One situation: greedy, refined (analytic and ga), optionally the zero baseline and the oracle."""
+def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: bool, meta: bool = False) -> dict:
+    """One situation: greedy, refined (analytic and ga), optionally the zero baseline and the oracle. With
+    `meta`, the refined execution is the greedy one where the meta model (models/meta.json) does not predict
+    that refinement makes it better (Sec. 5.5.4); the optimizer statistics still describe the refinement."""
     seed = situation_seed(job.seed, index)
     sequence, success = asserted_situation(job, objects)
     models = job_models(job, sequence)
     greedy = refine(sequence, models, horizon=1, method="analytic", seed=seed, success_models=success)
-    refined = refine(sequence, models, horizon=2, method="analytic", seed=seed, success_models=success)
+    optimized = refine(sequence, models, horizon=2, method="analytic", seed=seed, success_models=success)
+    decision = decide(job_meta_model(job), greedy.sequence, models) if meta else None
+    refined = optimized if decision is None or decision.refine else greedy
     # where the analytic minimization fell back to the GA everywhere, the GA run is that same run
-    fell_back = refined.windows and all(w.method == "ga" for w in refined.windows)
-    genetic = refined if fell_back else refine(sequence, models, horizon=2, method="ga", seed=seed,
-                                               success_models=success)
+    fell_back = optimized.windows and all(w.method == "ga" for w in optimized.windows)
+    genetic = optimized if fell_back else refine(sequence, models, horizon=2, method="ga", seed=seed,
+                                                 success_models=success)
     g, r = dispatch(greedy.sequence, seed=seed), dispatch(refined.sequence, seed=seed)
     out = {"index": index, "seed": seed, "problem": job.plan.problem,
            "greedy": g.duration, "refined": r.duration, "greedy_ok": g.succeeded, "refined_ok": r.succeeded,
            "greedy_outcome": outcome_of(g), "refined_outcome": outcome_of(r),
            "predicted_greedy": greedy.predicted_total, "predicted_refined": refined.predicted_total,
-           "analytic_seconds": sum(w.seconds for w in refined.windows),
-           "analytic_window_seconds": [w.seconds for w in refined.windows],
-           "analytic_method": ",".join(w.method for w in refined.windows),
+           "analytic_seconds": sum(w.seconds for w in optimized.windows),
+           "analytic_window_seconds": [w.seconds for w in optimized.windows],
+           "analytic_method": ",".join(w.method for w in optimized.windows),
            "ga_seconds": sum(w.seconds for w in genetic.windows),
-           "analytic_cost": refined.predicted_total, "ga_cost": genetic.predicted_total,
+           "analytic_cost": optimized.predicted_total, "ga_cost": genetic.predicted_total,
            "greedy_actions": [[a.action, a.duration] for a in g.results],
            "refined_actions": [[a.action, a.duration] for a in r.results]}
+    if decision is not None:
+        out["filter"] = decision.to_json()
     if zero:
         z = dispatch(sequence.bind(zero_assignment(sequence)), seed=seed)
         out["zero"], out["zero_ok"] = z.duration, z.succeeded
@@ -142,6 +162,8 @@ def situation_rows(rows: list[dict], situations: dict[int, dict]) -> list[dict]:
             row["zero"] = {"simulated": r["zero"], "outcome": "success" if r["zero_ok"] else "failed"}
         if r.get("oracle_method"):
             row["oracle"] = {"simulated": r.get("oracle"), "method": r["oracle_method"]}
+        if "filter" in r:
+            row["filter"] = r["filter"]
         out.append(row)
     return out
 
@@ -263,6 +285,11 @@ def summarize_comparison(rows: list[dict]) -> dict:
         "analytic_ga_agree": float(np.mean(agree)) if rows else None,
     }
     out["per_action"] = _per_action(both)
+    if any("filter" in r for r in rows):
+        decisions = [r["filter"] for r in rows if "filter" in r]
+        out["filter_decisions"] = {"refined": sum(d["refine"] for d in decisions),
+                         "kept_greedy": sum(not d["refine"] for d in decisions),
+                         "not_judged": sum(d["prediction"] is None for d in decisions)}
     if rows and "zero" in rows[0]:
         out.update(_zero_summary(rows))
     return out

@@ -25,6 +25,7 @@ from tailor.refinement.models.rules import Rule
 ACTION_MODEL_SCHEMA = "tailor.action_model/1"
 COLLISION_MODEL_SCHEMA = "tailor.collision_model/1"
 COLLISION_SUFFIX = ".collision.json"  # <action>.collision.json: the action's success classifier
+META_FILE = "meta.json"  # the meta action model (tailor.refinement.models.meta_model), not an action's
 # A predicted duration is plausible within the durations seen in training, [lo, hi] (report.duration_range;
 # for files without it [0, OLD_FILE_SPAN * mean_duration]), widened by RANGE_MARGIN times its width on each
 # side. Outside (or not finite) the model file is broken: ModelFileError. A plausible prediction below zero
@@ -191,7 +192,8 @@ def load_action_models(models_dir: Path, actions: tuple[str, ...] | None = None)
     if actions is not None:
         paths = [models_dir / f"{action}.json" for action in actions]
     else:
-        paths = sorted(p for p in models_dir.glob("*.json") if not p.name.endswith(COLLISION_SUFFIX))
+        paths = sorted(p for p in models_dir.glob("*.json")
+                       if not p.name.endswith(COLLISION_SUFFIX) and p.name != META_FILE)
         if not paths:
             raise ModelFileError("no action model files (<action>.json)", file=str(models_dir))
     models = {}

@@ -3,6 +3,8 @@
 The arrays are those of a fitted `sklearn.tree.DecisionTreeClassifier.tree_` (node i tests
 `x[feature[i]] <= threshold[i]`, going to children_left[i] if true); leaves have children -1 and carry
 the predicted class. Each leaf is also a box lower < x <= upper, the form subgoal assertion needs.
+`DecisionTree` predicts success or failure (a success classifier); `LabelTree` one of several named classes
+(the meta action model's better / equal / worse, Sec. 5.5.4).
 """
 
 from __future__ import annotations
@@ -14,6 +16,39 @@ import numpy as np
 from tailor.refinement.models.rules import leaf_boxes
 
 LEAF = -1
+
+
+def route(left: np.ndarray, right: np.ndarray, feature: np.ndarray, threshold: np.ndarray, X: np.ndarray
+          ) -> np.ndarray:
+    """The leaf index each row of X (n, f) reaches in a tree of `x <= threshold` tests."""
+    # scikit-learn compares features as float32 against float64 thresholds; do the same for equal answers
+    X = np.atleast_2d(np.asarray(X, dtype=float)).astype(np.float32).astype(np.float64)
+    node = np.zeros(len(X), dtype=np.int64)
+    active = left[node] != LEAF
+    while np.any(active):
+        rows = np.flatnonzero(active)
+        at = node[rows]
+        go_left = X[rows, feature[at]] <= threshold[at]
+        node[rows] = np.where(go_left, left[at], right[at])
+        active[rows] = left[node[rows]] != LEAF
+    return node
+
+
+def check_structure(left: np.ndarray, right: np.ndarray, arrays: dict[str, np.ndarray]) -> None:
+    """ValueError unless the arrays describe one binary tree: equal lengths, leaves marked in both children,
+    every other node referenced once as a child."""
+    n = len(left)
+    for name, array in {"children_right": right, **arrays}.items():
+        if np.shape(array) != (n,):
+            raise ValueError(f"{name} must have shape ({n},), got {np.shape(array)}")
+    if n == 0:
+        raise ValueError("a tree needs at least one node")
+    inner = left != LEAF
+    if np.any((right == LEAF) != ~inner):
+        raise ValueError("a node has exactly one child")
+    children = np.concatenate([left[inner], right[inner]])
+    if np.any((children < 1) | (children >= n)) or len(np.unique(children)) != len(children):
+        raise ValueError("children must be distinct node indices in 1..nodes-1")
 
 
 @dataclass(frozen=True, eq=False)
@@ -42,18 +77,8 @@ class DecisionTree:
     samples: np.ndarray  # (nodes,) int, training episodes reaching the node
 
     def __post_init__(self) -> None:
-        n = len(self.children_left)
-        for name in ("children_right", "feature", "threshold", "success", "samples"):
-            if np.shape(getattr(self, name)) != (n,):
-                raise ValueError(f"{name} must have shape ({n},), got {np.shape(getattr(self, name))}")
-        if n == 0:
-            raise ValueError("a tree needs at least one node")
-        inner = self.children_left != LEAF
-        if np.any((self.children_right == LEAF) != ~inner):
-            raise ValueError("a node has exactly one child")
-        children = np.concatenate([self.children_left[inner], self.children_right[inner]])
-        if np.any((children < 1) | (children >= n)) or len(np.unique(children)) != len(children):
-            raise ValueError("children must be distinct node indices in 1..nodes-1")
+        check_structure(self.children_left, self.children_right,
+                        {name: getattr(self, name) for name in ("feature", "threshold", "success", "samples")})
 
     @property
     def n_leaves(self) -> int:
@@ -61,17 +86,7 @@ class DecisionTree:
 
     def apply(self, X: np.ndarray) -> np.ndarray:
         """The leaf index reached by each row of X (n, f)."""
-        # scikit-learn compares features as float32 against float64 thresholds; do the same for equal answers
-        X = np.atleast_2d(np.asarray(X, dtype=float)).astype(np.float32).astype(np.float64)
-        node = np.zeros(len(X), dtype=np.int64)
-        active = self.children_left[node] != LEAF
-        while np.any(active):
-            rows = np.flatnonzero(active)
-            at = node[rows]
-            go_left = X[rows, self.feature[at]] <= self.threshold[at]
-            node[rows] = np.where(go_left, self.children_left[at], self.children_right[at])
-            active[rows] = self.children_left[node[rows]] != LEAF
-        return node
+        return route(self.children_left, self.children_right, self.feature, self.threshold, X)
 
     def predict(self, X: np.ndarray) -> np.ndarray:
         return self.success[self.apply(X)]
@@ -175,3 +190,131 @@ class DecisionTree:
             samples=np.asarray(data["samples"], dtype=np.int64),
         )
 
+
+
+@dataclass(frozen=True, eq=False)
+class LabelTree:
+    """A binary decision tree predicting one of the named `classes` per leaf (`label`: the class index), with
+    the training examples of each class that reached every node (`counts`, (nodes, classes))."""
+
+    children_left: np.ndarray  # (nodes,) int, -1 at leaves
+    children_right: np.ndarray  # (nodes,) int, -1 at leaves
+    feature: np.ndarray  # (nodes,) int, tested feature (ignored at leaves)
+    threshold: np.ndarray  # (nodes,) float, go left if x <= threshold
+    label: np.ndarray  # (nodes,) int, index into classes of the class predicted at the node
+    counts: np.ndarray  # (nodes, classes) int, training examples of each class reaching the node
+    classes: tuple[str, ...]
+
+    def __post_init__(self) -> None:
+        check_structure(self.children_left, self.children_right,
+                        {"feature": self.feature, "threshold": self.threshold, "label": self.label})
+        if len(self.classes) < 2 or len(set(self.classes)) != len(self.classes):
+            raise ValueError(f"classes must be at least two distinct names, got {list(self.classes)}")
+        if np.shape(self.counts) != (len(self.children_left), len(self.classes)):
+            raise ValueError(f"counts must have shape ({len(self.children_left)}, {len(self.classes)}), "
+                             f"got {np.shape(self.counts)}")
+        if np.any((self.label < 0) | (self.label >= len(self.classes))):
+            raise ValueError(f"a label lies outside 0..{len(self.classes) - 1}")
+        if np.any(self.counts < 0):
+            raise ValueError("counts must not be negative")
+        if not np.all(np.isfinite(self.threshold)):
+            raise ValueError("thresholds must be finite numbers")
+
+    @property
+    def n_leaves(self) -> int:
+        return int(np.sum(self.children_left == LEAF))
+
+    def apply(self, X: np.ndarray) -> np.ndarray:
+        """The leaf index reached by each row of X (n, f)."""
+        return route(self.children_left, self.children_right, self.feature, self.threshold, X)
+
+    def predict(self, X: np.ndarray) -> np.ndarray:
+        """The class name predicted for each row of X (n, f)."""
+        return np.array(self.classes, dtype=object)[self.label[self.apply(X)]]
+
+    def simplified(self) -> LabelTree:
+        """The same predictions with every subtree whose leaves all predict one class replaced by one leaf (its
+        counts those of the subtree's root): fewer, readable rules."""
+        verdict: dict[int, int | None] = {}
+
+        def visit(node: int) -> int | None:
+            if self.children_left[node] == LEAF:
+                verdict[node] = int(self.label[node])
+            else:
+                left, right = visit(self.children_left[node]), visit(self.children_right[node])
+                verdict[node] = left if left is not None and left == right else None
+            return verdict[node]
+
+        visit(0)
+        keep: list[int] = []
+        new_index: dict[int, int] = {}
+        stack = [0]
+        while stack:  # preorder walk that stops at uniform subtrees
+            node = stack.pop()
+            new_index[node] = len(keep)
+            keep.append(node)
+            if verdict[node] is None:
+                stack += [int(self.children_right[node]), int(self.children_left[node])]
+        leaf = [verdict[k] is not None for k in keep]
+        return LabelTree(
+            children_left=np.array([LEAF if lf else new_index[int(self.children_left[k])] for k, lf in zip(keep, leaf)]),
+            children_right=np.array([LEAF if lf else new_index[int(self.children_right[k])] for k, lf in zip(keep, leaf)]),
+            feature=np.array([LEAF if lf else int(self.feature[k]) for k, lf in zip(keep, leaf)]),
+            threshold=np.array([0.0 if lf else float(self.threshold[k]) for k, lf in zip(keep, leaf)]),
+            label=np.array([int(self.label[k]) if verdict[k] is None else verdict[k] for k in keep]),
+            counts=np.array([self.counts[k] for k in keep], dtype=np.int64).reshape(len(keep), len(self.classes)),
+            classes=self.classes,
+        )
+
+    def export_text(self, feature_names: tuple[str, ...]) -> str:
+        """Readable rules like WEKA's J48 output: one test per line, indented by depth, each leaf with its class
+        and its training examples per class."""
+        lines: list[str] = []
+
+        def leaf_text(node: int) -> str:
+            counts = "/".join(str(int(c)) for c in self.counts[node])
+            return f": {self.classes[self.label[node]]} ({counts})"
+
+        def visit(node: int, depth: int) -> None:
+            if self.children_left[node] == LEAF:
+                return
+            name, t = feature_names[self.feature[node]], self.threshold[node]
+            for child, op in ((self.children_left[node], "<="), (self.children_right[node], ">")):
+                text = f"{'|   ' * depth}{name} {op} {t:.3f}"
+                if self.children_left[child] == LEAF:
+                    text += leaf_text(child)
+                lines.append(text)
+                visit(child, depth + 1)
+
+        if self.children_left[0] == LEAF:
+            lines.append(leaf_text(0))
+        visit(0, 0)
+        return "\n".join(lines)
+
+    def to_json(self) -> dict:
+        return {
+            "classes": list(self.classes),
+            "children_left": self.children_left.tolist(),
+            "children_right": self.children_right.tolist(),
+            "feature": self.feature.tolist(),
+            "threshold": self.threshold.tolist(),
+            "label": self.label.tolist(),
+            "counts": self.counts.tolist(),
+        }
+
+    @classmethod
+    def from_json(cls, data: dict) -> LabelTree:
+        """Raises ValueError/KeyError/TypeError on malformed data (the loader names the file)."""
+        classes = data["classes"]
+        if not isinstance(classes, list) or not all(isinstance(c, str) for c in classes):
+            raise ValueError("classes must be a list of names")
+        counts = np.asarray(data["counts"], dtype=np.int64)
+        return cls(
+            children_left=np.asarray(data["children_left"], dtype=np.int64),
+            children_right=np.asarray(data["children_right"], dtype=np.int64),
+            feature=np.asarray(data["feature"], dtype=np.int64),
+            threshold=np.asarray(data["threshold"], dtype=float),
+            label=np.asarray(data["label"], dtype=np.int64),
+            counts=counts,
+            classes=tuple(classes),
+        )
