@@ -7,7 +7,9 @@ ball (sims.soccer.approach). Its duration is nearly linear in that path's length
 the shortest word changes (a loop instead of a turn and a straight), the time jumps by seconds. A model tree on
 the pose features alone must cut such a boundary out of scattered examples; from the team's standing starts a
 metre or two from the ball it erred by up to 3 s there (`tailor coordinate`, README). With the planned length
-and arc length as features, the boundary is in the features.
+and arc length as features, the boundary is in the features; the shortest exact word's length beside it flags
+where the shortest word only nearly exists (a turn and a straight whose circles overlap a little: the robot
+cannot quite follow it and may end up driving the loop).
 
 Vectorized (numpy), Dubins (1957) in the normalized frame of Shkel & Lumelsky (2001) as in sims.soccer.dubins,
 whose scalar candidates() it reproduces (tests): coordination predicts millions of approach times per run.
