@@ -72,8 +72,9 @@ def test_exact_path_is_longer_where_the_shortest_word_only_nearly_exists():
 
 def test_the_approach_model_is_accurate_from_standing_starts_near_the_ball():
     """Where the team decides (standing still, SEPARATION .. 2 m from the ball, any heading) the duration jumps
-    where the controller must loop. On these 24 the model trained in the pose space alone (the one before) errs
-    by 0.55 s on average (3.4 s at worst), the one with the planned path by 0.27 s."""
+    where the controller must loop. On these 24 a model trained in the pose space errs by 0.55 s on average from
+    6000 episodes (3.4 s at worst; the one before), 0.37 s from 24000; with the planned path 0.27 s from 6000,
+    0.24 s from 24000 (the bundled one)."""
     model = load_action_models(MODELS, ("approachBall",))["approachBall"]
     assert model.feature_set == "approach"
     rng = np.random.default_rng(7)
@@ -87,4 +88,4 @@ def test_the_approach_model_is_accurate_from_standing_starts_near_the_ball():
         assert measured is not None
         params = TEAM.utility_parameters("pioneer", robot[None], np.array([ball]))
         errors.append(abs(float(model.predict_duration(params)[0]) - measured))
-    assert np.mean(errors) < 0.35, np.round(errors, 2)
+    assert np.mean(errors) < 0.32, np.round(errors, 2)
