@@ -23,7 +23,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("domain", help="bundled domain name, a domain folder, or its domain.pddl")
     parser.add_argument("--episodes", type=whole_number(MIN_EPISODES), default=None, metavar="N",
                         help="episodes gathered per scenario, at least 8: a quarter of them is the test set "
-                             "(default: the domain's [training] episodes)")
+                             "(default: the domain's [training] episodes, and a model's own episodes where its "
+                             "[training.models.ACTION] names them)")
     parser.add_argument("--fresh-episodes", type=whole_number(1), default=None, metavar="M",
                         help="fresh episodes each success classifier is evaluated on (default: the domain's)")
     parser.add_argument("--seed", type=int, default=0, help="seed of experience and training (default 0)")
@@ -107,6 +108,7 @@ def run(args: argparse.Namespace) -> int:
     with backend_session(args):
         report = train_domain(recipe, episodes, args.seed, out, jobs=args.jobs, fresh_episodes=args.fresh_episodes,
                               n_i_candidates=args.n_i or N_I_CANDIDATES, progress=getattr(args, "progress", True),
+                              own_episodes=args.episodes is None,
                               gather=functools.partial(stored_gather, experience))
     log = logging.getLogger(__name__)
     written = [Path(out) / name for name in report.get("files", ())]

@@ -7,6 +7,7 @@
     [training.models.navigate]         # a duration model per executable action ...
     scenario = "navigate"              # ... learned from this experience scenario (or a list of them)
     feature_space = "pose"             # ... in this feature space (Table 4.1)
+    episodes = 24000                   # optional: this many of each of its scenarios (default: episodes above)
 
     [training.classifiers.navigate]    # a success classifier (Sec. 4.2.2), optional
     scenario = "navigateToObject"
@@ -40,6 +41,7 @@ class ModelRecipe:
     action: str
     scenarios: tuple[str, ...]  # experience scenarios whose episodes it learns from, together
     feature_space: str
+    episodes: int | None = None  # episodes of each scenario it learns from; None: the recipe's (duration models)
 
 
 @dataclass(frozen=True)
@@ -144,7 +146,8 @@ def _models(section: Any, key: str, entry, fail) -> tuple[ModelRecipe, ...]:
         where = f"{key}.{action}"
         if not isinstance(table, dict):
             raise fail(f"[training.{where}] must be a table")
-        _keys(table, {"scenario", "feature_space"}, where, fail)
+        _keys(table, {"scenario", "feature_space", "episodes"} if key == "models" else {"scenario", "feature_space"},
+              where, fail)
         if action not in entry.actions:
             raise fail(f"{where}: {action!r} is not an action of simulator {entry.name!r} "
                        f"(known: {', '.join(entry.actions)})")
@@ -166,5 +169,6 @@ def _models(section: Any, key: str, entry, fail) -> tuple[ModelRecipe, ...]:
         if len(spaces[space].parameters) != len(entry.actions[action].parameters):
             raise fail(f"{where} feature_space = {space!r} reads {len(spaces[space].parameters)} parameters, "
                        f"{action} has {len(entry.actions[action].parameters)}")
-        out.append(ModelRecipe(action, tuple(scenarios), space))
+        episodes = _positive_int(table["episodes"], f"{where} episodes", fail) if "episodes" in table else None
+        out.append(ModelRecipe(action, tuple(scenarios), space, episodes))
     return tuple(out)

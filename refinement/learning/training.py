@@ -52,10 +52,14 @@ def train_domain(
     gather: Gather | None = None,
     n_i_candidates: tuple[int, ...] = N_I_CANDIDATES,
     episode_fractions: tuple[float, ...] = EPISODE_FRACTIONS,
+    own_episodes: bool = False,
 ) -> dict:
     """Gather, train and write `out/models/*.json` and `out/training/` (report and plots); return the report.
 
-    `gather(simulator, scenario, episodes, seed, jobs, progress)` defaults to tailor.sims.experience.gather."""
+    `episodes` per scenario; with `own_episodes` a duration model whose recipe names its own count learns from
+    that many of each of its scenarios instead (the first ones of the seed stream: a scenario is gathered once,
+    as many as the most any model needs). `gather(simulator, scenario, episodes, seed, jobs, progress)` defaults
+    to tailor.sims.experience.gather."""
     if gather is None:
         from tailor.sims.experience import gather
     if episodes < 1:
@@ -64,13 +68,20 @@ def train_domain(
     fresh_episodes = recipe.fresh_episodes if fresh_episodes is None else fresh_episodes
     started = time.perf_counter()
 
+    def count(m) -> int:
+        return m.episodes if own_episodes and m.episodes is not None else episodes
+
+    needed: dict[str, int] = {}
+    for m in (*recipe.models, *recipe.classifiers):
+        for scenario in m.scenarios:
+            needed[scenario] = max(needed.get(scenario, 0), count(m))
     gathered_by_scenario: dict[str, list[Episode]] = {}
-    for scenario in dict.fromkeys(s for m in (*recipe.models, *recipe.classifiers) for s in m.scenarios):
-        gathered_by_scenario[scenario] = gather(recipe.simulator, scenario, episodes, seed=seed, jobs=jobs,
+    for scenario, n in needed.items():
+        gathered_by_scenario[scenario] = gather(recipe.simulator, scenario, n, seed=seed, jobs=jobs,
                                                 progress=progress)
 
     def experience_of(m) -> list[Episode]:
-        return [e for scenario in m.scenarios for e in gathered_by_scenario[scenario]]
+        return [e for scenario in m.scenarios for e in gathered_by_scenario[scenario][:count(m)]]
 
     fresh = {}
     for c in recipe.classifiers:

@@ -2,15 +2,17 @@
 of them for the coordination experiments (sims.soccer.team).
 
 `SIMULATOR` is what the package registers (entry point `tailor.simulators: soccer`): the three actions with
-their pose parameters (Table 2.1), the simulator factory, the experience scenarios and the random situations.
+their pose parameters (Table 2.1), the simulator factory, the experience scenarios and the random situations,
+and approachBall's own feature space (sims.soccer.features).
 """
 
 from tailor.sims.protocol import ActionSpec, Scenario, SimulatorEntry
-from tailor.sims.soccer.walls import POSE_WALLS
 from tailor.sims.soccer.actions import ACTION_FUNCTIONS, approachBall, dribbleBall, goToPose
+from tailor.sims.soccer.features import APPROACH
 from tailor.sims.soccer.scenarios import RANGES, SITUATIONS, subgoal_episode
 from tailor.sims.soccer.simulator import Noise, SoccerSim, simulate_sequence
 from tailor.sims.soccer.team import TEAM
+from tailor.sims.soccer.walls import POSE_WALLS
 
 _POSE = dict(observed=("x", "y", "phi", "v"), internal=("xg", "yg", "phig", "vg"),
              observed_quantities=("x", "y", "phi", "v"), internal_quantities=("x", "y", "phi", "v"))
@@ -30,7 +32,8 @@ SIMULATOR = SimulatorEntry(
     views=((("x", "y", "phi"), ("ball_x", "ball_y")),),  # the field from above: robot with heading, and ball
     subgoal_episode=subgoal_episode,
     team=TEAM,
-    feature_spaces=(POSE_WALLS,),
+    # approachBall's: the pose features and the path its controller plans; the success classifier's: the walls
+    feature_spaces=(APPROACH, POSE_WALLS),
     description="RoboCup mid-size field, Pioneer-like robot with a ball guide, a ball (pymunk)",
 )
 
