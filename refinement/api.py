@@ -88,7 +88,7 @@ def plan(domain, problem=None, *, planner: str = DEFAULT_PLANNER, timeout: float
 
 def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 2, optimizer: str = "analytic",
            seed: int = 0, models: str | Path | None = None, planner: str = DEFAULT_PLANNER,
-           timeout: float | None = None, assertion: bool = True) -> Refinement:
+           timeout: float | None = None, assertion: bool = True, risk: float | None = None) -> Refinement:
     """Plan (unless `plan` is given: ours, or a SequentialPlan / PartialOrderPlan of any UP engine),
     instantiate (Alg. 3), assert subgoals where a success model predicts failure (Alg. 5; unless `assertion`
     is False) and refine over `horizon` actions (Sec. 5.4; 1 is greedy), as `tailor refine` does.
@@ -96,7 +96,9 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     `domain` is a bundled name, a domain folder or its domain.pddl (the binding `actions.toml` beside it says
     how its actions execute); `problem` a PDDL file, a problem name or a unified-planning Problem; `belief`
     the continuous values `{object: {quantity: value}}`, a belief file, or None for the problem's own file.
-    `models` is a model folder (default: as the CLI, see model_store)."""
+    `models` is a model folder (default: as the CLI, see model_store). `risk` is lambda of the risk-aware
+    objective, expected duration + lambda * uncertainty (None: DEFAULT_RISK; > 0 needs models that store their
+    uncertainty, see models.uncertainty)."""
     from tailor.planner_bridge import resolve_domain_dir, resolve_problem
     from tailor.refinement.belief import belief_path_for, load_belief, parse_belief
     from tailor.refinement.binding import load_domain_binding
@@ -105,6 +107,7 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     from tailor.refinement.models.action_models import load_action_models
     from tailor.refinement.optimizers import OPTIMIZERS
     from tailor.refinement.pipeline import assert_task, success_models_in
+    from tailor.refinement.refine import DEFAULT_RISK, check_risk
     from tailor.refinement.refine import refine as refine_sequence
 
     _check(domain, (str, Path), "domain")
@@ -114,6 +117,10 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
         raise ArgumentTypeError(f"assertion must be bool, not {type(assertion).__name__}")
     if horizon < 1:
         raise ArgumentValueError(f"horizon must be at least 1, not {horizon}")
+    risk = DEFAULT_RISK if risk is None else risk
+    if isinstance(risk, bool) or not isinstance(risk, (int, float)):
+        raise ArgumentTypeError(f"risk must be a number, not {type(risk).__name__}")
+    check_risk(risk)
     if optimizer not in OPTIMIZERS:
         raise ArgumentValueError(f"optimizer must be one of {', '.join(sorted(OPTIMIZERS))}, not {optimizer!r}")
     domain_dir = resolve_domain_dir(domain)
@@ -153,7 +160,7 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
         sequence, assertions = asserted.sequence, asserted.assertions
     action_models = load_action_models(source.path, tuple(sorted({a.action for a in sequence.actions})))
     refined = refine_sequence(sequence, action_models, horizon=horizon, method=optimizer, seed=seed,
-                              success_models=success_models)
+                              success_models=success_models, risk=float(risk))
     return Refinement(abstract, sequence, refined, source.path, tuple(assertions))
 
 

@@ -12,7 +12,13 @@ import math
 import sys
 import time
 
-from tailor.refinement.cli.arguments import add_models_argument, announce_models, positive_seconds, whole_number
+from tailor.refinement.cli.arguments import (
+    add_models_argument,
+    add_risk_argument,
+    announce_models,
+    positive_seconds,
+    whole_number,
+)
 
 HELP = "refine the free parameters of a plan for the fastest predicted execution, optionally simulate it"
 
@@ -38,6 +44,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "FILE_polar.png (the first free parameter a full-circle angle) or FILE_costs.png: "
                              "the predicted time over that parameter; every file written is named")
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
+    add_risk_argument(parser)
 
 
 def _fmt_param(p) -> str:
@@ -67,7 +74,10 @@ def _execution_json(outcome, success_models=None) -> dict:
                 entry["simulated"] = None
                 entry["outcome"] = "not_started"
         actions.append(entry)
-    data = {"horizon": refined.horizon, "actions": actions, "predicted_total": round(refined.predicted_total, 4),
+    if refined.spread is not None:  # each action's uncertainty (models.uncertainty) at the chosen values
+        for entry, spread in zip(actions, refined.spread):
+            entry["uncertainty"] = round(spread, 4)
+    data = {"horizon": refined.horizon, "risk": refined.risk, "actions": actions, "predicted_total": round(refined.predicted_total, 4),
             "optimization": [{"method": w.method, "cost": round(w.cost, 4), "evaluations": w.evaluations,
                               "seconds": w.seconds, "note": w.note} for w in refined.windows]}
     if simulated is not None:
@@ -118,7 +128,10 @@ def _print_text(prepared, method: str, outcomes: dict) -> None:
     for check in prepared.assertions:
         out(f"Subgoal assertion, step {check.step} {check.pddl}: {check.reason()}\n")
     free = prepared.sequence.free_parameters()
-    names = [("greedy", "greedy (h=1)"), ("refined", f"refined (h={outcomes['refined'].refined.horizon}, {method})")]
+    risk = outcomes["refined"].refined.risk
+    names = [("greedy", "greedy (h=1)"),
+             ("refined", f"refined (h={outcomes['refined'].refined.horizon}, {method}"
+                         + (f", risk {risk:g})" if risk else ")"))]
     names = [(k, label) for k, label in names if k in outcomes]
     if free:
         out("\nFree parameters chosen:\n")
@@ -184,7 +197,8 @@ def _nothing_to_refine(prepared, args: argparse.Namespace, simulate: bool) -> in
     if args.plot:
         logging.getLogger(__name__).warning("%s not written: %s", args.plot, NOTHING_TO_REFINE)
     if args.json:
-        execution = {"horizon": args.horizon, "actions": [], "predicted_total": 0.0, "optimization": []}
+        execution = {"horizon": args.horizon, "risk": args.risk, "actions": [], "predicted_total": 0.0,
+                     "optimization": []}
         if simulate:
             execution.update(simulated_total=0.0, succeeded=True)
         from tailor.refinement.outputs import versioned
@@ -193,7 +207,7 @@ def _nothing_to_refine(prepared, args: argparse.Namespace, simulate: bool) -> in
         data = {"domain": plan.domain, "problem": plan.problem, "planner": plan.planner, "optimizer": args.optimizer,
                 "horizon": args.horizon, "seed": args.seed, "models": str(prepared.task.models_dir),
                 "plan": plan.to_json(), "free_parameters": [],
-                "refined": execution, "greedy": {**execution, "horizon": 1}, "note": NOTHING_TO_REFINE}
+                "refined": execution, "greedy": {**execution, "horizon": 1, "risk": 0.0}, "note": NOTHING_TO_REFINE}
         sys.stdout.write(json.dumps(versioned("refine", data), indent=1, allow_nan=False) + "\n")
     else:
         from tailor.planner_bridge import render_text
@@ -233,7 +247,7 @@ def run(args: argparse.Namespace) -> int:
     method, seed = args.optimizer, args.seed
     with showing_progress(getattr(args, "progress", True)):  # the genetic algorithm takes seconds per window
         outcomes = {"greedy": refine_and_dispatch(prepared, GREEDY_HORIZON, method, seed, simulate),
-                    "refined": refine_and_dispatch(prepared, args.horizon, method, seed, simulate)}
+                    "refined": refine_and_dispatch(prepared, args.horizon, method, seed, simulate, args.risk)}
     log.debug("refined greedy and with h=%d%s in %.2f s", args.horizon,
               " and simulated both" if simulate else "", time.perf_counter() - started)
     announce_models("refine", source)  # once the models have made their predictions: an error stays one line

@@ -21,7 +21,7 @@ from tailor.errors import ModelFileError
 from tailor.refinement.models.features import compute_features, feature_spaces
 from tailor.refinement.models.model_tree import ModelTree
 from tailor.refinement.models.rules import Rule
-from tailor.refinement.models.uncertainty import LeafUncertainty
+from tailor.refinement.models.uncertainty import LeafUncertainty, risk_adjusted
 
 ACTION_MODEL_SCHEMA = "tailor.action_model/1"
 COLLISION_MODEL_SCHEMA = "tailor.collision_model/1"
@@ -60,6 +60,13 @@ class ActionModel:
     def predict_spread(self, params: np.ndarray) -> np.ndarray:
         """How far off (s, held-out mean absolute error of the leaf) each row's predicted duration tends to be."""
         return self.require_uncertainty().of_leaves(self.duration.apply(self.features(params)))
+
+    def duration_with_risk(self, risk: float):
+        """What a risk-aware objective sums for this action: the duration tree itself at risk 0, else a tree
+        predicting duration + risk * spread (the same leaves, each with a larger intercept)."""
+        if risk == 0:
+            return self.duration
+        return risk_adjusted(self.duration, self.require_uncertainty(), risk)
 
     def require_uncertainty(self) -> LeafUncertainty:
         """The model's uncertainty, or a ModelFileError naming its file where it was trained without one."""

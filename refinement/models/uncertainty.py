@@ -14,11 +14,13 @@ function per leaf box, and the analytic minimization stays exact.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import weakref
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from tailor.errors import ModelFileError
+from tailor.refinement.models.rules import Rule
 
 KIND = "held_out_leaf_mae"  # the only kind so far: the JSON names it, so another can be added compatibly
 FOLDS = 4  # cross-fitting folds: each fold's tree learns from three quarters, as the reported MAE's does
@@ -82,6 +84,37 @@ class LeafUncertainty:
             raise fail("prior_episodes and overall must be finite numbers >= 0")
         return cls(np.array(spread, dtype=float), np.array(held_out, dtype=np.intp), float(overall), int(folds),
                    float(prior))
+
+
+class RiskAdjusted:
+    """A model tree whose every leaf predicts duration + risk * spread: what a risk-aware objective sums.
+
+    Quacks like the tree for the optimizers (`predict`, `rules`): the spread is constant in a leaf, so each
+    rule only gets a larger intercept and the analytic minimization stays exact."""
+
+    def __init__(self, tree, uncertainty: LeafUncertainty, risk: float) -> None:
+        if len(uncertainty.spread) != tree.n_leaves_:
+            raise ValueError(f"the uncertainty has {len(uncertainty.spread)} leaves, the tree {tree.n_leaves_}")
+        self.tree, self.risk = tree, float(risk)
+        self.penalty = self.risk * uncertainty.spread  # (n_leaves,) s
+
+    def predict(self, X) -> np.ndarray:
+        duration, leaf = self.tree.predict_with_leaf(X)
+        return duration + self.penalty[leaf]
+
+    def rules(self) -> list[Rule]:
+        return [replace(rule, intercept=rule.intercept + float(p)) for rule, p in zip(self.tree.rules(), self.penalty)]
+
+
+_adjusted: "weakref.WeakKeyDictionary[object, dict[float, RiskAdjusted]]" = weakref.WeakKeyDictionary()
+
+
+def risk_adjusted(tree, uncertainty: LeafUncertainty, risk: float) -> RiskAdjusted:
+    """One RiskAdjusted per (tree, risk), so the optimizers' caches of its rules last across windows."""
+    per_risk = _adjusted.setdefault(tree, {})
+    if float(risk) not in per_risk:
+        per_risk[float(risk)] = RiskAdjusted(tree, uncertainty, risk)
+    return per_risk[float(risk)]
 
 
 def _nonnegative(value) -> bool:
