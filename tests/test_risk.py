@@ -229,3 +229,61 @@ def test_refine_with_risk_needs_models_with_uncertainty(score):
         refine(score, models, horizon=2, risk=0.5)
     with pytest.raises(ArgumentValueError, match="finite number >= 0"):
         refine(score, models, horizon=2, risk=-1.0)
+
+
+def test_the_risk_sweep_summarizes_each_lambda_on_the_same_situations():
+    from tailor.refinement.evaluation.experiments import summarize_comparison, summarize_risk_sweep
+
+    def row(greedy, refined, sweep, oracle=None):
+        out = {"problem": "p", "greedy": greedy, "refined": refined, "greedy_ok": True, "refined_ok": True,
+               "greedy_outcome": "success", "refined_outcome": "success", "predicted_greedy": greedy,
+               "predicted_refined": refined, "analytic_seconds": 0.001, "analytic_method": "analytic",
+               "ga_seconds": 0.01, "analytic_cost": refined, "ga_cost": refined,
+               "sweep": {repr(lam): {"refined": t, "refined_ok": ok, "refined_outcome": "success" if ok else "timeout",
+                                     "predicted_refined": t} for lam, (t, ok) in sweep.items()}}
+        if oracle is not None:
+            out["oracle"], out["oracle_method"] = oracle, "grid"
+        return out
+
+    rows = [row(10.0, 8.0, {0.0: (8.0, True), 1.0: (9.0, True)}, oracle=8.0),
+            row(10.0, 11.0, {0.0: (11.0, True), 1.0: (10.0, True)}, oracle=9.0),
+            row(10.0, 9.0, {0.0: (9.0, True), 1.0: (30.0, False)})]
+    sweep = summarize_risk_sweep(rows)
+    assert [r["risk"] for r in sweep] == [0.0, 1.0]
+    plain = summarize_comparison(rows)
+    assert sweep[0]["improvement"] == pytest.approx(plain["improvement"])  # lambda 0 ran as the main refined
+    assert (sweep[0]["better"], sweep[0]["equal"], sweep[0]["worse"]) == (2, 0, 1)
+    assert sweep[0]["worse_share"] == pytest.approx(1 / 3) and sweep[0]["oracle_ratio"] == pytest.approx(19 / 17)
+    assert (sweep[1]["better"], sweep[1]["equal"], sweep[1]["worse"], sweep[1]["episodes"]) == (1, 1, 0, 2)
+    assert sweep[1]["failure_rate_refined"] == pytest.approx(1 / 3) and sweep[1]["improvement"] == pytest.approx(0.05)
+    assert sweep[1]["oracle_ratio"] == pytest.approx(19 / 17)
+
+
+def test_refine_cli_charges_the_uncertainty_with_risk(capsys):
+    from tailor.refinement.cli.main import main
+
+    runs = {}
+    for risk in ("0", "1.5"):
+        assert main(["refine", "soccer", "score", "--risk", risk, "--json"]) == 0
+        runs[risk] = json.loads(capsys.readouterr().out)
+    plain, risky = runs["0"]["refined"], runs["1.5"]["refined"]
+    assert (plain["risk"], risky["risk"], runs["1.5"]["greedy"]["risk"]) == (0.0, 1.5, 0.0)  # greedy stays plain
+    assert all(a["uncertainty"] > 0 for a in risky["actions"])
+    # one window covers both actions: its cost is the predicted total plus lambda times the summed uncertainty
+    assert len(risky["optimization"]) == 1
+    charged = risky["predicted_total"] + 1.5 * sum(a["uncertainty"] for a in risky["actions"])
+    assert risky["optimization"][0]["cost"] == pytest.approx(charged, abs=1e-3)
+    assert plain["optimization"][0]["cost"] == pytest.approx(plain["predicted_total"], abs=1e-3)
+    assert risky["predicted_total"] + 1.5 * sum(a["uncertainty"] for a in risky["actions"]) <= (
+        plain["predicted_total"] + 1.5 * sum(a["uncertainty"] for a in plain["actions"]) + 1e-3)
+
+
+def test_the_api_takes_risk_and_checks_it():
+    import tailor
+    from tailor.errors import ArgumentTypeError
+
+    assert tailor.refine("soccer", "score", risk=1.0).refined.risk == 1.0
+    with pytest.raises(ArgumentTypeError, match="risk must be a number"):
+        tailor.refine("soccer", "score", risk="1")
+    with pytest.raises(ArgumentValueError, match="risk lambda must be a finite number >= 0"):
+        tailor.refine("soccer", "score", risk=float("nan"))
