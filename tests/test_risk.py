@@ -287,3 +287,13 @@ def test_the_api_takes_risk_and_checks_it():
         tailor.refine("soccer", "score", risk="1")
     with pytest.raises(ArgumentValueError, match="risk lambda must be a finite number >= 0"):
         tailor.refine("soccer", "score", risk=float("nan"))
+
+
+def test_risk_with_a_model_trained_without_uncertainty_is_a_one_line_error(capsys):
+    """The arm's bundled reach model predates the uncertainty: --risk 0 refines, --risk > 0 says so."""
+    from tailor.refinement.cli.main import main
+
+    assert main(["refine", "arm", "letter-f", "--risk", "0.5"]) == 12
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "reach.json: the action model of reach has no uncertainty" in err[0]
+    assert "--risk 0" in err[0]
