@@ -15,6 +15,7 @@ ArgumentValueError (a ValueError), naming the argument.
 from __future__ import annotations
 
 import atexit
+import logging
 import math
 import threading
 from collections.abc import Mapping
@@ -97,8 +98,8 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     how its actions execute); `problem` a PDDL file, a problem name or a unified-planning Problem; `belief`
     the continuous values `{object: {quantity: value}}`, a belief file, or None for the problem's own file.
     `models` is a model folder (default: as the CLI, see model_store). `risk` is lambda of the risk-aware
-    objective, expected duration + lambda * uncertainty (None: DEFAULT_RISK; > 0 needs models that store their
-    uncertainty, see models.uncertainty)."""
+    objective, expected duration + lambda * uncertainty (None: refine.DEFAULT_RISK where every model stores
+    its uncertainty, else 0 with a warning; an explicit lambda > 0 needs it, see models.uncertainty)."""
     from tailor.planner_bridge import resolve_domain_dir, resolve_problem
     from tailor.refinement.belief import belief_path_for, load_belief, parse_belief
     from tailor.refinement.binding import load_domain_binding
@@ -107,7 +108,7 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     from tailor.refinement.models.action_models import load_action_models
     from tailor.refinement.optimizers import OPTIMIZERS
     from tailor.refinement.pipeline import assert_task, success_models_in
-    from tailor.refinement.refine import DEFAULT_RISK, check_risk
+    from tailor.refinement.refine import check_risk, resolve_risk
     from tailor.refinement.refine import refine as refine_sequence
 
     _check(domain, (str, Path), "domain")
@@ -117,10 +118,10 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
         raise ArgumentTypeError(f"assertion must be bool, not {type(assertion).__name__}")
     if horizon < 1:
         raise ArgumentValueError(f"horizon must be at least 1, not {horizon}")
-    risk = DEFAULT_RISK if risk is None else risk
-    if isinstance(risk, bool) or not isinstance(risk, (int, float)):
-        raise ArgumentTypeError(f"risk must be a number, not {type(risk).__name__}")
-    check_risk(risk)
+    if risk is not None:
+        if isinstance(risk, bool) or not isinstance(risk, (int, float)):
+            raise ArgumentTypeError(f"risk must be a number or None, not {type(risk).__name__}")
+        check_risk(risk)
     if optimizer not in OPTIMIZERS:
         raise ArgumentValueError(f"optimizer must be one of {', '.join(sorted(OPTIMIZERS))}, not {optimizer!r}")
     domain_dir = resolve_domain_dir(domain)
@@ -159,8 +160,11 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
         asserted = assert_task(sequence, binding, success_models, abstract)
         sequence, assertions = asserted.sequence, asserted.assertions
     action_models = load_action_models(source.path, tuple(sorted({a.action for a in sequence.actions})))
+    risk, note = resolve_risk(risk, action_models.values())
+    if note:
+        logging.getLogger(__name__).warning("%s", note)
     refined = refine_sequence(sequence, action_models, horizon=horizon, method=optimizer, seed=seed,
-                              success_models=success_models, risk=float(risk))
+                              success_models=success_models, risk=risk)
     return Refinement(abstract, sequence, refined, source.path, tuple(assertions))
 
 

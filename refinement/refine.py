@@ -24,7 +24,10 @@ from tailor.refinement.optimizers import FreeParameter, Objective, OptimizationR
 from tailor.refinement.progress import progress_bar
 
 MARGIN_SHARE = 0.005  # of each free range: 0.031 rad of a full heading range, 4 cm of 8 m (a mobile base: 1 deg, 1 cm noise)
-DEFAULT_RISK = 0.0  # lambda: expected duration + lambda * uncertainty
+# lambda of the user-facing default (CLI, API, evaluate): expected duration + lambda * uncertainty, chosen by
+# `tailor evaluate soccer --risk-sweep` (README, "Risk-aware refinement"); it applies where every model stores
+# its uncertainty (`resolve_risk`). The core `refine` defaults to 0: the plain objective of the dissertation.
+DEFAULT_RISK = 1.0
 
 if TYPE_CHECKING:  # the models' module imports scikit-learn; refining needs only their methods
     from tailor.refinement.models.action_models import ActionModel
@@ -142,6 +145,26 @@ def predicted_success(sequence: ActionSequence, success_models: Mapping[str, obj
     return tuple(out)
 
 
+def resolve_risk(risk: float | None, models) -> tuple[float, str]:
+    """The risk lambda to refine with, and a note where the default had to be dropped. None asks for
+    DEFAULT_RISK, which applies only where every one of `models` stores its uncertainty (else 0: an old model
+    folder still refines, plainly); an explicit lambda > 0 needs the uncertainty (a ModelFileError naming
+    the file otherwise)."""
+    models = list(models)
+    if risk is None:
+        lacking = [m for m in models if getattr(m, "uncertainty", None) is None]
+        if DEFAULT_RISK and lacking:
+            where = getattr(lacking[0], "source", None) or lacking[0].action
+            return 0.0, (f"{where}: no uncertainty stored (trained before it was): refining without the default "
+                         f"risk {DEFAULT_RISK:g}, i.e. with --risk 0 (retrain with `tailor train`)")
+        return DEFAULT_RISK, ""
+    check_risk(risk)
+    if risk:
+        for model in models:
+            model.require_uncertainty()
+    return float(risk), ""
+
+
 def check_risk(risk: float) -> None:
     """A risk lambda must be a finite number >= 0 (0: plain expected duration)."""
     if isinstance(risk, bool) or not isinstance(risk, (int, float)) or not 0.0 <= risk < float("inf"):
@@ -182,7 +205,7 @@ def predicted_spreads(sequence: ActionSequence, models: Mapping[str, ActionModel
 
 def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon: int = 2,
            method: str = "analytic", seed: int = 0, success_models: Mapping[str, object] | None = None,
-           risk: float = DEFAULT_RISK, margin_share: float = MARGIN_SHARE) -> RefinedSequence:
+           risk: float = 0.0, margin_share: float = MARGIN_SHARE) -> RefinedSequence:
     """Bind every free parameter of `sequence`, h actions at a time, minimizing summed predicted duration
     (plus `risk` times the summed uncertainty), each choice `margin_share` of its range from the models' splits.
 

@@ -21,7 +21,7 @@ from tailor.refinement.models.model_tree import ModelTree
 from tailor.refinement.models.rules import Rule
 from tailor.refinement.models.uncertainty import LeafUncertainty, RiskAdjusted
 from tailor.refinement.optimizers import FreeParameter, Objective, Term, brute_force, optimize
-from tailor.refinement.refine import refine
+from tailor.refinement.refine import DEFAULT_RISK, refine
 
 INF = np.inf
 
@@ -283,17 +283,28 @@ def test_the_api_takes_risk_and_checks_it():
     from tailor.errors import ArgumentTypeError
 
     assert tailor.refine("soccer", "score", risk=1.0).refined.risk == 1.0
-    with pytest.raises(ArgumentTypeError, match="risk must be a number"):
+    with pytest.raises(ArgumentTypeError, match="risk must be a number or None"):
         tailor.refine("soccer", "score", risk="1")
+    assert tailor.refine("soccer", "score").refined.risk == DEFAULT_RISK  # the bundled models store it
     with pytest.raises(ArgumentValueError, match="risk lambda must be a finite number >= 0"):
         tailor.refine("soccer", "score", risk=float("nan"))
 
 
-def test_risk_with_a_model_trained_without_uncertainty_is_a_one_line_error(capsys):
-    """The arm's bundled reach model predates the uncertainty: --risk 0 refines, --risk > 0 says so."""
+def test_models_without_uncertainty_refine_plainly_by_default_and_refuse_an_explicit_risk(tmp_path, capsys):
+    """A model folder trained before the uncertainty existed: the default risk is dropped with a warning,
+    --risk > 0 is a one-line error naming the file."""
+    from tailor.planner_bridge.bundled import DOMAINS_DIR
     from tailor.refinement.cli.main import main
 
-    assert main(["refine", "arm", "letter-f", "--risk", "0.5"]) == 12
+    for path in (DOMAINS_DIR / "kitchen" / "models").glob("*.json"):
+        data = json.loads(path.read_text())
+        data.pop("uncertainty", None)
+        (tmp_path / path.name).write_text(json.dumps(data))
+    assert main(["refine", "kitchen", "scenario1", "--models", str(tmp_path), "--json"]) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["refined"]["risk"] == 0.0
+    assert "no uncertainty stored" in captured.err and "refining without the default risk" in captured.err
+    assert main(["refine", "kitchen", "scenario1", "--models", str(tmp_path), "--risk", "0.5"]) == 12
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "reach.json: the action model of reach has no uncertainty" in err[0]
+    assert len(err) == 1 and ".json: the action model of" in err[0] and "no uncertainty" in err[0]
     assert "--risk 0" in err[0]

@@ -105,11 +105,11 @@ def add_risk_argument(parser: argparse.ArgumentParser) -> None:
     """--risk LAMBDA: the refined sequence minimizes expected duration + LAMBDA * uncertainty (greedy stays plain)."""
     from tailor.refinement.refine import DEFAULT_RISK
 
-    parser.add_argument("--risk", type=risk_lambda, default=DEFAULT_RISK, metavar="LAMBDA",
+    parser.add_argument("--risk", type=risk_lambda, default=None, metavar="LAMBDA",
                         help="risk-aware refinement: minimize the predicted duration plus LAMBDA times the models' "
                              "uncertainty (held-out error of each leaf), summed over the horizon; the greedy "
-                             f"baseline stays plain (default {DEFAULT_RISK:g}; > 0 needs models trained with "
-                             "their uncertainty)")
+                             f"baseline stays plain (default {DEFAULT_RISK:g} where the models store their "
+                             "uncertainty, else 0; 0 is plain refinement)")
 
 
 def risk_lambda(text: str) -> float:

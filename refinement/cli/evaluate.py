@@ -174,16 +174,25 @@ def _evaluate(args: argparse.Namespace) -> int:
         job, _, objects = items[0]
         job_models(job, situation_sequence(job, objects))
     announce_models("evaluate", source)
-    if items and (args.risk or any(args.risk_sweep)):  # every model must know its uncertainty: fail before work
+    risk = 0.0 if args.risk is None else args.risk
+    if items:  # the risk lambda (the default only where every model stores its uncertainty), checked before work
+        import logging
+
+        from tailor.refinement.refine import resolve_risk
+
         job, _, objects = items[0]
-        for model in job_models(job, situation_sequence(job, objects)).values():
-            model.require_uncertainty()
+        models = job_models(job, situation_sequence(job, objects)).values()
+        risk, note = resolve_risk(args.risk, models)
+        if note:
+            logging.getLogger(__name__).warning("%s", note)
+        if any(args.risk_sweep):
+            resolve_risk(max(args.risk_sweep), models)
     rows = run_in_workers(comparison_episode, [(job, i, objects, i < args.oracle_episodes, plan.zero_baseline,
-                                                args.risk, args.risk_sweep)
+                                                risk, args.risk_sweep)
                                                for job, i, objects in items], args.jobs, "greedy vs refined",
                           getattr(args, "progress", True))
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
-              "models": str(source.path), "comparison": plan.comparison, "risk": args.risk}
+              "models": str(source.path), "comparison": plan.comparison, "risk": risk}
     report.update(summarize_comparison(rows))
     if args.risk_sweep:
         report["risk_sweep"] = summarize_risk_sweep(rows)

@@ -197,7 +197,7 @@ def _nothing_to_refine(prepared, args: argparse.Namespace, simulate: bool) -> in
     if args.plot:
         logging.getLogger(__name__).warning("%s not written: %s", args.plot, NOTHING_TO_REFINE)
     if args.json:
-        execution = {"horizon": args.horizon, "risk": args.risk, "actions": [], "predicted_total": 0.0,
+        execution = {"horizon": args.horizon, "risk": args.risk or 0.0, "actions": [], "predicted_total": 0.0,
                      "optimization": []}
         if simulate:
             execution.update(simulated_total=0.0, succeeded=True)
@@ -244,10 +244,15 @@ def run(args: argparse.Namespace) -> int:
         from tailor.refinement.dispatch import check_scene
 
         check_scene(prepared.sequence, prepared.binding.file)
+    from tailor.refinement.refine import resolve_risk
+
+    risk, note = resolve_risk(args.risk, prepared.models.values())
+    if note:
+        log.warning("%s", note)
     method, seed = args.optimizer, args.seed
     with showing_progress(getattr(args, "progress", True)):  # the genetic algorithm takes seconds per window
         outcomes = {"greedy": refine_and_dispatch(prepared, GREEDY_HORIZON, method, seed, simulate),
-                    "refined": refine_and_dispatch(prepared, args.horizon, method, seed, simulate, args.risk)}
+                    "refined": refine_and_dispatch(prepared, args.horizon, method, seed, simulate, risk)}
     log.debug("refined greedy and with h=%d%s in %.2f s", args.horizon,
               " and simulated both" if simulate else "", time.perf_counter() - started)
     announce_models("refine", source)  # once the models have made their predictions: an error stays one line
