@@ -25,7 +25,7 @@ from tailor.refinement.progress import progress_bar
 
 MARGIN_SHARE = 0.005  # of each free range: 0.031 rad of a full heading range, 4 cm of 8 m (a mobile base: 1 deg, 1 cm noise)
 # lambda of the user-facing default (CLI, API, evaluate): expected duration + lambda * uncertainty, chosen by
-# `tailor evaluate soccer --risk-sweep` (README, "Risk-aware refinement"); it applies where every model stores
+# `tailor evaluate --risk-sweep` on a bundled domain (README, "Risk-aware refinement"); it applies where every model stores
 # its uncertainty (`resolve_risk`). The core `refine` defaults to 0: the plain objective of the dissertation.
 DEFAULT_RISK = 1.0
 
