@@ -23,10 +23,12 @@ from tailor.errors import ArgumentValueError, ModelFileError
 from tailor.refinement.optimizers import FreeParameter, Objective, OptimizationResult, Term, optimize
 from tailor.refinement.progress import progress_bar
 
-MARGIN_SHARE = 0.005  # of each free range: 0.031 rad of a full heading range, 4 cm of 8 m (a mobile base: 1 deg, 1 cm noise)
+# of each free range, kept from every split of the models: 0.031 rad of a full heading range, 4 cm of 8 m (a
+# mobile base's noise: 1 deg, 1 cm)
+MARGIN_SHARE = 0.005
 # lambda of the user-facing default (CLI, API, evaluate): expected duration + lambda * uncertainty, chosen by
-# `tailor evaluate --risk-sweep` on a bundled domain (README, "Risk-aware refinement"); it applies where every model stores
-# its uncertainty (`resolve_risk`). The core `refine` defaults to 0: the plain objective of the dissertation.
+# `tailor evaluate --risk-sweep` on a bundled domain (README, "Risk-aware refinement"); it applies where every
+# model stores its uncertainty (`resolve_risk`). The core `refine` defaults to 0: the dissertation's objective.
 DEFAULT_RISK = 1.0
 
 if TYPE_CHECKING:  # the models' module imports scikit-learn; refining needs only their methods

@@ -13,7 +13,6 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-
 from tailor.errors import ArgumentValueError, ModelFileError
 from tailor.refinement.models.action_models import ActionModel
 from tailor.refinement.models.features import compute_features, feature_names
@@ -213,7 +212,7 @@ def test_refine_with_risk_leaves_the_leaves_the_models_do_not_know(score):
     distrusting = _with_spread(models, used)
     same = refine(score, distrusting, horizon=2, risk=0.0)
     risky = refine(score, distrusting, horizon=2, risk=1.0)
-    chosen = lambda r: [p.value for a in r.sequence.actions for p in a.params if p.id.startswith("pos2")]  # noqa: E731
+    chosen = lambda r: [p.value for a in r.sequence.actions for p in a.params if p.id.startswith("pos2")]
     assert chosen(same) == chosen(plain) and same.risk == 0.0  # lambda 0: the spread changes nothing
     assert chosen(risky) != chosen(plain) and risky.risk == 1.0
     assert risky.predicted_total >= plain.predicted_total - 1e-9  # a little slower, as predicted ...

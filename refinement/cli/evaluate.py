@@ -127,7 +127,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-    from tailor.refinement.progress import run_in_workers
     from tailor.planner_bridge import resolve_domain_dir
     from tailor.refinement.binding import load_domain_binding
     from tailor.refinement.evaluation.experiments import (
@@ -141,9 +140,9 @@ def _evaluate(args: argparse.Namespace) -> int:
         summarize_horizons,
         summarize_risk_sweep,
     )
-    from tailor.refinement.situations import draw_situations, job_models, situation_sequence
-
     from tailor.refinement.model_store import resolve_models
+    from tailor.refinement.progress import run_in_workers
+    from tailor.refinement.situations import draw_situations, job_models, situation_sequence
 
     domain_dir = resolve_domain_dir(args.domain)
     binding = load_domain_binding(domain_dir)

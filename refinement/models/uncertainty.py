@@ -18,7 +18,6 @@ import weakref
 from dataclasses import dataclass, replace
 
 import numpy as np
-
 from tailor.errors import ModelFileError
 from tailor.refinement.models.rules import Rule
 
@@ -106,7 +105,7 @@ class RiskAdjusted:
         return [replace(rule, intercept=rule.intercept + float(p)) for rule, p in zip(self.tree.rules(), self.penalty)]
 
 
-_adjusted: "weakref.WeakKeyDictionary[object, dict[float, RiskAdjusted]]" = weakref.WeakKeyDictionary()
+_adjusted: weakref.WeakKeyDictionary[object, dict[float, RiskAdjusted]] = weakref.WeakKeyDictionary()
 
 
 def risk_adjusted(tree, uncertainty: LeafUncertainty, risk: float) -> RiskAdjusted:
