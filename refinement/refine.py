@@ -57,8 +57,9 @@ def action_term(action: ExecutableAction, model: ActionModel, free: tuple[FreePa
 
     Parameters already fixed (bound, or chosen in an earlier window) are baked in; the others are read from
     the columns of theta. With `risk` > 0 the term is the duration plus risk times the model's uncertainty
-    (a ModelFileError if its file has none). With a `success_model` (the action's guard) the term is invalid where it predicts
-    failure (Alg. 6), and its success leaves are the region the analytic optimizer intersects with.
+    (a ModelFileError if its file has none). With a `success_model` (the action's guard) the term is invalid
+    where it predicts failure (Alg. 6), and its success leaves are the region the analytic optimizer
+    intersects with.
     """
     column = {p.id: j for j, p in enumerate(free)}
     base = np.empty(len(action.params))
