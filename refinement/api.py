@@ -15,6 +15,7 @@ ArgumentValueError (a ValueError), naming the argument.
 from __future__ import annotations
 
 import atexit
+import logging
 import math
 import threading
 from collections.abc import Mapping
@@ -90,7 +91,8 @@ def plan(domain, problem=None, *, planner: str = DEFAULT_PLANNER, timeout: float
 
 def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 2, optimizer: str = "analytic",
            seed: int = 0, models: str | Path | None = None, planner: str = DEFAULT_PLANNER,
-           timeout: float | None = None, assertion: bool = True, filter: bool | None = None) -> Refinement:
+           timeout: float | None = None, assertion: bool = True, filter: bool | None = None,
+           risk: float | None = None) -> Refinement:
     """Plan (unless `plan` is given: ours, or a SequentialPlan / PartialOrderPlan of any UP engine),
     instantiate (Alg. 3), assert subgoals where a success model predicts failure (Alg. 5; unless `assertion`
     is False) and refine over `horizon` actions (Sec. 5.4; 1 is greedy), as `tailor refine` does.
@@ -101,7 +103,9 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     `models` is a model folder (default: as the CLI, see model_store). `filter` (default: the binding's
     `[evaluation] filter`): refine only where the meta action model `models/meta.json` predicts that refinement
     makes execution faster, else keep the greedy (h = 1) parameterization (Sec. 5.5.4); `.filter` says which
-    and why."""
+    and why. `risk` is lambda of the risk-aware objective, expected duration + lambda * uncertainty (None:
+    refine.DEFAULT_RISK where every model stores its uncertainty, else 0 with a warning; an explicit lambda > 0
+    needs it, see models.uncertainty); greedy (h = 1) stays plain."""
     from tailor.planner_bridge import resolve_domain_dir, resolve_problem
     from tailor.refinement.belief import belief_path_for, load_belief, parse_belief
     from tailor.refinement.binding import load_domain_binding
@@ -110,6 +114,7 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     from tailor.refinement.models.action_models import load_action_models
     from tailor.refinement.optimizers import OPTIMIZERS
     from tailor.refinement.pipeline import assert_task, success_models_in
+    from tailor.refinement.refine import check_risk, resolve_risk
     from tailor.refinement.refine import refine as refine_sequence
 
     _check(domain, (str, Path), "domain")
@@ -121,6 +126,10 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
         raise ArgumentTypeError(f"filter must be bool or None, not {type(filter).__name__}")
     if horizon < 1:
         raise ArgumentValueError(f"horizon must be at least 1, not {horizon}")
+    if risk is not None:
+        if isinstance(risk, bool) or not isinstance(risk, (int, float)):
+            raise ArgumentTypeError(f"risk must be a number or None, not {type(risk).__name__}")
+        check_risk(risk)
     if optimizer not in OPTIMIZERS:
         raise ArgumentValueError(f"optimizer must be one of {', '.join(sorted(OPTIMIZERS))}, not {optimizer!r}")
     domain_dir = resolve_domain_dir(domain)
@@ -168,6 +177,9 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
         asserted = assert_task(sequence, binding, success_models, abstract)
         sequence, assertions = asserted.sequence, asserted.assertions
     action_models = load_action_models(source.path, tuple(sorted({a.action for a in sequence.actions})))
+    risk, note = resolve_risk(risk, action_models.values())
+    if note:
+        logging.getLogger(__name__).warning("%s", note)
     decision = None
     if meta is not None and horizon > 1 and sequence.actions:  # refine, or keep greedy (Sec. 5.5.4)
         from tailor.refinement.meta_filter import decide
@@ -178,7 +190,7 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
         if not decision.refine:
             return Refinement(abstract, sequence, greedy, source.path, tuple(assertions), decision)
     refined = refine_sequence(sequence, action_models, horizon=horizon, method=optimizer, seed=seed,
-                              success_models=success_models)
+                              success_models=success_models, risk=risk)
     return Refinement(abstract, sequence, refined, source.path, tuple(assertions), decision)
 
 

@@ -132,8 +132,9 @@ class Outcome:
     simulated: SequenceResult | None
 
 
-def refine_and_dispatch(prepared: Prepared, horizon: int, method: str, seed: int, simulate: bool) -> Outcome:
+def refine_and_dispatch(prepared: Prepared, horizon: int, method: str, seed: int, simulate: bool,
+                        risk: float = 0.0) -> Outcome:
     refined = refine(prepared.sequence, prepared.models, horizon=horizon, method=method, seed=seed,
-                     success_models=prepared.success_models)
+                     success_models=prepared.success_models, risk=risk)
     simulated = dispatch(refined.sequence, seed=seed) if simulate else None
     return Outcome(refined, simulated)

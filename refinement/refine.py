@@ -4,6 +4,11 @@ The sequence is refined h actions at a time (the horizon): at action i the still
 actions i..i+h-1 are optimized for the sum of their predicted durations, then the ones action i uses are
 fixed and the window moves on. h = 1 is the greedy baseline of Sec. 5.5.1: each subgoal is chosen for the
 action that reaches it only.
+
+Beyond the dissertation: with a risk lambda > 0 each action's predicted duration is charged lambda times its
+uncertainty (the held-out spread of the leaf it comes from, models.uncertainty), so the optimizer stops
+chasing subgoals the models do not know; and every choice keeps a margin (MARGIN_SHARE of each free range)
+from the splits of the models, so no chosen subgoal sits on a knife edge between two leaves.
 """
 
 from __future__ import annotations
@@ -14,9 +19,17 @@ from typing import TYPE_CHECKING, Mapping
 import numpy as np
 
 from tailor.refinement.action_sequence import ActionSequence, ExecutableAction
-from tailor.errors import ModelFileError
+from tailor.errors import ArgumentValueError, ModelFileError
 from tailor.refinement.optimizers import FreeParameter, Objective, OptimizationResult, Term, optimize
 from tailor.refinement.progress import progress_bar
+
+# of each free range, kept from every split of the models: 0.031 rad of a full heading range, 4 cm of 8 m (a
+# mobile base's noise: 1 deg, 1 cm)
+MARGIN_SHARE = 0.005
+# lambda of the user-facing default (CLI, API, evaluate): expected duration + lambda * uncertainty, chosen by
+# `tailor evaluate --risk-sweep` on a bundled domain (README, "Risk-aware refinement"); it applies where every
+# model stores its uncertainty (`resolve_risk`). The core `refine` defaults to 0: the dissertation's objective.
+DEFAULT_RISK = 1.0
 
 if TYPE_CHECKING:  # the models' module imports scikit-learn; refining needs only their methods
     from tailor.refinement.models.action_models import ActionModel
@@ -30,6 +43,8 @@ class RefinedSequence:
     predicted: tuple[float, ...]  # per action, seconds
     windows: tuple[OptimizationResult, ...]
     horizon: int
+    risk: float = 0.0  # lambda of the objective: expected duration + lambda * uncertainty
+    spread: tuple[float, ...] | None = None  # per action, its model's uncertainty (s); None where one has none
 
     @property
     def predicted_total(self) -> float:
@@ -37,12 +52,14 @@ class RefinedSequence:
 
 
 def action_term(action: ExecutableAction, model: ActionModel, free: tuple[FreeParameter, ...],
-                assignment: Mapping[str, float], success_model=None) -> Term:
+                assignment: Mapping[str, float], success_model=None, risk: float = 0.0) -> Term:
     """The predicted duration of one action as a function of the window's free parameters.
 
     Parameters already fixed (bound, or chosen in an earlier window) are baked in; the others are read from
-    the columns of theta. With a `success_model` (the action's guard) the term is invalid where it predicts
-    failure (Alg. 6), and its success leaves are the region the analytic optimizer intersects with.
+    the columns of theta. With `risk` > 0 the term is the duration plus risk times the model's uncertainty
+    (a ModelFileError if its file has none). With a `success_model` (the action's guard) the term is invalid
+    where it predicts failure (Alg. 6), and its success leaves are the region the analytic optimizer
+    intersects with.
     """
     column = {p.id: j for j, p in enumerate(free)}
     base = np.empty(len(action.params))
@@ -66,8 +83,9 @@ def action_term(action: ExecutableAction, model: ActionModel, free: tuple[FreePa
     def features(theta: np.ndarray) -> np.ndarray:
         return model.features(params(theta))
 
+    duration = model.duration_with_risk(risk) if risk else model.duration
     if success_model is None:
-        return Term(model=model.duration, features=features, label=action.pddl)
+        return Term(model=duration, features=features, label=action.pddl)
     margin = [0.0] * len(free)
     for _, j in free_slots:
         margin[j] = action.guard_margin * (free[j].high - free[j].low)
@@ -83,7 +101,7 @@ def action_term(action: ExecutableAction, model: ActionModel, free: tuple[FreePa
                 ok &= np.asarray(success_model.predict_success(params(moved)), dtype=bool)
         return ok
 
-    return Term(model=model.duration, features=features, label=action.pddl, valid=valid,
+    return Term(model=duration, features=features, label=action.pddl, valid=valid,
                 region=success_model, region_features=lambda theta: success_model.features(params(theta)),
                 region_margin=tuple(margin))
 
@@ -130,6 +148,32 @@ def predicted_success(sequence: ActionSequence, success_models: Mapping[str, obj
     return tuple(out)
 
 
+def resolve_risk(risk: float | None, models) -> tuple[float, str]:
+    """The risk lambda to refine with, and a note where the default had to be dropped. None asks for
+    DEFAULT_RISK, which applies only where every one of `models` stores its uncertainty (else 0: an old model
+    folder still refines, plainly); an explicit lambda > 0 needs the uncertainty (a ModelFileError naming
+    the file otherwise)."""
+    models = list(models)
+    if risk is None:
+        lacking = [m for m in models if getattr(m, "uncertainty", None) is None]
+        if DEFAULT_RISK and lacking:
+            where = getattr(lacking[0], "source", None) or lacking[0].action
+            return 0.0, (f"{where}: no uncertainty stored (trained before it was): refining without the default "
+                         f"risk {DEFAULT_RISK:g}, i.e. with --risk 0 (retrain with `tailor train`)")
+        return DEFAULT_RISK, ""
+    check_risk(risk)
+    if risk:
+        for model in models:
+            model.require_uncertainty()
+    return float(risk), ""
+
+
+def check_risk(risk: float) -> None:
+    """A risk lambda must be a finite number >= 0 (0: plain expected duration)."""
+    if isinstance(risk, bool) or not isinstance(risk, (int, float)) or not 0.0 <= risk < float("inf"):
+        raise ArgumentValueError(f"the risk lambda must be a finite number >= 0, not {risk!r}")
+
+
 def model_for(action: ExecutableAction, models: Mapping[str, ActionModel]) -> ActionModel:
     try:
         return models[action.action]
@@ -151,17 +195,35 @@ def predicted_durations(sequence: ActionSequence, models: Mapping[str, ActionMod
     return tuple(_predicted(a, model_for(a, models)) for a in sequence.actions)
 
 
+def predicted_spreads(sequence: ActionSequence, models: Mapping[str, ActionModel]) -> tuple[float, ...] | None:
+    """Each action's uncertainty (s) at its bound values, or None if a model stores none."""
+    spreads = []
+    for action in sequence.actions:
+        model = model_for(action, models)
+        if getattr(model, "uncertainty", None) is None:
+            return None
+        spreads.append(float(model.predict_spread(action.values()[None, :])[0]))
+    return tuple(spreads)
+
+
 def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon: int = 2,
-           method: str = "analytic", seed: int = 0, success_models: Mapping[str, object] | None = None
-           ) -> RefinedSequence:
-    """Bind every free parameter of `sequence`, h actions at a time, minimizing summed predicted duration.
+           method: str = "analytic", seed: int = 0, success_models: Mapping[str, object] | None = None,
+           risk: float = 0.0, margin_share: float = MARGIN_SHARE) -> RefinedSequence:
+    """Bind every free parameter of `sequence`, h actions at a time, minimizing summed predicted duration
+    (plus `risk` times the summed uncertainty), each choice `margin_share` of its range from the models' splits.
 
     Guarded actions (subgoal assertion) take their success classifier from `success_models` by name: the
     optimizers consider only parameterizations it predicts to succeed (Alg. 6).
     """
     if horizon < 1:
         raise ValueError("the horizon must be at least 1")
+    check_risk(risk)
+    if not 0.0 <= margin_share < 0.5:
+        raise ValueError(f"the margin must be a share of a free range in [0, 0.5), not {margin_share!r}")
     actions = sequence.actions
+    if risk:  # every model the sequence uses must know its uncertainty: say so before any work
+        for action in actions:
+            model_for(action, models).require_uncertainty()
     assignment: dict[str, float] = {}
     windows: list[OptimizationResult] = []
     steps = progress_bar(iterable=range(len(actions)), desc=f"refining (h={horizon})", unit="action", leave=False)
@@ -186,11 +248,12 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
         for action in beyond:
             take(action)
         free_t = tuple(free)
-        terms = tuple(action_term(a, model_for(a, models), free_t, assignment, guard_for(a, success_models))
+        terms = tuple(action_term(a, model_for(a, models), free_t, assignment, guard_for(a, success_models), risk)
                       for a in window)
         terms += tuple(guard_term(a, model_for(a, models), free_t, assignment, guard_for(a, success_models))
                        for a in beyond)
-        result = optimize(Objective(free=free_t, terms=terms), method=method, seed=seed + i)
+        margin = tuple(margin_share * (p.high - p.low) for p in free_t)
+        result = optimize(Objective(free=free_t, terms=terms, margin=margin), method=method, seed=seed + i)
         windows.append(result)
         chosen = dict(zip((p.id for p in free_t), result.values))
         for p in actions[i].params:  # fix what action i uses; later subgoals are optimized again
@@ -198,4 +261,4 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
                 assignment[p.id] = float(chosen[p.id])
     bound = sequence.bind(assignment)
     return RefinedSequence(sequence=bound, predicted=predicted_durations(bound, models), windows=tuple(windows),
-                           horizon=horizon)
+                           horizon=horizon, risk=float(risk), spread=predicted_spreads(bound, models))

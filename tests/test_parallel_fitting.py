@@ -40,5 +40,6 @@ def test_a_duration_model_fitted_by_two_workers_is_the_serial_one(monkeypatch):
     parallel = train_duration_model("goToPose", episodes, jobs=2, **kwargs)
     assert parallel.report == serial.report
     assert parallel.model.to_json() == serial.model.to_json()
-    # the n_i candidates at once, the leaf sizes not fitted yet at once, the learning curve's 2 x 2 fits at once
-    assert batches[len(batches) // 2:] == [(3, 2), (3, 2), (4, 2)]
+    # the n_i candidates at once, the leaf sizes not fitted yet at once, the learning curve's 2 x 2 fits at once,
+    # the uncertainty's cross-fitting folds at once
+    assert batches[len(batches) // 2:] == [(3, 2), (3, 2), (4, 2), (4, 2)]

@@ -111,3 +111,25 @@ def backend_session(args: argparse.Namespace):
     from tailor.sims.parallel import backend_session as session
 
     return session(args.backend, args.jobs, args.scheduler)
+
+
+def add_risk_argument(parser: argparse.ArgumentParser) -> None:
+    """--risk LAMBDA: the refined sequence minimizes expected duration + LAMBDA * uncertainty (greedy stays plain)."""
+    from tailor.refinement.refine import DEFAULT_RISK
+
+    parser.add_argument("--risk", type=risk_lambda, default=None, metavar="LAMBDA",
+                        help="risk-aware refinement: minimize the predicted duration plus LAMBDA times the models' "
+                             "uncertainty (held-out error of each leaf), summed over the horizon; the greedy "
+                             f"baseline stays plain (default {DEFAULT_RISK:g} where the models store their "
+                             "uncertainty, else 0; 0 is plain refinement)")
+
+
+def risk_lambda(text: str) -> float:
+    """A finite number >= 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0.0 <= value < float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, not {text}")
+    return value

@@ -9,8 +9,10 @@ from tailor.refinement.cli.arguments import (
     add_backend_arguments,
     add_filter_arguments,
     add_models_argument,
+    add_risk_argument,
     announce_models,
     backend_session,
+    risk_lambda,
     whole_number,
     worker_count,
 )
@@ -55,6 +57,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="with --meta: write DIR/models/meta.json (default: beside --models / $TAILOR_MODELS, "
                              "or the user data folder with copies of the bundled models)")
     add_filter_arguments(parser)
+    add_risk_argument(parser)
+    parser.add_argument("--risk-sweep", type=_lambdas, default=(), metavar="LIST",
+                        help="also refine every situation with each of these risk lambdas (comma-separated, e.g. "
+                             "0,0.5,1,2) and report them side by side on the same situations, greedy runs and oracle")
+
+
+def _lambdas(text: str) -> tuple[float, ...]:
+    values = tuple(dict.fromkeys(risk_lambda(part.strip()) for part in text.split(",") if part.strip()))
+    if not values:
+        raise argparse.ArgumentTypeError("expected comma-separated risk lambdas, e.g. 0,0.5,1")
+    return values
 
 
 
@@ -93,7 +106,8 @@ def _print_text(report: dict) -> None:
     out(f"  penalized mean, all scenarios {_fmt(s['penalized_greedy_mean'])} s / {_fmt(s['penalized_refined_mean'])} s "
         f"(a failure counts its time + {s['failure_penalty_s']:.0f} s; improvement {_pct(s['penalized_improvement'])}%)\n")
     out(f"  mean duration greedy (h=1)   {_fmt(s['greedy_mean'])} s\n")
-    out(f"  mean duration refined (h=2)  {_fmt(s['refined_mean'])} s\n")
+    risk = f", risk {report['risk']:g}" if report.get("risk") else ""
+    out(f"  mean duration refined (h=2{risk})  {_fmt(s['refined_mean'])} s\n")
     out(f"  mean improvement (Eq. 5.3)   {_pct(s['improvement'])}%   (predicted {_pct(s['predicted_improvement'])}%)\n")
     out(f"  paired t-test p-value        {_fmt(s['p_value'], '{:.2g}')}\n")
     out(f"  better / equal / worse       {s['better']} / {s['equal']} / {s['worse']}   "
@@ -117,6 +131,16 @@ def _print_text(report: dict) -> None:
         for row in s["per_action"]:
             out(f"  {row['problem']:<16} {row['step']:>4}  {row['action']:<18} {_fmt(row['greedy_mean']):>13}"
                 f"  {_fmt(row['refined_mean']):>13}\n")
+    sweep = report.get("risk_sweep")
+    if sweep:
+        out("\nRisk-aware refinement (h=2, analytic) on the same situations: objective = predicted duration + "
+            "lambda * uncertainty\n")
+        out("  lambda  failed greedy/refined  improvement  penalized  better/equal/worse  worse  refined/optimum\n")
+        for row in sweep:
+            out(f"  {row['risk']:<6g}  {_pct(row['failure_rate_greedy']):>6}% / {_pct(row['failure_rate_refined']):>5}%"
+                f"  {_pct(row['improvement']):>10}%  {_pct(row['penalized_improvement']):>8}%"
+                f"  {row['better']:>6}/{row['equal']}/{row['worse']:<5}  {_pct(row['worse_share']):>5}%"
+                f"  {_fmt(row['oracle_ratio'], '{:.3f}'):>8} ({row['oracle_episodes']})\n")
     w = report.get("horizons")
     if w:
         out(f"\nHorizons (Table 5.3) over random '{report['horizon_situations']}' situations, {w['episodes']} "
@@ -134,7 +158,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-    from tailor.refinement.progress import run_in_workers
     from tailor.planner_bridge import resolve_domain_dir
     from tailor.refinement.binding import load_domain_binding
     from tailor.refinement.evaluation.experiments import (
@@ -146,10 +169,11 @@ def _evaluate(args: argparse.Namespace) -> int:
         situation_seed,
         summarize_comparison,
         summarize_horizons,
+        summarize_risk_sweep,
     )
-    from tailor.refinement.situations import draw_situations, job_models, situation_sequence
-
     from tailor.refinement.model_store import resolve_models
+    from tailor.refinement.progress import run_in_workers
+    from tailor.refinement.situations import draw_situations, job_models, situation_sequence
 
     domain_dir = resolve_domain_dir(args.domain)
     binding = load_domain_binding(domain_dir)
@@ -195,12 +219,28 @@ def _evaluate(args: argparse.Namespace) -> int:
         job, _, objects = items[0]
         job_models(job, situation_sequence(job, objects))
     announce_models("evaluate", source)
+    risk = 0.0 if args.risk is None else args.risk
+    if items:  # the risk lambda (the default only where every model stores its uncertainty), checked before work
+        import logging
+
+        from tailor.refinement.refine import resolve_risk
+
+        job, _, objects = items[0]
+        models = job_models(job, situation_sequence(job, objects)).values()
+        risk, note = resolve_risk(args.risk, models)
+        if note:
+            logging.getLogger(__name__).warning("%s", note)
+        if any(args.risk_sweep):
+            resolve_risk(max(args.risk_sweep), models)
     rows = run_in_workers(comparison_episode, [(job, i, objects, i < args.oracle_episodes, plan.zero_baseline,
-                                                use_filter) for job, i, objects in items], args.jobs,
-                          "greedy vs refined", getattr(args, "progress", True))
+                                                use_filter, risk, args.risk_sweep)
+                                               for job, i, objects in items], args.jobs, "greedy vs refined",
+                          getattr(args, "progress", True))
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
-              "models": str(source.path), "comparison": plan.comparison, "filter": use_filter}
+              "models": str(source.path), "comparison": plan.comparison, "filter": use_filter, "risk": risk}
     report.update(summarize_comparison(rows))
+    if args.risk_sweep:
+        report["risk_sweep"] = summarize_risk_sweep(rows)
     report["situations"] = situation_rows(rows, {i: objects for _, i, objects in items})
     if plan.horizons and args.horizon_episodes:
         items = situations(plan.horizons, args.horizon_episodes)

@@ -103,21 +103,24 @@ def zero_assignment(sequence: ActionSequence) -> dict[str, float]:
     return {p.id: min(max(0.0, p.low), p.high) for p in sequence.free_parameters()}
 
 
-def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: bool, meta: bool = False) -> dict:
-    """One situation: greedy, refined (analytic and ga), optionally the zero baseline and the oracle. With
-    `meta`, the refined execution is the greedy one where the meta model (models/meta.json) does not predict
-    that refinement makes it better (Sec. 5.5.4); the optimizer statistics still describe the refinement."""
+def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: bool, meta: bool = False,
+                       risk: float = 0.0, sweep: tuple[float, ...] = ()) -> dict:
+    """One situation: greedy, refined (analytic and ga; with the risk lambda `risk`), optionally the zero
+    baseline, the oracle, and the refined sequence with each risk lambda of `sweep` (analytic), all dispatched
+    with the same simulator seed. With `meta`, the refined execution is the greedy one where the meta model
+    (models/meta.json) does not predict that refinement makes it better (Sec. 5.5.4); the optimizer statistics
+    still describe the refinement."""
     seed = situation_seed(job.seed, index)
     sequence, success = asserted_situation(job, objects)
     models = job_models(job, sequence)
     greedy = refine(sequence, models, horizon=1, method="analytic", seed=seed, success_models=success)
-    optimized = refine(sequence, models, horizon=2, method="analytic", seed=seed, success_models=success)
+    optimized = refine(sequence, models, horizon=2, method="analytic", seed=seed, success_models=success, risk=risk)
     decision = decide(job_meta_model(job), greedy.sequence, models) if meta else None
     refined = optimized if decision is None or decision.refine else greedy
     # where the analytic minimization fell back to the GA everywhere, the GA run is that same run
     fell_back = optimized.windows and all(w.method == "ga" for w in optimized.windows)
     genetic = optimized if fell_back else refine(sequence, models, horizon=2, method="ga", seed=seed,
-                                                 success_models=success)
+                                                 success_models=success, risk=risk)
     g, r = dispatch(greedy.sequence, seed=seed), dispatch(refined.sequence, seed=seed)
     out = {"index": index, "seed": seed, "problem": job.plan.problem,
            "greedy": g.duration, "refined": r.duration, "greedy_ok": g.succeeded, "refined_ok": r.succeeded,
@@ -132,6 +135,15 @@ def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: 
            "refined_actions": [[a.action, a.duration] for a in r.results]}
     if decision is not None:
         out["filter"] = decision.to_json()
+    if sweep:  # each lambda's refinement, as refined (unfiltered: the sweep compares objectives)
+        out["sweep"] = {}
+        for lam in sweep:
+            at = optimized if lam == risk else refine(sequence, models, horizon=2, method="analytic", seed=seed,
+                                                      success_models=success, risk=lam)
+            result = dispatch(at.sequence, seed=seed) if at is not refined else r
+            out["sweep"][repr(float(lam))] = {"refined": result.duration, "refined_ok": result.succeeded,
+                                              "refined_outcome": outcome_of(result),
+                                              "predicted_refined": at.predicted_total}
     if zero:
         z = dispatch(sequence.bind(zero_assignment(sequence)), seed=seed)
         out["zero"], out["zero_ok"] = z.duration, z.succeeded
@@ -164,6 +176,9 @@ def situation_rows(rows: list[dict], situations: dict[int, dict]) -> list[dict]:
             row["oracle"] = {"simulated": r.get("oracle"), "method": r["oracle_method"]}
         if "filter" in r:
             row["filter"] = r["filter"]
+        if "sweep" in r:  # the refined execution with each risk lambda of the sweep
+            row["risk_sweep"] = {lam: {"predicted": v["predicted_refined"], "simulated": v["refined"],
+                                       "outcome": v["refined_outcome"]} for lam, v in r["sweep"].items()}
         out.append(row)
     return out
 
@@ -266,6 +281,7 @@ def summarize_comparison(rows: list[dict]) -> dict:
         "better": int(better.sum()),
         "equal": int(equal.sum()),
         "worse": int(worse.sum()),
+        "worse_share": float(worse.mean()) if len(both) else None,
         "improvement_better": _mean(gain[better]),
         "improvement_equal": _mean(gain[equal]),
         "improvement_worse": _mean(gain[worse]),
@@ -293,6 +309,23 @@ def summarize_comparison(rows: list[dict]) -> dict:
     if rows and "zero" in rows[0]:
         out.update(_zero_summary(rows))
     return out
+
+
+SWEEP_KEYS = ("episodes", "failure_rate_greedy", "failure_rate_refined", "penalized_improvement", "improvement",
+              "predicted_improvement", "better", "equal", "worse", "worse_share", "oracle_episodes", "oracle_ratio",
+              "oracle_ratio_per_episode", "greedy_oracle_ratio")
+
+
+def summarize_risk_sweep(rows: list[dict]) -> list[dict]:
+    """Per risk lambda of the sweep, the comparison's headline numbers with that lambda's refined executions
+    (the same situations, greedy runs and oracle for every lambda)."""
+    if not rows or "sweep" not in rows[0]:
+        return []
+    table = []
+    for lam in rows[0]["sweep"]:
+        summary = summarize_comparison([{**r, **r["sweep"][lam]} for r in rows])
+        table.append({"risk": float(lam), **{k: summary[k] for k in SWEEP_KEYS}})
+    return table
 
 
 def _failure_summary(rows: list[dict]) -> dict:

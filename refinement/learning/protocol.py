@@ -9,6 +9,8 @@ Episodes are shuffled (seeded) and split: half train, a quarter validation, a qu
 2. A model trained on train + validation (three quarters) with that n_i is tested on the last quarter: its
    MAE is the reported accuracy, beside the MAE of a gradient-boosting ensemble trained on the same examples.
 3. The stored model is trained on all episodes.
+4. Its uncertainty (models.uncertainty): each episode predicted by a tree of the same n_i and leaf size fitted
+   on the other folds (K-fold cross-fitting), the held-out errors averaged per leaf of the stored tree.
 Test sets only ever hold the first example of each episode (Sec. 4.1.2): that is how the model is queried.
 """
 
@@ -26,6 +28,7 @@ from tailor.refinement.models.action_models import ActionModel
 from tailor.errors import DataError
 from tailor.refinement.models.features import compute_features, feature_names, first_examples, intermediate_examples
 from tailor.refinement.models.model_tree import ModelTree
+from tailor.refinement.models.uncertainty import FOLDS, LeafUncertainty
 from tailor.sims.episode import Episode
 
 N_I_CANDIDATES = (1, 2, 3, 5, 10, 20, 30, 50)  # examples per episode tried (Fig. 4.5)
@@ -199,6 +202,8 @@ def train_duration_model(
     step(f"{action}: final model")
     with threadpool_limits(limits=ONE_THREAD):
         final = fit_on_episodes(used, feature_set, n_i, make_model(seed, leaf), observed)
+    uncertainty = _leaf_uncertainty(final, used, seed, leaf, n_i, feature_set, observed, make_model, step, action,
+                                    jobs)
     durations = np.array([e.duration for e in used])
     report = {
         "action": action,
@@ -224,8 +229,41 @@ def train_duration_model(
         "episodes_curve": episodes_curve,
         "seed": seed,
     }
-    model = ActionModel(action, feature_set, feature_names(feature_set), final, n_i, report)
+    if uncertainty is not None:
+        report["uncertainty_overall"] = uncertainty.overall  # the cross-fitted held-out MAE of all episodes
+    model = ActionModel(action, feature_set, feature_names(feature_set), final, n_i, report,
+                        uncertainty=uncertainty)
     return DurationTraining(model, report)
+
+
+def _leaf_uncertainty(final: RegressorMixin, used: list[Episode], seed: int, leaf: int, n_i: int, feature_set: str,
+                      observed: tuple[str, ...], make_model: RegressorFactory, step: Callable[[str], None],
+                      action: str, jobs: int) -> LeafUncertainty | None:
+    """Cross-fitted held-out errors of every episode, averaged per leaf of `final` (None if it has no leaves)."""
+    if not hasattr(final, "apply") or not hasattr(final, "n_leaves_"):
+        return None
+    order = np.random.default_rng(seed).permutation(len(used))
+    folds = np.array_split(order, FOLDS)
+    calls = []
+    for k, fold in enumerate(folds):
+        rest = np.concatenate([f for j, f in enumerate(folds) if j != k])
+        params, targets, _ = intermediate_examples([used[i] for i in rest], n_i, observed)
+        calls.append((make_model, seed, leaf, compute_features(feature_set, params), targets,
+                      *_first_example_features([used[i] for i in fold], feature_set)))
+    residual = np.empty(len(used))
+    for fold, errors in zip(folds, _results(_fit_and_residuals, calls, jobs)):
+        step(f"{action}: uncertainty fold")
+        residual[fold] = errors
+    features, _ = _first_example_features(used, feature_set)
+    return LeafUncertainty.from_residuals(final.apply(features), residual, int(final.n_leaves_))
+
+
+def _fit_and_residuals(factory: RegressorFactory, seed: int, leaf: int, features: np.ndarray, targets: np.ndarray,
+                       test_features: np.ndarray, test_durations: np.ndarray) -> np.ndarray:
+    """Observed minus predicted duration of each held-out example, by a regressor fitted on the others."""
+    with threadpool_limits(limits=ONE_THREAD):
+        regressor = factory(seed, leaf).fit(features, targets)
+        return test_durations - regressor.predict(test_features)
 
 
 def _first_example_features(episodes: list[Episode], feature_set: str) -> tuple[np.ndarray, np.ndarray]:

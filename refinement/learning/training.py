@@ -31,6 +31,7 @@ from tailor.refinement.learning.html_report import html_report
 from tailor.refinement.learning.report import format_report, rules_sections
 from tailor.refinement.learning.trust import trust_warnings
 from tailor.refinement.models.action_models import COLLISION_SUFFIX
+from tailor.refinement.models.uncertainty import FOLDS
 from tailor.refinement.outputs import check_output_dir, json_text, staged_file, write_error
 from tailor.sims.episode import Episode
 
@@ -169,7 +170,7 @@ def _learn_at_subgoals(recipe: TrainingRecipe, chain: SubgoalExperience, models:
 
 def _fits_per_model(n_i_candidates: tuple[int, ...], episode_fractions: tuple[float, ...]) -> int:
     """At most this many fits train one duration model (the bar may finish early: fits are shared)."""
-    return 2 * len(n_i_candidates) + len(MIN_SAMPLES_LEAF) + 2 * len(episode_fractions) + 2
+    return 2 * len(n_i_candidates) + len(MIN_SAMPLES_LEAF) + 2 * len(episode_fractions) + 2 + FOLDS
 
 
 REPORT_FILES = {  # the report files beside report.json, and what each holds (named by `tailor train`)

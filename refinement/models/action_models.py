@@ -21,6 +21,7 @@ from tailor.errors import ModelFileError
 from tailor.refinement.models.features import compute_features, feature_spaces
 from tailor.refinement.models.model_tree import ModelTree
 from tailor.refinement.models.rules import Rule
+from tailor.refinement.models.uncertainty import LeafUncertainty, risk_adjusted
 
 ACTION_MODEL_SCHEMA = "tailor.action_model/1"
 COLLISION_MODEL_SCHEMA = "tailor.collision_model/1"
@@ -45,6 +46,8 @@ class ActionModel:
     n_i: int  # intermediate examples per episode it was trained with (Sec. 4.1.2)
     report: dict = field(default_factory=dict)
     source: str | None = field(default=None, compare=False)  # the file it was read from, for error messages
+    # per-leaf held-out spread (models.uncertainty); None in files trained before it existed
+    uncertainty: LeafUncertainty | None = None
 
     def features(self, params: np.ndarray) -> np.ndarray:
         """(n, p) action parameters -> (n, f) features."""
@@ -54,6 +57,24 @@ class ActionModel:
         """Predicted duration (s) for each row of (n, p) action parameters."""
         with np.errstate(over="ignore", invalid="ignore"):  # absurd coefficients: see check_duration
             return np.asarray(self.duration.predict(self.features(params)), dtype=float)
+
+    def predict_spread(self, params: np.ndarray) -> np.ndarray:
+        """How far off (s, held-out mean absolute error of the leaf) each row's predicted duration tends to be."""
+        return self.require_uncertainty().of_leaves(self.duration.apply(self.features(params)))
+
+    def duration_with_risk(self, risk: float):
+        """What a risk-aware objective sums for this action: the duration tree itself at risk 0, else a tree
+        predicting duration + risk * spread (the same leaves, each with a larger intercept)."""
+        if risk == 0:
+            return self.duration
+        return risk_adjusted(self.duration, self.require_uncertainty(), risk)
+
+    def require_uncertainty(self) -> LeafUncertainty:
+        """The model's uncertainty, or a ModelFileError naming its file where it was trained without one."""
+        if self.uncertainty is None:
+            raise ModelFileError(f"the action model of {self.action} has no uncertainty (trained before it was "
+                                 "stored): retrain with `tailor train`, or refine with --risk 0", file=self.source)
+        return self.uncertainty
 
     def plausible_range(self) -> tuple[float, float] | None:
         """The durations a prediction may take (see RANGE_MARGIN); None where the report says nothing."""
@@ -95,6 +116,7 @@ class ActionModel:
             "rules": self.rules_text().splitlines(),
             "duration": self.duration.to_json(),
             "report": self.report,
+            **({} if self.uncertainty is None else {"uncertainty": self.uncertainty.to_json()}),
         }
 
     @classmethod
@@ -116,7 +138,10 @@ class ActionModel:
         n_in = getattr(tree, "n_features_in_", None)
         if n_in != len(names):
             raise ModelFileError(f"duration model tree takes {n_in} features, feature set has {len(names)}", file=source)
-        return cls(action, feature_set, names, tree, n_i, _report(data, source), source)
+        uncertainty = None
+        if "uncertainty" in data:  # optional: files written before it existed load without it
+            uncertainty = LeafUncertainty.from_json(data["uncertainty"], tree.n_leaves_, source)
+        return cls(action, feature_set, names, tree, n_i, _report(data, source), source, uncertainty)
 
 
 @dataclass(frozen=True, eq=False)

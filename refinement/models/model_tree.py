@@ -123,6 +123,15 @@ class ModelTree(RegressorMixin, BaseEstimator):
         leaf = self._leaf_of(X)
         return np.einsum("ij,ij->i", X, self.tree_.coef[leaf]) + self.tree_.intercept[leaf]
 
+    def predict_with_leaf(self, X) -> tuple[np.ndarray, np.ndarray]:
+        """`predict(X)` and `apply(X)` from one routing of the rows (what a per-leaf correction needs)."""
+        check_is_fitted(self)
+        if not self._is_ready_matrix(X):
+            X = validate_data(self, X, dtype=np.float64, reset=False)
+        X = np.ascontiguousarray(X)
+        leaf = self._leaf_of(X)
+        return np.einsum("ij,ij->i", X, self.tree_.coef[leaf]) + self.tree_.intercept[leaf], leaf
+
     def apply(self, X) -> np.ndarray:
         """The index of the leaf (0 .. n_leaves_-1, the order of `rules()`) each row falls in."""
         check_is_fitted(self)

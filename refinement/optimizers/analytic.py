@@ -7,6 +7,12 @@ the rules they violate, C.3.2). The rule sets of all terms are merged by interse
 their linear models, dropping contradictory pairs (C.3.3), and the minimum of each merged rule is at the
 corner its gradient points away from. The best corners are checked with the true objective.
 
+Knife-edge optima: the cheapest corner of a box often lies on a split of a tree, where the smallest perturbation
+(execution noise, a printed value's rounding) lands in the neighbouring leaf and its time. With the objective's
+margin, each box is shrunk by it at every bound that is a split of the term's model (not at the ends of the
+range, and not at a piece edge of the feature map, which is a kink of a continuous prediction): the chosen
+values then lie at least the margin from every split, and a leaf thinner than twice the margin is never chosen.
+
 A term with a predicted-success region (Alg. 6: a success classifier's leaves, axis-aligned boxes in its
 feature space) contributes those leaves as rules with a zero linear model: merged like any rule set, they cut
 every box down to where success is predicted, so the minimum is the minimum within the region.
@@ -76,8 +82,10 @@ def region_rules(region) -> _SuccessRules:
     return rules
 
 
-def term_boxes(structure: TermStructure, model) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """One term's rules as boxes in free-parameter space: lo, hi (n, d), gradient (n, d), constant (n,)."""
+def term_boxes(structure: TermStructure, model, margin: tuple[float, ...] = ()
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One term's rules as boxes in free-parameter space: lo, hi (n, d), gradient (n, d), constant (n,); with a
+    margin per free parameter, each box kept that far (and a hair more) inside the splits of the model."""
     lower, upper, coef, intercept = rule_arrays(model)
     bound = structure.var_of < 0
     c = structure.const[bound]
@@ -95,8 +103,13 @@ def term_boxes(structure: TermStructure, model) -> tuple[np.ndarray, np.ndarray,
             b = np.where(rising, (hi_f - o) / s, np.where(falling, (lo_f - o) / s, np.inf))
         flat_ok = (s != 0) | ((lo_f < o) & (o <= hi_f))  # a feature constant on the piece holds or not
         a = np.where(flat_ok, a, np.inf)
-        lo = np.maximum(a.max(axis=1, initial=-np.inf), edges[:-1])  # (R, P)
-        hi = np.minimum(b.min(axis=1, initial=np.inf), edges[1:])
+        split_lo, split_hi = a.max(axis=1, initial=-np.inf), b.min(axis=1, initial=np.inf)
+        lo = np.maximum(split_lo, edges[:-1])  # (R, P)
+        hi = np.minimum(split_hi, edges[1:])
+        if margin and margin[j] > 0:  # strictly more than the margin: a perturbation by it stays in the leaf
+            m = margin[j] + NUDGE * max(1.0, float(edges[-1] - edges[0]))
+            lo = np.where(split_lo > edges[:-1], lo + m, lo)
+            hi = np.where(split_hi < edges[1:], hi - m, hi)
         grad = coef[:, dep] @ structure.slope[j][dep]  # (R, P)
         const = coef[:, dep] @ structure.offset[j][dep]
         per_var.append((lo, hi, grad, const))
@@ -145,16 +158,14 @@ def merge(first, second):
     return lo[i, k], hi[i, k], g1[i] + g2[k], c1[i] + c2[k]
 
 
-def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
-    """The minimum over the corners of the merged rule set, or NotApplicable (the caller falls back)."""
-    del seed  # deterministic; the argument keeps the optimizers interchangeable
-    start = time.perf_counter()
+def _merged_boxes(objective: Objective, structures, margin: tuple[float, ...]):
+    """The terms' rule sets (and success regions) merged into one set of boxes; how many regions took part."""
     low, high = objective.low, objective.high
     names = tuple(p.id for p in objective.free)
     merged = None
     regions = 0
-    for term in objective.terms:
-        boxes = term_boxes(detect(term, low, high, names), term.model)
+    for term, structure in zip(objective.terms, structures):
+        boxes = term_boxes(structure, term.model, margin)
         merged = boxes if merged is None else merge(merged, boxes)
         if term.region is not None:
             region_term = replace(term, features=term.region_features)
@@ -162,6 +173,24 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
             merged = merge(merged, _inside(term_boxes(detect(region_term, low, high, names), rules),
                                            term.region_margin, low, high))
             regions += 1
+    return merged, regions
+
+
+def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
+    """The minimum over the corners of the merged rule set, or NotApplicable (the caller falls back)."""
+    del seed  # deterministic; the argument keeps the optimizers interchangeable
+    start = time.perf_counter()
+    low, high = objective.low, objective.high
+    names = tuple(p.id for p in objective.free)
+    structures = [detect(term, low, high, names) for term in objective.terms]
+    margin_note = ""
+    merged, regions = _merged_boxes(objective, structures, objective.margin)
+    if len(merged[0]) == 0 and any(objective.margin):
+        # every combination of leaves is thinner than twice the margin somewhere: choose without it
+        merged, regions = _merged_boxes(objective, structures, ())
+        margin_note = ", no leaf box wider than twice the margin: chosen without it"
+    elif any(objective.margin):
+        margin_note = ", a margin inside every leaf box"
     lo, hi, grad, const = merged
     if len(lo) == 0:
         where = " within the predicted-success regions" if regions else ""
@@ -189,6 +218,7 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
                 method="analytic",
                 evaluations=evaluations,
                 seconds=time.perf_counter() - start,
-                note=f"{len(lo)} merged rules" + (f", within {regions} success region(s)" if regions else ""),
+                note=f"{len(lo)} merged rules" + (f", within {regions} success region(s)" if regions else "")
+                + margin_note,
             )
     raise NotApplicable("every corner of the merged rule set is marked invalid")

@@ -44,6 +44,10 @@ class Objective:
 
     free: tuple[FreeParameter, ...]
     terms: tuple[Term, ...]
+    # per free parameter: how far from every split of a term's model a choice must lie (knife-edge optima: a
+    # value on a split may predict another leaf's time once perturbed by execution noise or rounding); the
+    # analytic optimizer keeps it inside every leaf box, () keeps none
+    margin: tuple[float, ...] = ()
 
     @property
     def low(self) -> np.ndarray:
