@@ -120,6 +120,11 @@ def test_the_bundled_training_reports_raise_no_warning(domain):
     assert trust_warnings(bundled_report(domain)) == []
 
 
+def _classifier(report: dict) -> dict:
+    """The goToPose classifier's row of a training report (schema 3: by action; schema 2: `collision`)."""
+    return report["classifiers"]["goToPose"] if "classifiers" in report else report["collision"]
+
+
 def test_each_warning_fires_on_its_own_condition_only():
     report = bundled_report("soccer")
     action = next(iter(report["models"]))
@@ -139,21 +144,21 @@ def test_each_warning_fires_on_its_own_condition_only():
         r["models"][action]["mae_constant"] = 2 * r["models"][action]["mae"]
 
     def at_chance(r):  # predicts failure for a random half, whatever happens
-        r["classifiers"]["goToPose"]["confusion"]["counts"] = {"predicted_fail_observed_fail": 80, "predicted_fail_observed_success":
+        _classifier(r)["confusion"]["counts"] = {"predicted_fail_observed_fail": 80, "predicted_fail_observed_success":
                                                  420, "predicted_success_observed_fail": 80,
                                                  "predicted_success_observed_success": 420}
-        r["classifiers"]["goToPose"]["accuracy"] = 0.5
+        _classifier(r)["accuracy"] = 0.5
 
     def one_outcome(r):
-        r["classifiers"]["goToPose"]["confusion"]["counts"] = {"predicted_fail_observed_fail": 0, "predicted_fail_observed_success":
+        _classifier(r)["confusion"]["counts"] = {"predicted_fail_observed_fail": 0, "predicted_fail_observed_success":
                                                  10, "predicted_success_observed_fail": 0,
                                                  "predicted_success_observed_success": 990}
 
     def few_failures(r):
-        r["classifiers"]["goToPose"]["outcomes"] = {"collision": 3, "success": 5997}
+        _classifier(r)["outcomes"] = {"collision": 3, "success": 5997}
 
     def few_fresh(r):
-        r["classifiers"]["goToPose"]["confusion"]["episodes"] = 20
+        _classifier(r)["confusion"]["episodes"] = 20
 
     cases = {few_test_episodes: f"duration model of {action}: MAE measured on only 6 held-out episodes",
              no_better_than_the_median: f"duration model of {action}: MAE",
