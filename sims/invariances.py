@@ -20,3 +20,18 @@ def shift_mirror_axes(params: np.ndarray, rng: np.random.Generator, axes: Sequen
         for k in (velocity, velocity + goal_offset):
             out[:, k] = flip * params[:, k]
     return out
+
+
+def rigid_motion(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """A navigation's parameters (x, y, phi, v, xg, yg, phig, vg) with the scene rotated, translated and (half
+    the time) mirrored about the x axis."""
+    angle, (sx, sy), mirror = rng.uniform(-np.pi, np.pi), rng.uniform(-5, 5, 2), rng.random() < 0.5
+    out = params.copy()
+    c, s = np.cos(angle), np.sin(angle)
+    for ix, iy, iphi in ((0, 1, 2), (4, 5, 6)):
+        x, y = params[:, ix], params[:, iy]
+        out[:, ix], out[:, iy] = c * x - s * y + sx, s * x + c * y + sy
+        out[:, iphi] = params[:, iphi] + angle
+        if mirror:
+            out[:, iy], out[:, iphi] = -out[:, iy], -out[:, iphi]
+    return out

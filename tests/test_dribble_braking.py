@@ -8,10 +8,8 @@ entered at 0.67 m/s instead of 0.24, and lost the ball ~22 s into this sequence.
 import dataclasses
 
 import pytest
-
-import tailor.sims.soccer.dribble as dribble
 from tailor.sims.episode import ActionCall
-from tailor.sims.soccer import simulate_sequence
+from tailor.sims.soccer import dribble, simulate_sequence
 from tailor.sims.soccer.dribble import V_DRIBBLE
 
 ROBOT = (-2.1295824060504405, 1.3774232900066283, -1.4488277848636213, 0.0)

@@ -2,41 +2,14 @@
 
 import numpy as np
 import pytest
-
+from rule_models import RuleModel, identity, rule
 from tailor.refinement.optimizers import FreeParameter, Objective, Term, brute_force, optimize
 from tailor.refinement.optimizers.analytic import merge, term_boxes
 from tailor.refinement.optimizers.structure import detect
 from tailor.refinement.optimizers.synthetic import FeatureMap, feature_function, random_objective, wrap
-from tailor.refinement.models.rules import Rule
 
 INF = np.inf
 GRID = {1: 4001, 2: 401, 3: 61}
-
-
-class RuleModel:
-    """A model given by its rules (as in App. C.3), predicting with the rule that contains the point."""
-
-    def __init__(self, rules):
-        self._rules = rules
-
-    def rules(self):
-        return self._rules
-
-    def predict(self, F):
-        F = np.atleast_2d(F)
-        out = np.full(len(F), np.nan)
-        for rule in self._rules:
-            inside = rule.contains(F)
-            out[inside] = rule.predict(F[inside])
-        return out
-
-
-def rule(lower, upper, coef, intercept):
-    return Rule(np.array(lower, float), np.array(upper, float), np.array(coef, float), intercept)
-
-
-def identity(theta):
-    return np.atleast_2d(theta).copy()
 
 
 # App. C.3.1: the fictional tree over (dist, angle)

@@ -13,42 +13,16 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from rule_models import RuleModel, identity, rule
 from tailor.errors import ArgumentValueError, ModelFileError
 from tailor.refinement.models.action_models import ActionModel
 from tailor.refinement.models.features import compute_features, feature_names
 from tailor.refinement.models.model_tree import ModelTree
-from tailor.refinement.models.rules import Rule
 from tailor.refinement.models.uncertainty import LeafUncertainty, RiskAdjusted
 from tailor.refinement.optimizers import FreeParameter, Objective, Term, brute_force, optimize
 from tailor.refinement.refine import DEFAULT_RISK, refine
 
 INF = np.inf
-
-
-class RuleModel:
-    """A model given by its rules (lower < x <= upper), predicting with the rule that contains the point."""
-
-    def __init__(self, rules):
-        self._rules = rules
-
-    def rules(self):
-        return self._rules
-
-    def predict(self, F):
-        F = np.atleast_2d(F)
-        out = np.full(len(F), np.nan)
-        for rule in self._rules:
-            inside = rule.contains(F)
-            out[inside] = rule.predict(F[inside])
-        return out
-
-
-def rule(lower, upper, coef, intercept):
-    return Rule(np.array(lower, float), np.array(upper, float), np.array(coef, float), intercept)
-
-
-def identity(theta):
-    return np.atleast_2d(theta).copy()
 
 
 # x in [0, 1]: a slope down to 4 s at the split 0.5, then a cheap leaf 0.01 wide (1 s rising to 1.2 s), then 6 s

@@ -5,7 +5,6 @@ import math
 
 import numpy as np
 import pytest
-
 from tailor.refinement.models.features import compute_features, feature_spaces
 from tailor.sims.soccer.walls import NAMES, WALL_X, WALL_Y
 

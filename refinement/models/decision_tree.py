@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
 from tailor.refinement.models.rules import leaf_boxes
 
 LEAF = -1
@@ -93,32 +92,9 @@ class DecisionTree:
 
     def simplified(self) -> DecisionTree:
         """The same predictions with every subtree whose leaves all agree replaced by one leaf (fewer rules)."""
-        verdict: dict[int, bool | None] = {}  # node -> the one class its subtree predicts, None if mixed
-
-        def visit(node: int) -> bool | None:
-            if self.children_left[node] == LEAF:
-                verdict[node] = bool(self.success[node])
-            else:
-                left, right = visit(self.children_left[node]), visit(self.children_right[node])
-                verdict[node] = left if left is not None and left == right else None
-            return verdict[node]
-
-        visit(0)
-        keep: list[int] = []
-        new_index: dict[int, int] = {}
-        stack = [0]
-        while stack:  # preorder walk that stops at uniform subtrees
-            node = stack.pop()
-            new_index[node] = len(keep)
-            keep.append(node)
-            if verdict[node] is None:
-                stack += [int(self.children_right[node]), int(self.children_left[node])]
-        leaf = [verdict[node] is not None for node in keep]
+        keep, verdict, structure = collapse_uniform(self, lambda node: bool(self.success[node]))
         return DecisionTree(
-            children_left=np.array([LEAF if lf else new_index[int(self.children_left[k])] for k, lf in zip(keep, leaf)]),
-            children_right=np.array([LEAF if lf else new_index[int(self.children_right[k])] for k, lf in zip(keep, leaf)]),
-            feature=np.array([LEAF if lf else int(self.feature[k]) for k, lf in zip(keep, leaf)]),
-            threshold=np.array([0.0 if lf else float(self.threshold[k]) for k, lf in zip(keep, leaf)]),
+            **structure,
             success=np.array([bool(self.success[k]) if verdict[k] is None else verdict[k] for k in keep]),
             samples=np.array([int(self.samples[k]) for k in keep]),
         )
@@ -235,32 +211,9 @@ class LabelTree:
     def simplified(self) -> LabelTree:
         """The same predictions with every subtree whose leaves all predict one class replaced by one leaf (its
         counts those of the subtree's root): fewer, readable rules."""
-        verdict: dict[int, int | None] = {}
-
-        def visit(node: int) -> int | None:
-            if self.children_left[node] == LEAF:
-                verdict[node] = int(self.label[node])
-            else:
-                left, right = visit(self.children_left[node]), visit(self.children_right[node])
-                verdict[node] = left if left is not None and left == right else None
-            return verdict[node]
-
-        visit(0)
-        keep: list[int] = []
-        new_index: dict[int, int] = {}
-        stack = [0]
-        while stack:  # preorder walk that stops at uniform subtrees
-            node = stack.pop()
-            new_index[node] = len(keep)
-            keep.append(node)
-            if verdict[node] is None:
-                stack += [int(self.children_right[node]), int(self.children_left[node])]
-        leaf = [verdict[k] is not None for k in keep]
+        keep, verdict, structure = collapse_uniform(self, lambda node: int(self.label[node]))
         return LabelTree(
-            children_left=np.array([LEAF if lf else new_index[int(self.children_left[k])] for k, lf in zip(keep, leaf)]),
-            children_right=np.array([LEAF if lf else new_index[int(self.children_right[k])] for k, lf in zip(keep, leaf)]),
-            feature=np.array([LEAF if lf else int(self.feature[k]) for k, lf in zip(keep, leaf)]),
-            threshold=np.array([0.0 if lf else float(self.threshold[k]) for k, lf in zip(keep, leaf)]),
+            **structure,
             label=np.array([int(self.label[k]) if verdict[k] is None else verdict[k] for k in keep]),
             counts=np.array([self.counts[k] for k in keep], dtype=np.int64).reshape(len(keep), len(self.classes)),
             classes=self.classes,
@@ -318,3 +271,38 @@ class LabelTree:
             counts=counts,
             classes=tuple(classes),
         )
+
+
+def collapse_uniform(tree, leaf_class) -> tuple[list[int], dict[int, object], dict[str, np.ndarray]]:
+    """The nodes kept when every subtree whose leaves all predict one class (`leaf_class(node)` at a leaf) becomes
+    one leaf: the kept nodes in preorder, the class each node's subtree predicts (None: mixed), and the kept
+    tree's structure arrays (children_left, children_right, feature, threshold)."""
+    verdict: dict[int, object] = {}
+
+    def visit(node: int):
+        if tree.children_left[node] == LEAF:
+            verdict[node] = leaf_class(node)
+        else:
+            left, right = visit(tree.children_left[node]), visit(tree.children_right[node])
+            verdict[node] = left if left is not None and left == right else None
+        return verdict[node]
+
+    visit(0)
+    keep: list[int] = []
+    new_index: dict[int, int] = {}
+    stack = [0]
+    while stack:  # preorder walk that stops at uniform subtrees
+        node = stack.pop()
+        new_index[node] = len(keep)
+        keep.append(node)
+        if verdict[node] is None:
+            stack += [int(tree.children_right[node]), int(tree.children_left[node])]
+    leaf = [verdict[k] is not None for k in keep]
+    structure = {
+        "children_left": np.array([LEAF if lf else new_index[int(tree.children_left[k])] for k, lf in zip(keep, leaf)]),
+        "children_right": np.array([LEAF if lf else new_index[int(tree.children_right[k])]
+                                    for k, lf in zip(keep, leaf)]),
+        "feature": np.array([LEAF if lf else int(tree.feature[k]) for k, lf in zip(keep, leaf)]),
+        "threshold": np.array([0.0 if lf else float(tree.threshold[k]) for k, lf in zip(keep, leaf)]),
+    }
+    return keep, verdict, structure

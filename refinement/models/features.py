@@ -17,11 +17,10 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 import numpy as np
-
 from tailor.errors import DataError
 from tailor.sims import registry
 from tailor.sims.episode import Episode
-from tailor.sims.invariances import shift_mirror_axes
+from tailor.sims.invariances import rigid_motion, shift_mirror_axes
 from tailor.sims.protocol import FeatureSpace
 
 Transform = Callable[[np.ndarray, np.random.Generator], np.ndarray]
@@ -62,20 +61,6 @@ def _pose_selection(names: tuple[str, ...]) -> Callable[[np.ndarray], np.ndarray
         return np.column_stack([parts[name] for name in names])
 
     return compute
-
-
-def _rigid_motion(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """The scene rotated, translated and (half the time) mirrored about the x axis."""
-    angle, (sx, sy), mirror = rng.uniform(-np.pi, np.pi), rng.uniform(-5, 5, 2), rng.random() < 0.5
-    out = params.copy()
-    c, s = np.cos(angle), np.sin(angle)
-    for ix, iy, iphi in ((0, 1, 2), (4, 5, 6)):
-        x, y = params[:, ix], params[:, iy]
-        out[:, ix], out[:, iy] = c * x - s * y + sx, s * x + c * y + sy
-        out[:, iphi] = params[:, iphi] + angle
-        if mirror:
-            out[:, iy], out[:, iphi] = -out[:, iy], -out[:, iphi]
-    return out
 
 
 POSE = ("v", "vg", "dist", "angle_to", "angle_at")
@@ -157,11 +142,11 @@ def register_feature_space(space: FeatureSpace, replace: bool = False) -> Featur
 
 for _space in (
     FeatureSpace("pose", POSE_PARAMETERS, POSE, _pose_selection(POSE),
-                 "translation, rotation and mirroring of the scene", _rigid_motion),
+                 "translation, rotation and mirroring of the scene", rigid_motion),
     FeatureSpace("pose_delta", POSE_PARAMETERS, POSE_DELTA, _pose_selection(POSE_DELTA),
-                 "translation, rotation and mirroring of the scene", _rigid_motion),
+                 "translation, rotation and mirroring of the scene", rigid_motion),
     FeatureSpace("position", POSE_PARAMETERS, POSITION, _pose_selection(POSITION),
-                 "translation, rotation and mirroring of the scene", _rigid_motion),
+                 "translation, rotation and mirroring of the scene", rigid_motion),
     FeatureSpace("reach", JOINT_PARAMETERS, ("dist", "angle_to", "angle_at", "speed", "speed_g"), _reach,
                  "translation and rotation of joint space (Table 4.1)", _joint_rotation),
     FeatureSpace("joints", JOINT_PARAMETERS, ("dist_a", "v_a", "vg_a", "dist_b", "v_b", "vg_b"), _joints,

@@ -19,7 +19,7 @@ Walls and the ball's clearance are left out, so that the features stay invariant
 from __future__ import annotations
 
 import numpy as np
-
+from tailor.sims.invariances import rigid_motion
 from tailor.sims.protocol import FeatureSpace
 from tailor.sims.soccer.approach import PRE_DISTANCE, R_APPROACH
 from tailor.sims.soccer.dubins import TANGENT_SLACK, WORDS
@@ -113,19 +113,5 @@ def _approach(params: np.ndarray) -> np.ndarray:
                             planned_path(params)])
 
 
-def _rigid_motion(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """The scene rotated, translated and (half the time) mirrored about the x axis."""
-    angle, (sx, sy), mirror = rng.uniform(-np.pi, np.pi), rng.uniform(-5, 5, 2), rng.random() < 0.5
-    out = params.copy()
-    c, s = np.cos(angle), np.sin(angle)
-    for ix, iy, iphi in ((0, 1, 2), (4, 5, 6)):
-        px, py = params[:, ix], params[:, iy]
-        out[:, ix], out[:, iy] = c * px - s * py + sx, s * px + c * py + sy
-        out[:, iphi] = params[:, iphi] + angle
-        if mirror:
-            out[:, iy], out[:, iphi] = -out[:, iy], -out[:, iphi]
-    return out
-
-
 APPROACH = FeatureSpace("approach", POSE_PARAMETERS, APPROACH_FEATURES, _approach,
-                        "translation, rotation and mirroring of the scene", _rigid_motion)
+                        "translation, rotation and mirroring of the scene", rigid_motion)

@@ -13,7 +13,6 @@ Invariant to mirroring the field about either axis (the walls are symmetric), no
 from __future__ import annotations
 
 import numpy as np
-
 from tailor.sims.protocol import FeatureSpace
 from tailor.sims.soccer.world import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, WALL_RUNOFF
 
