@@ -139,18 +139,19 @@ def _print_text(prepared, method: str, outcomes: dict, decision=None) -> None:
              ("refined", f"refined (h={outcomes['refined'].refined.horizon}, {method}"
                          + (f", risk {risk:g})" if risk else ")"))]
     names = [(k, label) for k, label in names if k in outcomes]
+    width = max(28, *(len(label) + 2 for _, label in names))  # a column per execution, its label fits
     if free:
         out("\nFree parameters chosen:\n")
-        out(f"  {'parameter':<16}" + "".join(f"{label:>28}" for _, label in names) + "\n")
+        out(f"  {'parameter':<16}" + "".join(f"{label:>{width}}" for _, label in names) + "\n")
         for p in free:
             cells = []
             for key, _ in names:
                 value = next(q.value for a in outcomes[key].refined.sequence.actions for q in a.params if q.id == p.id)
                 cells.append(f"{value:.3f} ({math.degrees(value):.0f}°)" if p.name.startswith("phi") else f"{value:.3f}")
-            out(f"  {p.id:<16}" + "".join(f"{c:>28}" for c in cells) + "\n")
+            out(f"  {p.id:<16}" + "".join(f"{c:>{width}}" for c in cells) + "\n")
     simulate = all(outcomes[k].simulated is not None for k, _ in names)
     out("\nDurations (s), predicted" + (" / simulated" if simulate else "") + ":\n")
-    out(f"  {'action':<24}" + "".join(f"{label:>28}" for _, label in names) + "\n")
+    out(f"  {'action':<24}" + "".join(f"{label:>{width}}" for _, label in names) + "\n")
     for k, action in enumerate(prepared.sequence.actions):
         cells = []
         for key, _ in names:
@@ -162,7 +163,7 @@ def _print_text(prepared, method: str, outcomes: dict, decision=None) -> None:
                 if k < len(res) and res[k].outcome != "success":
                     cell += f" ({res[k].outcome})"
             cells.append(cell)
-        out(f"  {str(action.step) + ' ' + action.action:<24}" + "".join(f"{c:>28}" for c in cells) + "\n")
+        out(f"  {str(action.step) + ' ' + action.action:<24}" + "".join(f"{c:>{width}}" for c in cells) + "\n")
     totals = []
     for key, _ in names:
         o = outcomes[key]
@@ -170,7 +171,7 @@ def _print_text(prepared, method: str, outcomes: dict, decision=None) -> None:
         if simulate:
             cell += f" / {o.simulated.duration:.2f}"
         totals.append(cell)
-    out(f"  {'total':<24}" + "".join(f"{c:>28}" for c in totals) + "\n")
+    out(f"  {'total':<24}" + "".join(f"{c:>{width}}" for c in totals) + "\n")
     if len(names) == 2:
         g, r = outcomes["greedy"], outcomes["refined"]
         line = f"\nImprovement of refined over greedy: predicted {100 * (1 - r.refined.predicted_total / g.refined.predicted_total):.1f}%"
