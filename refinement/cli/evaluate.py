@@ -215,18 +215,17 @@ def _evaluate(args: argparse.Namespace) -> int:
         from tailor.refinement.models.meta_model import load_meta_model
 
         load_meta_model(source.path)
+    models = None
     if items:  # the models are loaded here once, so a missing or bad model file fails before any work
         job, _, objects = items[0]
-        job_models(job, situation_sequence(job, objects))
+        models = job_models(job, situation_sequence(job, objects)).values()
     announce_models("evaluate", source)
     risk = 0.0 if args.risk is None else args.risk
-    if items:  # the risk lambda (the default only where every model stores its uncertainty), checked before work
+    if models is not None:  # the risk lambda (the default only where every model stores its uncertainty)
         import logging
 
         from tailor.refinement.refine import resolve_risk
 
-        job, _, objects = items[0]
-        models = job_models(job, situation_sequence(job, objects)).values()
         risk, note = resolve_risk(args.risk, models)
         if note:
             logging.getLogger(__name__).warning("%s", note)

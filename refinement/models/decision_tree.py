@@ -64,8 +64,20 @@ class LeafBox:
         return np.all((X > self.lower) & (X <= self.upper), axis=1)
 
 
+class _Routed:
+    """What every tree stored as arrays (children_left, children_right, feature, threshold) does alike."""
+
+    @property
+    def n_leaves(self) -> int:
+        return int(np.sum(self.children_left == LEAF))
+
+    def apply(self, X: np.ndarray) -> np.ndarray:
+        """The leaf index reached by each row of X (n, f)."""
+        return route(self.children_left, self.children_right, self.feature, self.threshold, X)
+
+
 @dataclass(frozen=True, eq=False)
-class DecisionTree:
+class DecisionTree(_Routed):
     """A binary decision tree predicting success (True) or failure (False) per leaf."""
 
     children_left: np.ndarray  # (nodes,) int, -1 at leaves
@@ -78,14 +90,6 @@ class DecisionTree:
     def __post_init__(self) -> None:
         check_structure(self.children_left, self.children_right,
                         {name: getattr(self, name) for name in ("feature", "threshold", "success", "samples")})
-
-    @property
-    def n_leaves(self) -> int:
-        return int(np.sum(self.children_left == LEAF))
-
-    def apply(self, X: np.ndarray) -> np.ndarray:
-        """The leaf index reached by each row of X (n, f)."""
-        return route(self.children_left, self.children_right, self.feature, self.threshold, X)
 
     def predict(self, X: np.ndarray) -> np.ndarray:
         return self.success[self.apply(X)]
@@ -169,7 +173,7 @@ class DecisionTree:
 
 
 @dataclass(frozen=True, eq=False)
-class LabelTree:
+class LabelTree(_Routed):
     """A binary decision tree predicting one of the named `classes` per leaf (`label`: the class index), with
     the training examples of each class that reached every node (`counts`, (nodes, classes))."""
 
@@ -195,14 +199,6 @@ class LabelTree:
             raise ValueError("counts must not be negative")
         if not np.all(np.isfinite(self.threshold)):
             raise ValueError("thresholds must be finite numbers")
-
-    @property
-    def n_leaves(self) -> int:
-        return int(np.sum(self.children_left == LEAF))
-
-    def apply(self, X: np.ndarray) -> np.ndarray:
-        """The leaf index reached by each row of X (n, f)."""
-        return route(self.children_left, self.children_right, self.feature, self.threshold, X)
 
     def predict(self, X: np.ndarray) -> np.ndarray:
         """The class name predicted for each row of X (n, f)."""

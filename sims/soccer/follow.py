@@ -135,8 +135,9 @@ class Follower:
 
     def path_command(self, path: DubinsPath, v: float, vg: float) -> tuple[float, float]:
         """[v, phidot] along the first segment of `path`, a Dubins path from the axle to the pre-pose (mode 3)."""
-        v_target, curvature = self._along_path(path, v, vg, self.decel_plan)
-        bound = self._along_path(path, v, vg, self.decel_limit)[0] if self.bounded_braking else None
+        curvature = self._path_curvature(path, v)
+        v_target = self._path_speed(path, v, vg, self.decel_plan, curvature)
+        bound = self._path_speed(path, v, vg, self.decel_limit, curvature) if self.bounded_braking else None
         return self.limited(v_target, curvature * max(0.0, v), v, bound)  # the actual speed: braking lags v_target
 
     def limited(self, v_target: float, w: float, v: float, bound: float | None = None) -> tuple[float, float]:
@@ -147,9 +148,8 @@ class Follower:
             braked = bound
         return max(v_target, braked, 0.0), clip(w, self.w_limit)
 
-    def _along_path(self, path: DubinsPath, v: float, vg: float, decel: float) -> tuple[float, float]:
-        """Target speed (braking at `decel` for every arc and the end) and curvature on the first segment of a
-        Dubins path ending at the pre-pose."""
+    def _path_curvature(self, path: DubinsPath, v: float) -> float:
+        """The curvature commanded on the first segment of a Dubins path ending at the pre-pose."""
         curvature = path.curvature(0)
         span = min(CORRECTION_MAX, max(CORRECTION_MIN, CORRECTION_SHARE * path.lengths[1]))
         if curvature != 0.0 and path.word[1] == "S" and path.lengths[1] > span:
@@ -158,6 +158,10 @@ class Follower:
             curvature = math.copysign(min(abs(curvature), path.lengths[0] / path.radius / span), curvature)
         elif curvature == 0.0 and path.lengths[0] < self.lead_time * v:
             curvature = path.curvature(1) * (1.0 - path.lengths[0] / (self.lead_time * v))
+        return curvature
+
+    def _path_speed(self, path: DubinsPath, v: float, vg: float, decel: float, curvature: float) -> float:
+        """Target speed on that path, braking at `decel` in time for every arc and the end."""
         v_target = profile_speed(path.length + self.final_straight, vg, self.v_top, decel)
         arc_speed = self.w_plan * path.radius
         travelled = -self.lead_time * v  # the arc is begun this early
@@ -168,4 +172,4 @@ class Follower:
             travelled += path.lengths[seg]
         if curvature != 0.0:
             v_target = max(v_target, self.v_creep)
-        return v_target, curvature
+        return v_target
