@@ -92,7 +92,7 @@ def plan(domain, problem=None, *, planner: str = DEFAULT_PLANNER, timeout: float
 def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 2, optimizer: str = "analytic",
            seed: int = 0, models: str | Path | None = None, planner: str = DEFAULT_PLANNER,
            timeout: float | None = None, assertion: bool = True, filter: bool | None = None,
-           risk: float | None = None) -> Refinement:
+           risk: float | None = None, neighbourhood: float | None = None) -> Refinement:
     """Plan (unless `plan` is given: ours, or a SequentialPlan / PartialOrderPlan of any UP engine),
     instantiate (Alg. 3), assert subgoals where a success model predicts failure (Alg. 5; unless `assertion`
     is False) and refine over `horizon` actions (Sec. 5.4; 1 is greedy), as `tailor refine` does.
@@ -105,7 +105,9 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     makes execution faster, else keep the greedy (h = 1) parameterization (Sec. 5.5.4); `.filter` says which
     and why. `risk` is lambda of the risk-aware objective, expected duration + lambda * uncertainty (None:
     refine.DEFAULT_RISK where every model stores its uncertainty, else 0 with a warning; an explicit lambda > 0
-    needs it, see models.uncertainty); greedy (h = 1) stays plain."""
+    needs it, see models.uncertainty); `neighbourhood` the share of each free range around a choice whose
+    worst predicted time is minimized (None: the binding's `[evaluation] neighbourhood`, else 0); greedy (h = 1)
+    stays plain."""
     from tailor.planner_bridge import resolve_domain_dir, resolve_problem
     from tailor.refinement.belief import belief_path_for, load_belief, parse_belief
     from tailor.refinement.binding import load_domain_binding
@@ -114,7 +116,7 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     from tailor.refinement.models.action_models import load_action_models
     from tailor.refinement.optimizers import OPTIMIZERS
     from tailor.refinement.pipeline import assert_task, success_models_in
-    from tailor.refinement.refine import check_risk, resolve_risk
+    from tailor.refinement.refine import check_neighbourhood, check_risk, resolve_risk
     from tailor.refinement.refine import refine as refine_sequence
 
     _check(domain, (str, Path), "domain")
@@ -130,6 +132,10 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
         if isinstance(risk, bool) or not isinstance(risk, (int, float)):
             raise ArgumentTypeError(f"risk must be a number or None, not {type(risk).__name__}")
         check_risk(risk)
+    if neighbourhood is not None:
+        if isinstance(neighbourhood, bool) or not isinstance(neighbourhood, (int, float)):
+            raise ArgumentTypeError(f"neighbourhood must be a number or None, not {type(neighbourhood).__name__}")
+        check_neighbourhood(neighbourhood)
     if optimizer not in OPTIMIZERS:
         raise ArgumentValueError(f"optimizer must be one of {', '.join(sorted(OPTIMIZERS))}, not {optimizer!r}")
     domain_dir = resolve_domain_dir(domain)
@@ -166,6 +172,10 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
         from tailor.refinement.evaluation.experiments import binding_filter
 
         filter = binding_filter(binding)
+    if neighbourhood is None:
+        from tailor.refinement.evaluation.experiments import binding_neighbourhood
+
+        neighbourhood = binding_neighbourhood(binding)
     meta = None
     if filter:
         from tailor.refinement.models.meta_model import load_meta_model
@@ -190,7 +200,7 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
         if not decision.refine:
             return Refinement(abstract, sequence, greedy, source.path, tuple(assertions), decision)
     refined = refine_sequence(sequence, action_models, horizon=horizon, method=optimizer, seed=seed,
-                              success_models=success_models, risk=risk)
+                              success_models=success_models, risk=risk, neighbourhood=neighbourhood)
     return Refinement(abstract, sequence, refined, source.path, tuple(assertions), decision)
 
 

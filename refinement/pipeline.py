@@ -133,8 +133,8 @@ class Outcome:
 
 
 def refine_and_dispatch(prepared: Prepared, horizon: int, method: str, seed: int, simulate: bool,
-                        risk: float = 0.0) -> Outcome:
+                        risk: float = 0.0, neighbourhood: float = 0.0) -> Outcome:
     refined = refine(prepared.sequence, prepared.models, horizon=horizon, method=method, seed=seed,
-                     success_models=prepared.success_models, risk=risk)
+                     success_models=prepared.success_models, risk=risk, neighbourhood=neighbourhood)
     simulated = dispatch(refined.sequence, seed=seed) if simulate else None
     return Outcome(refined, simulated)

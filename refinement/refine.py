@@ -7,8 +7,12 @@ action that reaches it only.
 
 Beyond the dissertation: with a risk lambda > 0 each action's predicted duration is charged lambda times its
 uncertainty (the held-out spread of the leaf it comes from, models.uncertainty), so the optimizer stops
-chasing subgoals the models do not know; and every choice keeps a margin (MARGIN_SHARE of each free range)
-from the splits of the models, so no chosen subgoal sits on a knife edge between two leaves.
+chasing subgoals the models do not know; every choice keeps a margin (MARGIN_SHARE of each free range)
+from the splits of the models, so no chosen subgoal sits on a knife edge between two leaves; and with a
+neighbourhood (a share of each free range, the size of the execution noise: the binding's `[evaluation]
+neighbourhood`) the optimizers minimize the worst predicted sum within it around a choice, so they stop
+choosing a dip of the models narrower than the robot can hit (a subgoal whose next action's planned path
+changes word a few degrees away).
 """
 
 from __future__ import annotations
@@ -45,6 +49,7 @@ class RefinedSequence:
     horizon: int
     risk: float = 0.0  # lambda of the objective: expected duration + lambda * uncertainty
     spread: tuple[float, ...] | None = None  # per action, its model's uncertainty (s); None where one has none
+    neighbourhood: float = 0.0  # share of each free range whose worst predicted case was minimized (0: the point)
 
     @property
     def predicted_total(self) -> float:
@@ -168,6 +173,12 @@ def resolve_risk(risk: float | None, models) -> tuple[float, str]:
     return float(risk), ""
 
 
+def check_neighbourhood(share: float) -> None:
+    """A neighbourhood is a share of each free range in [0, 0.5)."""
+    if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0.0 <= share < 0.5:
+        raise ArgumentValueError(f"the neighbourhood must be a share of each free range in [0, 0.5), not {share!r}")
+
+
 def check_risk(risk: float) -> None:
     """A risk lambda must be a finite number >= 0 (0: plain expected duration)."""
     if isinstance(risk, bool) or not isinstance(risk, (int, float)) or not 0.0 <= risk < float("inf"):
@@ -208,9 +219,10 @@ def predicted_spreads(sequence: ActionSequence, models: Mapping[str, ActionModel
 
 def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon: int = 2,
            method: str = "analytic", seed: int = 0, success_models: Mapping[str, object] | None = None,
-           risk: float = 0.0, margin_share: float = MARGIN_SHARE) -> RefinedSequence:
+           risk: float = 0.0, margin_share: float = MARGIN_SHARE, neighbourhood: float = 0.0) -> RefinedSequence:
     """Bind every free parameter of `sequence`, h actions at a time, minimizing summed predicted duration
-    (plus `risk` times the summed uncertainty), each choice `margin_share` of its range from the models' splits.
+    (plus `risk` times the summed uncertainty), each choice `margin_share` of its range from the models' splits;
+    with `neighbourhood` > 0, the worst of that sum within that share of each free range around a choice.
 
     Guarded actions (subgoal assertion) take their success classifier from `success_models` by name: the
     optimizers consider only parameterizations it predicts to succeed (Alg. 6).
@@ -220,6 +232,7 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
     check_risk(risk)
     if not 0.0 <= margin_share < 0.5:
         raise ValueError(f"the margin must be a share of a free range in [0, 0.5), not {margin_share!r}")
+    check_neighbourhood(neighbourhood)
     actions = sequence.actions
     if risk:  # every model the sequence uses must know its uncertainty: say so before any work
         for action in actions:
@@ -253,7 +266,9 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
         terms += tuple(guard_term(a, model_for(a, models), free_t, assignment, guard_for(a, success_models))
                        for a in beyond)
         margin = tuple(margin_share * (p.high - p.low) for p in free_t)
-        result = optimize(Objective(free=free_t, terms=terms, margin=margin), method=method, seed=seed + i)
+        radius = tuple(neighbourhood * (p.high - p.low) for p in free_t) if neighbourhood else ()
+        result = optimize(Objective(free=free_t, terms=terms, margin=margin, neighbourhood=radius),
+                          method=method, seed=seed + i)
         windows.append(result)
         chosen = dict(zip((p.id for p in free_t), result.values))
         for p in actions[i].params:  # fix what action i uses; later subgoals are optimized again
@@ -261,4 +276,5 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
                 assignment[p.id] = float(chosen[p.id])
     bound = sequence.bind(assignment)
     return RefinedSequence(sequence=bound, predicted=predicted_durations(bound, models), windows=tuple(windows),
-                           horizon=horizon, risk=float(risk), spread=predicted_spreads(bound, models))
+                           horizon=horizon, risk=float(risk), spread=predicted_spreads(bound, models),
+                           neighbourhood=float(neighbourhood))

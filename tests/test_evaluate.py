@@ -55,7 +55,8 @@ def test_zero_baseline_is_paired_with_refined_where_both_succeeded():
 
 
 def test_the_evaluation_plan_is_data_in_the_binding():
-    assert evaluation_plan(load_domain_binding(DOMAINS_DIR / "soccer")) == EvaluationPlan("score", "waypoints", False, "approach")
+    soccer = evaluation_plan(load_domain_binding(DOMAINS_DIR / "soccer"))
+    assert soccer == EvaluationPlan("score", "waypoints", False, "approach", neighbourhood=0.02)
     head = 'schema = 2\nsimulator = "soccer"\n'
     for table, message in (("", r"\[evaluation\] missing"),
                            ('[evaluation]\ncomparison = "tour"\n',
@@ -64,7 +65,9 @@ def test_the_evaluation_plan_is_data_in_the_binding():
                            ('[evaluation]\ncomparison = "score"\nhorizon = "waypoints"\n',
                             r"\[evaluation\] unknown key 'horizon'"),
                            ('[evaluation]\ncomparison = "score"\nzero_baseline = 1\n',
-                            r"\[evaluation\] zero_baseline must be true or false, not 1")):
+                            r"\[evaluation\] zero_baseline must be true or false, not 1"),
+                           ('[evaluation]\ncomparison = "score"\nneighbourhood = -0.1\n',
+                            r"\[evaluation\] neighbourhood must be a share of each free range in \[0, 0.5\), not -0.1")):
         with pytest.raises(BindingError, match=r"^e.toml: " + message):
             evaluation_plan(parse_binding(tomllib.loads(head + table), "e.toml"))
     only = parse_binding(tomllib.loads(head + '[evaluation]\ncomparison = "waypoints"\nzero_baseline = true\n'))

@@ -23,9 +23,11 @@ from tailor.refinement.models.decision_tree import LabelTree
 from tailor.refinement.models.meta_model import MetaModel, load_meta_model
 
 SOCCER = DOMAINS_DIR / "soccer"
-WINDOW = (("goToPose", "pose"), ("dribbleBall", "pose"))
-NAMES = tuple(f"{k}.{a}.{n}" for k, a in ((1, "goToPose"), (2, "dribbleBall"))
-              for n in ("v", "vg", "dist", "angle_to", "angle_at"))
+WINDOW = (("goToPose", "pose"), ("dribbleBall", "dribble"))
+POSE = ("v", "vg", "dist", "angle_to", "angle_at")
+NAMES = tuple(f"{k}.{a}.{n}" for k, a, names in ((1, "goToPose", POSE), (2, "dribbleBall", POSE + ("path", "arcs",
+                                                                                                 "exact_path")))
+              for n in names)
 
 
 def _row(greedy, refined, features=None, ok=(True, True)):

@@ -237,7 +237,7 @@ def test_refine_cli_charges_the_uncertainty_with_risk(capsys):
 
     runs = {}
     for risk in ("0", "1.5"):
-        assert main(["refine", "soccer", "score", "--risk", risk, "--json"]) == 0
+        assert main(["refine", "soccer", "score", "--risk", risk, "--neighbourhood", "0", "--json"]) == 0
         runs[risk] = json.loads(capsys.readouterr().out)
     plain, risky = runs["0"]["refined"], runs["1.5"]["refined"]
     assert (plain["risk"], risky["risk"], runs["1.5"]["greedy"]["risk"]) == (0.0, 1.5, 0.0)  # greedy stays plain

@@ -60,7 +60,7 @@ def test_each_round_chooses_subgoals_with_the_model_the_round_before_retrained(m
         return [SimpleNamespace(action=action, succeeded=True, index=first + i) for i in range(situations)]
 
     def train(action, episodes, seed, feature_set, observed, **kwargs):
-        assert (feature_set, observed) == ("pose", ("x", "y", "phi", "v"))
+        assert (feature_set, observed) == ("dribble", ("x", "y", "phi", "v"))
         model = f"model {len(trained)} on {len(episodes)}"
         trained.append(model)
         return SimpleNamespace(model=model)

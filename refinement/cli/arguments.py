@@ -124,6 +124,27 @@ def add_risk_argument(parser: argparse.ArgumentParser) -> None:
                              "uncertainty, else 0; 0 is plain refinement)")
 
 
+def add_neighbourhood_argument(parser: argparse.ArgumentParser) -> None:
+    """--neighbourhood SHARE: the refined sequence minimizes the worst predicted time within SHARE of each free
+    range around a choice (greedy stays plain)."""
+    parser.add_argument("--neighbourhood", type=neighbourhood_share, default=None, metavar="SHARE",
+                        help="minimize the worst predicted duration within SHARE of each free parameter's range "
+                             "around a choice (the size of the execution noise), so refinement does not choose a "
+                             "dip of the models narrower than the robot can hit; the greedy baseline stays plain "
+                             "(default: the binding's [evaluation] neighbourhood, else 0)")
+
+
+def neighbourhood_share(text: str) -> float:
+    """A number in [0, 0.5)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0.0 <= value < 0.5:
+        raise argparse.ArgumentTypeError(f"must be a share of each free range in [0, 0.5), not {text}")
+    return value
+
+
 def risk_lambda(text: str) -> float:
     """A finite number >= 0."""
     try:

@@ -9,6 +9,7 @@ from tailor.refinement.cli.arguments import (
     add_backend_arguments,
     add_filter_arguments,
     add_models_argument,
+    add_neighbourhood_argument,
     add_risk_argument,
     announce_models,
     backend_session,
@@ -58,6 +59,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "or the user data folder with copies of the bundled models)")
     add_filter_arguments(parser)
     add_risk_argument(parser)
+    add_neighbourhood_argument(parser)
     parser.add_argument("--risk-sweep", type=_lambdas, default=(), metavar="LIST",
                         help="also refine every situation with each of these risk lambdas (comma-separated, e.g. "
                              "0,0.5,1,2) and report them side by side on the same situations, greedy runs and oracle")
@@ -231,12 +233,14 @@ def _evaluate(args: argparse.Namespace) -> int:
             logging.getLogger(__name__).warning("%s", note)
         if any(args.risk_sweep):
             resolve_risk(max(args.risk_sweep), models)
+    neighbourhood = plan.neighbourhood if args.neighbourhood is None else args.neighbourhood
     rows = run_in_workers(comparison_episode, [(job, i, objects, i < args.oracle_episodes, plan.zero_baseline,
-                                                use_filter, risk, args.risk_sweep)
+                                                use_filter, risk, args.risk_sweep, neighbourhood)
                                                for job, i, objects in items], args.jobs, "greedy vs refined",
                           getattr(args, "progress", True))
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
-              "models": str(source.path), "comparison": plan.comparison, "filter": use_filter, "risk": risk}
+              "models": str(source.path), "comparison": plan.comparison, "filter": use_filter, "risk": risk,
+              "neighbourhood": neighbourhood}
     report.update(summarize_comparison(rows))
     if args.risk_sweep:
         report["risk_sweep"] = summarize_risk_sweep(rows)

@@ -141,12 +141,22 @@ def run_meta(args: argparse.Namespace, domain_dir: Path, binding, plan, source) 
     if train_items:  # models loaded once up front: a missing or bad model file fails before any work
         job, _, objects = train_items[0]
         job_models(job, situation_sequence(job, objects))
+    risk = 0.0 if args.risk is None else args.risk
+    if train_items:  # the refinement judged is the one `tailor evaluate` and `tailor refine` run
+        from tailor.refinement.refine import resolve_risk
+
+        risk, note = resolve_risk(args.risk, job_models(job, situation_sequence(job, objects)).values())
+        if note:
+            logging.getLogger(__name__).warning("%s", note)
+    neighbourhood = plan.neighbourhood if args.neighbourhood is None else args.neighbourhood
     announce_models("evaluate", source)
     progress = getattr(args, "progress", True)
-    train_rows = run_in_workers(meta_episode, [(j, i, o, META_HORIZON) for j, i, o in train_items], args.jobs,
-                                "meta: training episodes", progress)
-    fresh_rows = run_in_workers(meta_episode, [(j, i, o, META_HORIZON) for j, i, o in fresh_items], args.jobs,
-                                "meta: fresh episodes", progress)
+    train_rows = run_in_workers(meta_episode, [(j, i, o, META_HORIZON, risk, neighbourhood)
+                                               for j, i, o in train_items], args.jobs, "meta: training episodes",
+                                progress)
+    fresh_rows = run_in_workers(meta_episode, [(j, i, o, META_HORIZON, risk, neighbourhood)
+                                               for j, i, o in fresh_items], args.jobs, "meta: fresh episodes",
+                                progress)
     training = learn_meta_model(train_rows, META_HORIZON, seed=args.seed, cost=args.worse_cost)
     fresh = fresh_report(training.model, fresh_rows)
     model = training.model
@@ -171,6 +181,7 @@ def run_meta(args: argparse.Namespace, domain_dir: Path, binding, plan, source) 
         files.append(str(draw_meta_model(Path(args.plot), training, fresh_rows)))
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
               "models": str(source.path), "generator": plan.comparison, "horizon": META_HORIZON,
+              "risk": risk, "neighbourhood": neighbourhood,
               "equal_band": model.equal_band, "features": list(model.feature_names),
               "window": [{"action": a, "feature_set": s} for a, s in model.window],
               "training": {**training.report, "situations": [0, train_n], "cv_folds": CV_FOLDS,

@@ -15,6 +15,7 @@ import time
 from tailor.refinement.cli.arguments import (
     add_filter_arguments,
     add_models_argument,
+    add_neighbourhood_argument,
     add_risk_argument,
     announce_models,
     positive_seconds,
@@ -47,6 +48,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_filter_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
     add_risk_argument(parser)
+    add_neighbourhood_argument(parser)
 
 
 def _fmt_param(p) -> str:
@@ -79,7 +81,8 @@ def _execution_json(outcome, success_models=None) -> dict:
     if refined.spread is not None:  # each action's uncertainty (models.uncertainty) at the chosen values
         for entry, spread in zip(actions, refined.spread):
             entry["uncertainty"] = round(spread, 4)
-    data = {"horizon": refined.horizon, "risk": refined.risk, "actions": actions, "predicted_total": round(refined.predicted_total, 4),
+    data = {"horizon": refined.horizon, "risk": refined.risk, "neighbourhood": refined.neighbourhood, "actions": actions,
+            "predicted_total": round(refined.predicted_total, 4),
             "optimization": [{"method": w.method, "cost": round(w.cost, 4), "evaluations": w.evaluations,
                               "seconds": w.seconds, "note": w.note} for w in refined.windows]}
     if simulated is not None:
@@ -134,10 +137,11 @@ def _print_text(prepared, method: str, outcomes: dict, decision=None) -> None:
     if decision is not None:
         out(f"Meta filter (Sec. 5.5.4): {decision.reason}\n")
     free = prepared.sequence.free_parameters()
-    risk = outcomes["refined"].refined.risk
+    risk, around = outcomes["refined"].refined.risk, outcomes["refined"].refined.neighbourhood
     names = [("greedy", "greedy (h=1)"),
              ("refined", f"refined (h={outcomes['refined'].refined.horizon}, {method}"
-                         + (f", risk {risk:g})" if risk else ")"))]
+                         + (f", risk {risk:g}" if risk else "") + (f", neighbourhood {around:g}" if around else "")
+                         + ")")]
     names = [(k, label) for k, label in names if k in outcomes]
     width = max(28, *(len(label) + 2 for _, label in names))  # a column per execution, its label fits
     if free:
@@ -204,7 +208,8 @@ def _nothing_to_refine(prepared, args: argparse.Namespace, simulate: bool) -> in
     if args.plot:
         logging.getLogger(__name__).warning("%s not written: %s", args.plot, NOTHING_TO_REFINE)
     if args.json:
-        execution = {"horizon": args.horizon, "risk": args.risk or 0.0, "actions": [], "predicted_total": 0.0,
+        execution = {"horizon": args.horizon, "risk": args.risk or 0.0, "neighbourhood": args.neighbourhood or 0.0,
+                     "actions": [], "predicted_total": 0.0,
                      "optimization": []}
         if simulate:
             execution.update(simulated_total=0.0, succeeded=True)
@@ -214,7 +219,8 @@ def _nothing_to_refine(prepared, args: argparse.Namespace, simulate: bool) -> in
         data = {"domain": plan.domain, "problem": plan.problem, "planner": plan.planner, "optimizer": args.optimizer,
                 "horizon": args.horizon, "seed": args.seed, "models": str(prepared.task.models_dir),
                 "plan": plan.to_json(), "free_parameters": [],
-                "refined": execution, "greedy": {**execution, "horizon": 1, "risk": 0.0}, "note": NOTHING_TO_REFINE}
+                "refined": execution, "greedy": {**execution, "horizon": 1, "risk": 0.0, "neighbourhood": 0.0},
+                "note": NOTHING_TO_REFINE}
         sys.stdout.write(json.dumps(versioned("refine", data), indent=1, allow_nan=False) + "\n")
     else:
         from tailor.planner_bridge import render_text
@@ -276,6 +282,11 @@ def run(args: argparse.Namespace) -> int:
     risk, note = resolve_risk(args.risk, prepared.models.values())
     if note:
         log.warning("%s", note)
+    neighbourhood = args.neighbourhood
+    if neighbourhood is None:
+        from tailor.refinement.evaluation.experiments import binding_neighbourhood
+
+        neighbourhood = binding_neighbourhood(prepared.binding)
     method, seed = args.optimizer, args.seed
     decision = None
     with showing_progress(getattr(args, "progress", True)):  # the genetic algorithm takes seconds per window
@@ -285,7 +296,8 @@ def run(args: argparse.Namespace) -> int:
 
             decision = decide(meta, outcomes["greedy"].refined.sequence, prepared.models)
         refined = decision is None or decision.refine
-        outcomes["refined"] = (refine_and_dispatch(prepared, args.horizon, method, seed, simulate, risk) if refined
+        outcomes["refined"] = (refine_and_dispatch(prepared, args.horizon, method, seed, simulate, risk,
+                                                   neighbourhood) if refined
                                else outcomes["greedy"])
     log.debug("refined greedy and with h=%d%s in %.2f s", args.horizon,
               " and simulated both" if simulate else "", time.perf_counter() - started)

@@ -11,6 +11,9 @@ parameter zero, and the horizons 1-4 (Table 5.3), for any domain whose binding n
     filter = false           # refine only where the meta action model (models/meta.json) predicts "better"
                              # (Sec. 5.5.4), in `tailor refine`, `tailor evaluate` and `tailor.refine`; the
                              # commands' --filter / --no-filter override it
+    neighbourhood = 0.0      # share of each free range (the execution noise): refinement minimizes the worst
+                             # predicted time within it around a choice, in the same three; --neighbourhood
+                             # overrides it (refine.refine)
 
 Every situation goes through the real pipeline: a random belief state, Algorithm 3 on the problem's plan
 (planned once per problem), subgoal assertion (Alg. 5) where the binding names success models, refinement
@@ -57,6 +60,7 @@ class EvaluationPlan:
     zero_baseline: bool
     assertion: str | None = None  # situation generator of the subgoal assertion experiment (Table 6.1)
     filter: bool = False  # refine only where the meta action model predicts "better" (Sec. 5.5.4)
+    neighbourhood: float = 0.0  # share of each free range whose worst predicted case refinement minimizes
 
 
 def evaluation_plan(binding: Binding) -> EvaluationPlan:
@@ -69,8 +73,9 @@ def evaluation_plan(binding: Binding) -> EvaluationPlan:
     if not table:
         raise fail("missing: the domain's binding names no situations to evaluate on (add an [evaluation] table)")
     for key in table:
-        if key not in ("comparison", "horizons", "zero_baseline", "assertion", "filter"):
-            raise fail(f"unknown key '{key}' (expected comparison, horizons, zero_baseline, assertion, filter)")
+        if key not in ("comparison", "horizons", "zero_baseline", "assertion", "filter", "neighbourhood"):
+            raise fail(f"unknown key '{key}' (expected comparison, horizons, zero_baseline, assertion, filter, "
+                       "neighbourhood)")
     known = binding.entry.situations
     for key in ("comparison", "horizons", "assertion"):
         value = table.get(key)
@@ -83,7 +88,7 @@ def evaluation_plan(binding: Binding) -> EvaluationPlan:
     if not isinstance(zero, bool):
         raise fail(f"zero_baseline must be true or false, not {zero!r}")
     return EvaluationPlan(table["comparison"], table.get("horizons"), zero, table.get("assertion"),
-                          binding_filter(binding))
+                          binding_filter(binding), binding_neighbourhood(binding))
 
 
 def binding_filter(binding: Binding) -> bool:
@@ -92,6 +97,16 @@ def binding_filter(binding: Binding) -> bool:
     if not isinstance(value, bool):
         raise BindingError(f"[evaluation] filter must be true or false, not {value!r}", file=binding.file)
     return value
+
+
+def binding_neighbourhood(binding: Binding) -> float:
+    """The binding's `[evaluation] neighbourhood` (default 0): the share of each free range around a choice
+    whose worst predicted time refinement minimizes."""
+    value = dict(binding.evaluation).get("neighbourhood", 0.0)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= value < 0.5:
+        raise BindingError(f"[evaluation] neighbourhood must be a share of each free range in [0, 0.5), not {value!r}",
+                           file=binding.file)
+    return float(value)
 
 
 def situation_seed(seed: int, index: int) -> int:
@@ -104,7 +119,7 @@ def zero_assignment(sequence: ActionSequence) -> dict[str, float]:
 
 
 def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: bool, meta: bool = False,
-                       risk: float = 0.0, sweep: tuple[float, ...] = ()) -> dict:
+                       risk: float = 0.0, sweep: tuple[float, ...] = (), neighbourhood: float = 0.0) -> dict:
     """One situation: greedy, refined (analytic and ga; with the risk lambda `risk`), optionally the zero
     baseline, the oracle, and the refined sequence with each risk lambda of `sweep` (analytic), all dispatched
     with the same simulator seed. With `meta`, the refined execution is the greedy one where the meta model
@@ -114,13 +129,14 @@ def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: 
     sequence, success = asserted_situation(job, objects)
     models = job_models(job, sequence)
     greedy = refine(sequence, models, horizon=1, method="analytic", seed=seed, success_models=success)
-    optimized = refine(sequence, models, horizon=2, method="analytic", seed=seed, success_models=success, risk=risk)
+    optimized = refine(sequence, models, horizon=2, method="analytic", seed=seed, success_models=success, risk=risk,
+                       neighbourhood=neighbourhood)
     decision = decide(job_meta_model(job), greedy.sequence, models) if meta else None
     refined = optimized if decision is None or decision.refine else greedy
     # where the analytic minimization fell back to the GA everywhere, the GA run is that same run
     fell_back = optimized.windows and all(w.method == "ga" for w in optimized.windows)
     genetic = optimized if fell_back else refine(sequence, models, horizon=2, method="ga", seed=seed,
-                                                 success_models=success, risk=risk)
+                                                 success_models=success, risk=risk, neighbourhood=neighbourhood)
     g, r = dispatch(greedy.sequence, seed=seed), dispatch(refined.sequence, seed=seed)
     out = {"index": index, "seed": seed, "problem": job.plan.problem,
            "greedy": g.duration, "refined": r.duration, "greedy_ok": g.succeeded, "refined_ok": r.succeeded,
@@ -139,7 +155,7 @@ def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: 
         out["sweep"] = {}
         for lam in sweep:
             at = optimized if lam == risk else refine(sequence, models, horizon=2, method="analytic", seed=seed,
-                                                      success_models=success, risk=lam)
+                                                      success_models=success, risk=lam, neighbourhood=neighbourhood)
             result = dispatch(at.sequence, seed=seed) if at is not refined else r
             out["sweep"][repr(float(lam))] = {"refined": result.duration, "refined_ok": result.succeeded,
                                               "refined_outcome": outcome_of(result),

@@ -25,14 +25,17 @@ def label_gain(gain: float, band: float = EQUAL_BAND) -> str:
     return "better" if gain > band else "worse" if gain < -band else "equal"
 
 
-def meta_episode(job: Job, index: int, objects: dict, horizon: int) -> dict:
-    """One situation: greedy and refined (analytic, `horizon`), both dispatched with the situation's seed; the
-    first window's features at the greedy parameterization."""
+def meta_episode(job: Job, index: int, objects: dict, horizon: int, risk: float = 0.0,
+                 neighbourhood: float = 0.0) -> dict:
+    """One situation: greedy and refined (analytic, `horizon`, with the risk lambda and neighbourhood the
+    filtered refinement uses), both dispatched with the situation's seed; the first window's features at the
+    greedy parameterization."""
     seed = situation_seed(job.seed, index)
     sequence, success = asserted_situation(job, objects)
     models = job_models(job, sequence)
     greedy = refine(sequence, models, horizon=1, method="analytic", seed=seed, success_models=success)
-    refined = refine(sequence, models, horizon=horizon, method="analytic", seed=seed, success_models=success)
+    refined = refine(sequence, models, horizon=horizon, method="analytic", seed=seed, success_models=success,
+                     risk=risk, neighbourhood=neighbourhood)
     g, r = dispatch(greedy.sequence, seed=seed), dispatch(refined.sequence, seed=seed)
     features = window_features(greedy.sequence, models, horizon)
     return {"index": index, "seed": seed, "problem": job.plan.problem, "situation": objects,

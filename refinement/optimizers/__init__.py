@@ -46,7 +46,8 @@ def _analytic_or_ga(objective: Objective, seed: int = 0) -> OptimizationResult:
     except NotApplicable as why:
         log.debug("analytic minimization not applicable (%s): the genetic algorithm instead", why)
         result = genetic.minimize(objective, seed)
-        return replace(result, seconds=time.perf_counter() - start, note=f"analytic not applicable: {why}")
+        return replace(result, seconds=time.perf_counter() - start,
+                       note=f"analytic not applicable: {why}" + (f"; {result.note}" if result.note else ""))
 
 
 OPTIMIZERS: dict[str, Callable[[Objective, int], OptimizationResult]] = {

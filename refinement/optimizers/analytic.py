@@ -203,6 +203,9 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
     nudged = np.where(interior, np.clip(corner + inward, lo, hi), corner)
     nudged = np.where(interior & (hi - lo < 2 * np.abs(inward)), (lo + hi) / 2, nudged)
     order = np.argsort(predicted, kind="stable")
+    note = f"{len(lo)} merged rules" + (f", within {regions} success region(s)" if regions else "") + margin_note
+    if any(objective.neighbourhood):
+        return _robust(objective, order, predicted, (lo, hi, corner, nudged), start, note)
     evaluations = 0
     for chunk in range(0, len(order), CANDIDATES):
         pick = order[chunk : chunk + CANDIDATES]
@@ -218,7 +221,37 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
                 method="analytic",
                 evaluations=evaluations,
                 seconds=time.perf_counter() - start,
-                note=f"{len(lo)} merged rules" + (f", within {regions} success region(s)" if regions else "")
-                + margin_note,
+                note=note,
             )
     raise NotApplicable("every corner of the merged rule set is marked invalid")
+
+
+def _robust(objective: Objective, order: np.ndarray, predicted: np.ndarray, boxes, start: float,
+            note: str) -> OptimizationResult:
+    """The neighbourhood's worst case minimized over candidates of every box that could still win: its cheapest
+    corner (and that corner nudged inside), the corner moved the neighbourhood's radius inward (toward the
+    middle where the box is thinner), and its middle. Boxes come cheapest first; since the worst case is never
+    below the box's own minimum, the search stops at the first box whose minimum is above the best worst case."""
+    lo, hi, corner, nudged = boxes
+    radius = np.asarray(objective.neighbourhood, dtype=float)
+    middle = (lo + hi) / 2
+    inset = np.where(corner <= lo, np.minimum(lo + radius, middle), np.maximum(hi - radius, middle))
+    best_cost, best_point, evaluations = np.inf, None, 0
+    for chunk in range(0, len(order), CANDIDATES):
+        pick = order[chunk : chunk + CANDIDATES]
+        if predicted[pick[0]] >= best_cost:
+            break
+        points = np.concatenate([corner[pick], nudged[pick], inset[pick], middle[pick]])
+        valid = objective.valid(points)
+        cost = np.full(len(points), np.inf)
+        if valid.any():
+            cost[valid] = objective.robust_cost(points[valid])
+        evaluations += int(valid.sum()) * (1 + 4 * int(np.count_nonzero(radius)))
+        i = int(np.argmin(cost))
+        if cost[i] < best_cost:
+            best_cost, best_point = float(cost[i]), points[i]
+    if best_point is None:
+        raise NotApplicable("every corner of the merged rule set is marked invalid")
+    return OptimizationResult(values=tuple(float(v) for v in best_point), cost=best_cost, method="analytic",
+                              evaluations=evaluations, seconds=time.perf_counter() - start,
+                              note=note + ", worst case over the neighbourhood")

@@ -148,7 +148,7 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
         population = [box.individual() for _ in range(size)]
         while generation < MAX_GENERATIONS and stall < STALL_GENERATIONS:
             genes = np.array(population, dtype=float)
-            cost = objective.cost(genes)
+            cost = objective.robust_cost(genes)
             valid = objective.valid(genes)
             evaluations += size
             generation += 1
@@ -171,5 +171,6 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
         evaluations=evaluations,
         seconds=time.perf_counter() - start,
         note=f"{generation} generations" + ("" if best_valid else "; no valid parameterization found")
-        + ("; invalid parameterizations get fitness 0" if any(t.valid is not None for t in objective.terms) else ""),
+        + ("; invalid parameterizations get fitness 0" if any(t.valid is not None for t in objective.terms) else "")
+        + ("; worst case over the neighbourhood" if any(objective.neighbourhood) else ""),
     )

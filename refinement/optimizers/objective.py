@@ -48,6 +48,9 @@ class Objective:
     # value on a split may predict another leaf's time once perturbed by execution noise or rounding); the
     # analytic optimizer keeps it inside every leaf box, () keeps none
     margin: tuple[float, ...] = ()
+    # per free parameter: the radius of the neighbourhood a choice is judged by (execution noise): with it the
+    # optimizers minimize `robust_cost`, the worst predicted cost within it; () judges each point alone
+    neighbourhood: tuple[float, ...] = ()
 
     @property
     def low(self) -> np.ndarray:
@@ -65,6 +68,18 @@ class Objective:
             total += np.asarray(term.model.predict(term.features(theta)), dtype=float)
         return total
 
+    def robust_cost(self, theta: np.ndarray) -> np.ndarray:
+        """The worst summed predicted duration (s) within the neighbourhood of each row of theta: over the
+        point and, per free parameter, half and all the radius to either side (kept within the ranges). The
+        point where the models predict a dip narrower than the execution noise is not a subgoal the robot can
+        hit: this is what the optimizers minimize when the objective has a neighbourhood."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        if not any(self.neighbourhood):
+            return self.cost(theta)
+        offsets = neighbourhood_offsets(np.asarray(self.neighbourhood, dtype=float))
+        moved = np.clip(theta[:, None, :] + offsets[None], self.low, self.high).reshape(-1, theta.shape[1])
+        return self.cost(moved).reshape(len(theta), len(offsets)).max(axis=1)
+
     def valid(self, theta: np.ndarray) -> np.ndarray:
         """True where no term's model marks the parameterization invalid (e.g. a predicted failure)."""
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
@@ -73,6 +88,18 @@ class Objective:
             if term.valid is not None:
                 ok &= np.asarray(term.valid(theta), dtype=bool)
         return ok
+
+
+def neighbourhood_offsets(radius: np.ndarray) -> np.ndarray:
+    """(1 + 4 n, n) offsets of a neighbourhood stencil: none, and half and all of each radius to either side."""
+    steps = [np.zeros(len(radius))]
+    for j, r in enumerate(radius):
+        if r > 0:
+            for share in (-1.0, -0.5, 0.5, 1.0):
+                step = np.zeros(len(radius))
+                step[j] = share * r
+                steps.append(step)
+    return np.array(steps)
 
 
 @dataclass(frozen=True)

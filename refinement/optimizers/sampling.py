@@ -27,13 +27,15 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
         valid = objective.valid(theta)
         thetas.append(theta)
         valids.append(valid)
-        costs.append(objective.cost(theta))
+        costs.append(objective.robust_cost(theta))
         n_valid += int(valid.sum())
     theta, cost, valid = np.concatenate(thetas), np.concatenate(costs), np.concatenate(valids)
     best = int(np.lexsort((cost, ~valid))[0])
     note = "" if valid.all() else f"rejection: {int(valid.sum())} of {len(valid)} draws valid"
     if not valid[best]:
         note = "no valid parameterization found"
+    if any(objective.neighbourhood):
+        note = "; ".join(filter(None, [note, "worst case over the neighbourhood"]))
     return OptimizationResult(
         values=tuple(float(v) for v in theta[best]),
         cost=float(cost[best]),

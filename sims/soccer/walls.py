@@ -48,7 +48,7 @@ def _pose_walls(params: np.ndarray) -> np.ndarray:
     return np.column_stack(pose + wall_features(x, y, phi) + wall_features(xg, yg, phig))
 
 
-def _mirror_field(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+def mirror_field(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """The scene mirrored about the x axis, the y axis, or both (a half turn), one of the three at random."""
     out = params.copy()
     flip_y, flip_x = ((True, False), (False, True), (True, True))[int(rng.integers(3))]
@@ -61,4 +61,4 @@ def _mirror_field(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
 
 
 POSE_WALLS = FeatureSpace("pose_walls", PARAMETERS, NAMES, _pose_walls,
-                          "mirroring the field about either axis", _mirror_field)
+                          "mirroring the field about either axis", mirror_field)
