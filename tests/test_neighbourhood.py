@@ -74,19 +74,20 @@ def test_the_analytic_worst_case_is_as_good_as_brute_force_finds(seed):
 
 
 def test_refine_checks_the_share():
-    from test_refine import SCORE, _sequence
     from tailor.refinement.refine import refine
+    from test_refine import SCORE, _sequence
 
     with pytest.raises(ArgumentValueError, match="neighbourhood must be a share"):
         refine(_sequence("score_plan.json", SCORE), {}, neighbourhood=0.5)
 
 
 def test_a_bad_share_in_the_binding_is_one_line(tmp_path):
+    import shutil
+
     from tailor.errors import BindingError
+    from tailor.planner_bridge import resolve_domain_dir
     from tailor.refinement.binding import load_domain_binding
     from tailor.refinement.evaluation.experiments import binding_neighbourhood
-    from tailor.planner_bridge import resolve_domain_dir
-    import shutil
 
     domain = tmp_path / "soccer"
     shutil.copytree(resolve_domain_dir("soccer"), domain, ignore=shutil.ignore_patterns("models", "training"))

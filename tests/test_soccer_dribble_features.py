@@ -8,7 +8,6 @@ import math
 from pathlib import Path
 
 import numpy as np
-
 from tailor.refinement.models.action_models import load_action_models
 from tailor.refinement.models.features import compute_features, feature_space
 from tailor.sims.experience import gather

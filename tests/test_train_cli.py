@@ -139,6 +139,24 @@ def test_only_learns_the_named_models(tmp_path, monkeypatch, capsys):
     assert not (tmp_path / "x").exists()
 
 
+def test_only_a_model_with_subgoal_experience_refines_with_the_domains_others(tmp_path):
+    """--only dribbleBall: its subgoal experience refines `score` situations, which need goToPose (the
+    approach): the domain's own model of it, or OUT's where OUT holds one; never the model being learned."""
+    from tailor.planner_bridge import resolve_domain_dir
+    from tailor.refinement.cli.train import _companions, _only
+    from tailor.refinement.learning.recipe import load_recipe
+
+    domain = resolve_domain_dir("soccer")
+    recipe = _only(load_recipe(domain), ("dribbleBall",))
+    companions = _companions(recipe, tmp_path / "out")
+    assert set(companions) == {"goToPose", "approachBall", "goToPosition"}
+    assert companions["goToPose"].source == str(domain / "models" / "goToPose.json")
+    (tmp_path / "out" / "models").mkdir(parents=True)
+    (tmp_path / "out" / "models" / "goToPose.json").write_bytes((domain / "models" / "goToPose.json").read_bytes())
+    assert set(_companions(recipe, tmp_path / "out")) == {"goToPose"}
+    assert _companions(_only(load_recipe(domain), ("goToPosition",)), tmp_path / "out") == {}
+
+
 def test_unknown_domain_is_one_line(capsys, tmp_path):
     assert main(["train", "hockey", "--out", str(tmp_path)]) == 3
     err = capsys.readouterr().err.strip().splitlines()

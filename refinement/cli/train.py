@@ -81,6 +81,21 @@ def _only(recipe, actions: tuple[str, ...]):
                    subgoal_experience=tuple(c for c in recipe.subgoal_experience if c.action in actions))
 
 
+def _companions(recipe, out: Path) -> dict:
+    """With --only: the domain's other action models, which the subgoal experience of the models learned may
+    refine with (from OUT's models where it holds them, else the domain's own; loaded before any work)."""
+    if not recipe.subgoal_experience:
+        return {}
+    from tailor.refinement.model_store import MODELS, resolve_models
+    from tailor.refinement.models.action_models import load_action_models
+
+    learned = {m.action for m in recipe.models}
+    out_models = Path(out) / MODELS
+    folder = out_models if any(out_models.glob("*.json")) else resolve_models(recipe.domain_dir).path
+    names = tuple(sorted({p.stem for p in folder.glob("*.json") if p.stem.count(".") == 0} - learned - {"meta"}))
+    return load_action_models(folder, names)
+
+
 def run(args: argparse.Namespace) -> int:
     from tailor.planner_bridge import resolve_domain_dir
     from tailor.refinement.binding import BINDING_FILE
@@ -109,7 +124,8 @@ def run(args: argparse.Namespace) -> int:
         report = train_domain(recipe, episodes, args.seed, out, jobs=args.jobs, fresh_episodes=args.fresh_episodes,
                               n_i_candidates=args.n_i or N_I_CANDIDATES, progress=getattr(args, "progress", True),
                               own_episodes=args.episodes is None,
-                              gather=functools.partial(stored_gather, experience))
+                              gather=functools.partial(stored_gather, experience),
+                              companions=_companions(recipe, out) if args.only else None)
     log = logging.getLogger(__name__)
     written = [Path(out) / name for name in report.get("files", ())]
     try:

@@ -54,13 +54,15 @@ def train_domain(
     n_i_candidates: tuple[int, ...] = N_I_CANDIDATES,
     episode_fractions: tuple[float, ...] = EPISODE_FRACTIONS,
     own_episodes: bool = False,
+    companions: dict | None = None,
 ) -> dict:
     """Gather, train and write `out/models/*.json` and `out/training/` (report and plots); return the report.
 
     `episodes` per scenario; with `own_episodes` a duration model whose recipe names its own count learns from
     that many of each of its scenarios instead (the first ones of the seed stream: a scenario is gathered once,
     as many as the most any model needs). `gather(simulator, scenario, episodes, seed, jobs, progress)` defaults
-    to tailor.sims.experience.gather."""
+    to tailor.sims.experience.gather. `companions` (action -> ActionModel) are models this run does not learn
+    that its subgoal experience refines with (`--only`: the domain's others); they are not written."""
     if gather is None:
         from tailor.sims.experience import gather
     if episodes < 1:
@@ -112,9 +114,12 @@ def train_domain(
         bar.n = bar.total
         bar.refresh()
     experience = {m.action: experience_of(m) for m in recipe.models}
-    subgoal = [_learn_at_subgoals(recipe, chain, models, experience, round(chain.share * episodes), seed, jobs,
-                                  progress, n_i_candidates, episode_fractions)
-               for chain in recipe.subgoal_experience]
+    subgoal = []
+    for chain in recipe.subgoal_experience:
+        refining = {**(companions or {}), **models}  # the chain's situations may need actions not learned here
+        subgoal.append(_learn_at_subgoals(recipe, chain, refining, experience, round(chain.share * episodes), seed,
+                                          jobs, progress, n_i_candidates, episode_fractions))
+        models[chain.action] = refining[chain.action]
 
     report = {
         "schema": REPORT_SCHEMA,
