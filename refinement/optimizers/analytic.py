@@ -42,6 +42,8 @@ def rule_arrays(model) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     except (KeyError, TypeError):
         pass
     rules = model.rules()
+    if not rules:  # e.g. a success classifier without a success leaf: no box to merge
+        raise NotApplicable("a model without rules (a success region that predicts success nowhere)")
     arrays = (
         np.array([r.lower for r in rules], dtype=float),
         np.array([r.upper for r in rules], dtype=float),
