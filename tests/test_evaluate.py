@@ -54,6 +54,20 @@ def test_zero_baseline_is_paired_with_refined_where_both_succeeded():
     assert s["p_value_zero"] == pytest.approx(__import__("scipy").stats.ttest_rel([16, 12], [8, 9]).pvalue)
 
 
+def test_per_action_tables_keep_asserted_sequences_apart():
+    """Assertion inserts an action in some situations of a problem: Table 5.2 has a table per executed sequence
+    (the most frequent first), never a step of one sequence averaged with another's (nor an index error)."""
+    plain = [("goToPose", 4.0), ("dribbleBall", 12.0)]
+    asserted = [("goToPose", 3.0), ("goToPose", 2.0), ("dribbleBall", 10.0)]
+    rows = [{**_row(16.0, 15.0), "greedy_actions": plain, "refined_actions": [("goToPose", 5.0), ("dribbleBall", 10.0)]},
+            {**_row(15.0, 15.0), "greedy_actions": asserted, "refined_actions": asserted},
+            {**_row(16.0, 14.0), "greedy_actions": plain, "refined_actions": [("goToPose", 3.0), ("dribbleBall", 11.0)]}]
+    table = summarize_comparison(rows)["per_action"]
+    assert [(r["step"], r["action"], r["situations"], r["greedy_mean"], r["refined_mean"]) for r in table] == [
+        (1, "goToPose", 2, 4.0, 4.0), (2, "dribbleBall", 2, 12.0, 10.5),
+        (1, "goToPose", 1, 3.0, 3.0), (2, "goToPose", 1, 2.0, 2.0), (3, "dribbleBall", 1, 10.0, 10.0)]
+
+
 def test_the_evaluation_plan_is_data_in_the_binding():
     soccer = evaluation_plan(load_domain_binding(DOMAINS_DIR / "soccer"))
     assert soccer == EvaluationPlan("score", "waypoints", False, "approach", neighbourhood=0.02)

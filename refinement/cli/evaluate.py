@@ -128,10 +128,11 @@ def _print_text(report: dict) -> None:
         out(f"  optimizer per window (h=2)   median {_fmt(s['window_ms_median'])} ms; all windows of a sequence take "
             f"{_pct(s['optimizer_share'])}% of its execution time on average\n")
     if s.get("per_action"):
-        out("\nPer action (Table 5.2), mean duration (s) over the situations where both succeeded:\n")
+        out("\nPer action (Table 5.2), mean duration (s) over the situations where both succeeded (how many):\n")
         out("  problem          step  action              greedy (h=1)  refined (h=2)\n")
         for row in s["per_action"]:
-            out(f"  {row['problem']:<16} {row['step']:>4}  {row['action']:<18} {_fmt(row['greedy_mean']):>13}"
+            label = f"{row['problem']} ({row['situations']})"
+            out(f"  {label:<16} {row['step']:>4}  {row['action']:<18} {_fmt(row['greedy_mean']):>13}"
                 f"  {_fmt(row['refined_mean']):>13}\n")
     sweep = report.get("risk_sweep")
     if sweep:

@@ -365,15 +365,20 @@ def _failure_summary(rows: list[dict]) -> dict:
 
 
 def _per_action(both: list[dict]) -> list[dict]:
-    """Table 5.2: the mean duration of each action of each problem's plan, greedy and refined (Eq. 5.4), over
-    the situations where both executions succeeded."""
-    table = []
-    for problem in sorted({r["problem"] for r in both}):
-        rows = [r for r in both if r["problem"] == problem and "greedy_actions" in r]
-        if not rows:
+    """Table 5.2: the mean duration of each action of each problem's executed sequence, greedy and refined
+    (Eq. 5.4), over the situations where both executions succeeded. Subgoal assertion may insert an action in
+    some situations of a problem: each sequence of actions is a table of its own (`situations` says how many)."""
+    groups: dict[tuple, list[dict]] = {}
+    for r in both:
+        if "greedy_actions" not in r:
             continue
-        for k, (action, _) in enumerate(rows[0]["refined_actions"]):
-            table.append({"problem": problem, "step": k + 1, "action": action,
+        actions = tuple(action for action, _ in r["refined_actions"])
+        if actions == tuple(action for action, _ in r["greedy_actions"]):
+            groups.setdefault((r["problem"], actions), []).append(r)
+    table = []
+    for (problem, actions), rows in sorted(groups.items(), key=lambda item: (item[0][0], -len(item[1]))):
+        for k, action in enumerate(actions):
+            table.append({"problem": problem, "step": k + 1, "action": action, "situations": len(rows),
                           "greedy_mean": _mean([r["greedy_actions"][k][1] for r in rows]),
                           "refined_mean": _mean([r["refined_actions"][k][1] for r in rows])})
     return table
