@@ -66,6 +66,7 @@ class Refinement:
 
     def to_json(self) -> dict:
         return {"plan": self.plan.to_json(), "models": str(self.models), "horizon": self.refined.horizon,
+                "risk": self.refined.risk, "neighbourhood": self.refined.neighbourhood,
                 "assertions": [a.to_json() for a in self.assertions],
                 "filter": None if self.filter is None else self.filter.to_json(),
                 "free_parameters": [{"id": pid, "low": low, "high": high, "value": self.chosen[pid]}

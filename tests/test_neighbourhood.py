@@ -124,3 +124,16 @@ def test_refine_minimizes_the_worst_case_around_the_soccer_subgoal(capsys):
     assert robust["optimization"][0]["cost"] >= robust["predicted_total"] - 1e-3
     assert "neighbourhood" in robust["optimization"][0]["note"]
     assert plain["predicted_total"] <= robust["predicted_total"] + 1e-3  # the point optimum is predicted faster
+
+
+def test_the_api_takes_the_neighbourhood_and_checks_it():
+    import tailor
+    from tailor.errors import ArgumentTypeError
+
+    default, plain = tailor.refine("soccer", "score"), tailor.refine("soccer", "score", neighbourhood=0.0)
+    assert (default.refined.neighbourhood, plain.refined.neighbourhood) == (0.02, 0.0)  # the binding's, else given
+    assert default.to_json()["neighbourhood"] == 0.02 and plain.to_json()["risk"] == 1.0
+    with pytest.raises(ArgumentValueError, match="neighbourhood must be a share"):
+        tailor.refine("soccer", "score", neighbourhood=0.9)
+    with pytest.raises(ArgumentTypeError, match="neighbourhood must be a number or None"):
+        tailor.refine("soccer", "score", neighbourhood="0.1")
