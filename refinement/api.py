@@ -15,7 +15,6 @@ ArgumentValueError (a ValueError), naming the argument.
 from __future__ import annotations
 
 import atexit
-import logging
 import math
 import threading
 from collections.abc import Mapping
@@ -188,9 +187,7 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
         asserted = assert_task(sequence, binding, success_models, abstract)
         sequence, assertions = asserted.sequence, asserted.assertions
     action_models = load_action_models(source.path, tuple(sorted({a.action for a in sequence.actions})))
-    risk, note = resolve_risk(risk, action_models.values())
-    if note:
-        logging.getLogger(__name__).warning("%s", note)
+    risk = resolve_risk(risk, action_models.values())
     decision = None
     if meta is not None and horizon > 1 and sequence.actions:  # refine, or keep greedy (Sec. 5.5.4)
         from tailor.refinement.meta_filter import decide

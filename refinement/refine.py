@@ -17,6 +17,7 @@ changes word a few degrees away).
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Mapping
 
@@ -153,24 +154,25 @@ def predicted_success(sequence: ActionSequence, success_models: Mapping[str, obj
     return tuple(out)
 
 
-def resolve_risk(risk: float | None, models) -> tuple[float, str]:
-    """The risk lambda to refine with, and a note where the default had to be dropped. None asks for
-    DEFAULT_RISK, which applies only where every one of `models` stores its uncertainty (else 0: an old model
-    folder still refines, plainly); an explicit lambda > 0 needs the uncertainty (a ModelFileError naming
-    the file otherwise)."""
+def resolve_risk(risk: float | None, models) -> float:
+    """The risk lambda to refine with. None asks for DEFAULT_RISK, which applies only where every one of
+    `models` stores its uncertainty (else 0, with a warning naming the file: an old model folder still refines,
+    plainly); an explicit lambda > 0 needs the uncertainty (a ModelFileError naming the file otherwise)."""
     models = list(models)
     if risk is None:
         lacking = [m for m in models if getattr(m, "uncertainty", None) is None]
         if DEFAULT_RISK and lacking:
             where = getattr(lacking[0], "source", None) or lacking[0].action
-            return 0.0, (f"{where}: no uncertainty stored (trained before it was): refining without the default "
-                         f"risk {DEFAULT_RISK:g}, i.e. with --risk 0 (retrain with `tailor train`)")
-        return DEFAULT_RISK, ""
+            logging.getLogger(__name__).warning(
+                "%s: no uncertainty stored (trained before it was): refining without the default risk %g, i.e. "
+                "with --risk 0 (retrain with `tailor train`)", where, DEFAULT_RISK)
+            return 0.0
+        return DEFAULT_RISK
     check_risk(risk)
     if risk:
         for model in models:
             model.require_uncertainty()
-    return float(risk), ""
+    return float(risk)
 
 
 def check_neighbourhood(share: float) -> None:

@@ -31,15 +31,15 @@ def _travel_time(F: np.ndarray) -> np.ndarray:
     return 0.8 + dist / 0.8 + 0.9 * angle_to + 0.6 * np.abs(angle_at) - 0.8 * v + 0.5 * vg
 
 
-def _model(action: str, seed: int) -> ActionModel:
+def _model(action: str, seed: int, n: int = 6000, min_samples_leaf: int = 20) -> ActionModel:
+    """A model tree of `_travel_time` fitted on n random pose parameterizations."""
     rng = np.random.default_rng(seed)
-    n = 6000
     params = np.column_stack([
         rng.uniform(-3, 3, n), rng.uniform(-2, 2, n), rng.uniform(-math.pi, math.pi, n), rng.uniform(0, 0.3, n),
         rng.uniform(-3, 3, n), rng.uniform(-2, 2, n), rng.uniform(-math.pi, math.pi, n), rng.uniform(0, 0.3, n),
     ])
     F = compute_features("pose", params)
-    tree = ModelTree(min_samples_leaf=20).fit(F, _travel_time(F))
+    tree = ModelTree(min_samples_leaf=min_samples_leaf).fit(F, _travel_time(F))
     return ActionModel(action, "pose", feature_names("pose"), tree, n_i=1)
 
 

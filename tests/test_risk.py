@@ -8,7 +8,6 @@ on the trained models.
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import replace
 
 import numpy as np
@@ -142,21 +141,11 @@ def test_the_risk_objective_is_minimized_exactly_as_brute_force_finds(risk):
 
 # -- through refine() on the soccer binding ------------------------------------------------------------------
 
-def _travel_time(F: np.ndarray) -> np.ndarray:
-    v, vg, dist, angle_to, angle_at = F.T
-    return 0.8 + dist / 0.8 + 0.9 * angle_to + 0.6 * np.abs(angle_at) - 0.8 * v + 0.5 * vg
-
-
 def _model(action: str, seed: int) -> ActionModel:
-    rng = np.random.default_rng(seed)
-    n = 4000
-    params = np.column_stack([
-        rng.uniform(-3, 3, n), rng.uniform(-2, 2, n), rng.uniform(-math.pi, math.pi, n), rng.uniform(0, 0.3, n),
-        rng.uniform(-3, 3, n), rng.uniform(-2, 2, n), rng.uniform(-math.pi, math.pi, n), rng.uniform(0, 0.3, n),
-    ])
-    F = compute_features("pose", params)
-    tree = ModelTree(min_samples_leaf=40).fit(F, _travel_time(F))
-    return ActionModel(action, "pose", feature_names("pose"), tree, n_i=1)
+    """test_refine's model of a known travel time, coarser (fewer examples, larger leaves)."""
+    from test_refine import _model as travel_time_model
+
+    return travel_time_model(action, seed, n=4000, min_samples_leaf=40)
 
 
 @pytest.fixture(scope="module")

@@ -7,7 +7,6 @@ import math
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from tailor.refinement.models.action_models import load_action_models
 from tailor.refinement.models.features import compute_features, feature_space

@@ -134,12 +134,17 @@ def add_neighbourhood_argument(parser: argparse.ArgumentParser) -> None:
                              "(default: the binding's [evaluation] neighbourhood, else 0)")
 
 
-def neighbourhood_share(text: str) -> float:
-    """A number in [0, 0.5)."""
+def number(text: str) -> float:
+    """The float `text` spells, or the argparse error saying it is not a number (the number types build on it)."""
     try:
-        value = float(text)
+        return float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+
+
+def neighbourhood_share(text: str) -> float:
+    """A number in [0, 0.5)."""
+    value = number(text)
     if not 0.0 <= value < 0.5:
         raise argparse.ArgumentTypeError(f"must be a share of each free range in [0, 0.5), not {text}")
     return value
@@ -147,10 +152,7 @@ def neighbourhood_share(text: str) -> float:
 
 def risk_lambda(text: str) -> float:
     """A finite number >= 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    value = number(text)
     if not 0.0 <= value < float("inf"):
         raise argparse.ArgumentTypeError(f"must be a finite number >= 0, not {text}")
     return value

@@ -10,6 +10,7 @@ from tailor.refinement.cli.arguments import (
     add_filter_arguments,
     add_models_argument,
     add_neighbourhood_argument,
+    number,
     add_risk_argument,
     announce_models,
     backend_session,
@@ -77,10 +78,7 @@ def positive_number(text: str) -> float:
     """A finite number above 0 (argparse type)."""
     import math
 
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    value = number(text)
     if not math.isfinite(value) or value <= 0:
         raise argparse.ArgumentTypeError(f"must be a positive number, not {text}")
     return value
@@ -225,13 +223,9 @@ def _evaluate(args: argparse.Namespace) -> int:
     announce_models("evaluate", source)
     risk = 0.0 if args.risk is None else args.risk
     if models is not None:  # the risk lambda (the default only where every model stores its uncertainty)
-        import logging
-
         from tailor.refinement.refine import resolve_risk
 
-        risk, note = resolve_risk(args.risk, models)
-        if note:
-            logging.getLogger(__name__).warning("%s", note)
+        risk = resolve_risk(args.risk, models)
         if any(args.risk_sweep):
             resolve_risk(max(args.risk_sweep), models)
     neighbourhood = plan.neighbourhood if args.neighbourhood is None else args.neighbourhood

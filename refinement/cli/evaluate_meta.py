@@ -145,9 +145,7 @@ def run_meta(args: argparse.Namespace, domain_dir: Path, binding, plan, source) 
     if train_items:  # the refinement judged is the one `tailor evaluate` and `tailor refine` run
         from tailor.refinement.refine import resolve_risk
 
-        risk, note = resolve_risk(args.risk, job_models(job, situation_sequence(job, objects)).values())
-        if note:
-            logging.getLogger(__name__).warning("%s", note)
+        risk = resolve_risk(args.risk, job_models(job, situation_sequence(job, objects)).values())
     neighbourhood = plan.neighbourhood if args.neighbourhood is None else args.neighbourhood
     announce_models("evaluate", source)
     progress = getattr(args, "progress", True)

@@ -279,14 +279,10 @@ def run(args: argparse.Namespace) -> int:
         check_scene(prepared.sequence, prepared.binding.file)
     from tailor.refinement.refine import resolve_risk
 
-    risk, note = resolve_risk(args.risk, prepared.models.values())
-    if note:
-        log.warning("%s", note)
-    neighbourhood = args.neighbourhood
-    if neighbourhood is None:
-        from tailor.refinement.evaluation.experiments import binding_neighbourhood
+    from tailor.refinement.evaluation.experiments import binding_neighbourhood
 
-        neighbourhood = binding_neighbourhood(prepared.binding)
+    risk = resolve_risk(args.risk, prepared.models.values())
+    neighbourhood = binding_neighbourhood(prepared.binding) if args.neighbourhood is None else args.neighbourhood
     method, seed = args.optimizer, args.seed
     decision = None
     with showing_progress(getattr(args, "progress", True)):  # the genetic algorithm takes seconds per window

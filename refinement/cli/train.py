@@ -92,8 +92,7 @@ def _companions(recipe, out: Path) -> dict:
     learned = {m.action for m in recipe.models}
     out_models = Path(out) / MODELS
     folder = out_models if any(out_models.glob("*.json")) else resolve_models(recipe.domain_dir).path
-    names = tuple(sorted({p.stem for p in folder.glob("*.json") if p.stem.count(".") == 0} - learned - {"meta"}))
-    return load_action_models(folder, names)
+    return {action: model for action, model in load_action_models(folder).items() if action not in learned}
 
 
 def run(args: argparse.Namespace) -> int:

@@ -26,7 +26,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from tailor.refinement.optimizers.objective import Objective, OptimizationResult
+from tailor.refinement.optimizers.objective import Objective, OptimizationResult, neighbourhood_offsets
 from tailor.refinement.optimizers.structure import LOCATE_TOL, NotApplicable, TermStructure, detect
 
 MAX_MERGED_PAIRS = 4_000_000  # box pairs examined when merging two rule sets (C.3.3 worst case r1 * r2)
@@ -248,7 +248,7 @@ def _robust(objective: Objective, order: np.ndarray, predicted: np.ndarray, boxe
         cost = np.full(len(points), np.inf)
         if valid.any():
             cost[valid] = objective.robust_cost(points[valid])
-        evaluations += int(valid.sum()) * (1 + 4 * int(np.count_nonzero(radius)))
+        evaluations += int(valid.sum()) * len(neighbourhood_offsets(radius))
         i = int(np.argmin(cost))
         if cost[i] < best_cost:
             best_cost, best_point = float(cost[i]), points[i]

@@ -42,6 +42,14 @@ POSE_PARAMETERS = ("x", "y", "phi", "v", "xg", "yg", "phig", "vg")
 APPROACH_FEATURES = ("v", "vg", "dist", "angle_to", "angle_at", "path", "arcs", "exact_path")
 
 
+ARC = np.array([[kind != "S" for kind in word] for word in WORDS])  # (6, 3): which segments of each word are arcs
+
+
+def _lengths(words: np.ndarray) -> np.ndarray:
+    """(M, 6) total length of each word of `words` (M, 6, 3); inf where the word does not exist."""
+    return np.where(np.isnan(words).any(axis=2), np.inf, words.sum(axis=2))
+
+
 def _mod(a: np.ndarray) -> np.ndarray:
     return np.mod(a, TWO_PI)
 
@@ -88,8 +96,7 @@ def dubins_words(start: np.ndarray, goal: np.ndarray, radius: float) -> tuple[np
         t = _mod(-alpha + np.arctan2(-ca + cb, d + sa - sb) + p / 2.0)
         out[:, 5] = np.where((np.abs(c) <= 1.0)[:, None], np.column_stack([t, p, _mod(beta - alpha - t + p)]), np.nan)
     full = TWO_PI - 1e-9  # an arc of (almost) a full turn is numerically zero, as in candidates()
-    arc = np.array([[w[0] != "S", w[1] != "S", w[2] != "S"] for w in WORDS])
-    out = np.where((out > full) & arc[None], 0.0, out)
+    out = np.where((out > full) & ARC[None], 0.0, out)
     return out * radius, exact
 
 
@@ -98,11 +105,10 @@ def shortest_word(start: np.ndarray, pre: np.ndarray, radius: float, final: floa
     (M, 3), plus the final straight `final`; the length of its arcs; the length of the shortest exact one plus
     the final straight (longer where the shortest is a near-touching mixed word the robot cannot quite follow)."""
     words, exact = dubins_words(start, pre, radius)
-    total = np.where(np.isnan(words).any(axis=2), np.inf, words.sum(axis=2))
+    total = _lengths(words)
     best = np.argmin(total, axis=1)
     rows = np.arange(len(start))
-    arc = np.array([[w[0] != "S", w[1] != "S", w[2] != "S"] for w in WORDS])
-    arcs = (words[rows, best] * arc[best]).sum(axis=1)
+    arcs = (words[rows, best] * ARC[best]).sum(axis=1)
     return np.column_stack([total[rows, best] + final, arcs, np.where(exact, total, np.inf).min(axis=1) + final])
 
 
@@ -145,7 +151,7 @@ def shortest_word_inside(start: np.ndarray, pre: np.ndarray, radius: float, fina
     stays inside box = (xmin, xmax, ymin, ymax), else the one that leaves it least; the third column the
     same choice among the exact words (the shortest word inside where no exact word exists)."""
     words, exact = dubins_words(start, pre, radius)
-    total = np.where(np.isnan(words).any(axis=2), np.inf, words.sum(axis=2))
+    total = _lengths(words)
     bounds = word_bounds(start, words, radius)
     excess = np.max(np.stack([box[0] - bounds[..., 0], bounds[..., 1] - box[1], box[2] - bounds[..., 2],
                               bounds[..., 3] - box[3]]), axis=0)
@@ -154,7 +160,6 @@ def shortest_word_inside(start: np.ndarray, pre: np.ndarray, radius: float, fina
     surely = np.all([(box[0] + m <= a) & (a <= box[1] - m) & (box[2] + m <= b) & (b <= box[3] - m)
                      for a, b in ((start[:, 0], start[:, 1]), (pre[:, 0], pre[:, 1]))], axis=0)
     rows = np.arange(len(start))
-    arc = np.array([[w[0] != "S", w[1] != "S", w[2] != "S"] for w in WORDS])
 
     def choose(usable: np.ndarray) -> np.ndarray:
         length = np.where(usable, total, np.inf)
@@ -165,7 +170,7 @@ def shortest_word_inside(start: np.ndarray, pre: np.ndarray, radius: float, fina
         return np.where(surely, np.argmin(length, axis=1), pick)
 
     best = choose(np.isfinite(total))
-    arcs = (np.nan_to_num(words[rows, best]) * arc[best]).sum(axis=1)
+    arcs = (np.nan_to_num(words[rows, best]) * ARC[best]).sum(axis=1)
     best_exact = np.where(exact.any(axis=1), choose(np.isfinite(total) & exact), best)
     return np.column_stack([total[rows, best] + final, arcs, total[rows, best_exact] + final])
 
