@@ -88,11 +88,12 @@ class Observations:
 class StaticSituation:
     """Fig. 7.7: the team's course to its waiting poses (the last tick is when they decide) and the time each
     robot then took to approach the target from there, alone (None where its approach failed); `repeated`: the
-    same approaches under other noise (how certain "the quickest" is in the simulator itself)."""
+    same approaches again under other noise, one tuple per repeat (how certain "the quickest" is in the
+    simulator itself, and what an oracle of the expected times could choose)."""
 
     log: TeamLog
     measured: tuple[float | None, ...]
-    repeated: tuple[float | None, ...] = ()
+    repeated: tuple[tuple[float | None, ...], ...] = ()
 
 
 @runtime_checkable
@@ -108,8 +109,9 @@ class TeamScene(Protocol):
     def dynamic(self, kinds: tuple[str, ...], duration: float, seed: int) -> TeamLog:
         """Robots navigating to random poses for `duration` seconds around a target lying still (Fig. 7.6)."""
 
-    def static(self, kinds: tuple[str, ...], seed: int) -> StaticSituation:
-        """Robots drive to random poses and wait; then each approaches the target in turn (Fig. 7.7)."""
+    def static(self, kinds: tuple[str, ...], seed: int, repeats: int = 1) -> StaticSituation:
+        """Robots drive to random poses and wait; then each approaches the target in turn (Fig. 7.7), and again
+        `repeats` times under other noise."""
 
     def observe(self, log: TeamLog, perception: Perception, rng: np.random.Generator) -> Observations:
         """Noisy, field-of-view limited perception of every robot at every tick of `log`. The noise drawn does

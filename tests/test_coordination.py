@@ -163,6 +163,22 @@ def test_the_other_kind_is_limited_by_its_own_dynamics_and_ignores_the_goal_head
     assert episode.duration >= math.hypot(2.0, 1.0) / SPARROW.v_max
 
 
+def test_the_oracle_of_expected_times_and_repeatability_by_hand():
+    """Three runs of two robots: run 0 says robot 0 is quickest, runs 1 and 2 say robot 1. Pairs (0, 1), (0, 2)
+    disagree; leaving one run out, the mean of the others picks robot 1 for every held-out run, right twice
+    (runs 1, 2) and wrong once (run 0); robots choosing robot 0 are right only on run 0."""
+    from tailor.refinement.evaluation.coordination_experiments import summarize_static
+
+    row = {"chosen": [0, 0], "chosen_distance": [0, 0], "chosen_true_states": 0, "predicted": [5.0, 5.0],
+           "measured": [5.0, 5.2], "repeated": [[5.5, 5.1], [5.6, 5.0]]}
+    s = summarize_static([row])
+    assert s["repeats"] == 2 and s["chose_quickest"] == 1.0
+    assert s["quickest_repeatable"] == 0.0
+    assert s["chose_quickest_oracle"] == pytest.approx(2 / 3)
+    assert s["chose_quickest_every_run"] == pytest.approx(1 / 3)
+    assert summarize_static([{**row, "repeated": [[5.5, 5.1]]}])["chose_quickest_oracle"] == 0.0  # = repeatable
+
+
 # --- the command -----------------------------------------------------------------------------------------
 def _coordinate(capsys, *argv) -> dict:
     assert main(["coordinate", "soccer", "--episodes", "2", "--json", *argv]) == 0
@@ -174,6 +190,7 @@ def test_the_same_seed_gives_the_same_tables(capsys):
     assert first == second
     assert {"agreement", "chose_quickest", "chose_quickest_distance", "static", "dynamic"} <= set(first)
     assert first["static"]["situations"] == 2 and first["dynamic"]["episodes"] == 2
+    assert first["static"]["repeats"] == 1
     assert _coordinate(capsys, "--seed", "6")["dynamic"]["noise"] != first["dynamic"]["noise"]
 
 
@@ -181,6 +198,8 @@ def test_the_same_seed_gives_the_same_tables(capsys):
     (["soccer", "--robots", "1"], 2, "tailor coordinate: error: argument --robots: must be at least 2: '1'"),
     (["soccer", "--robots", "9"], 2, "tailor coordinate: error: argument --robots: must be at most 8: '9'"),
     (["soccer", "--episodes", "0"], 2, "tailor coordinate: error: argument --episodes: must be at least 1: '0'"),
+    (["soccer", "--repeats", "0"], 2, "tailor coordinate: error: argument --repeats: must be at least 1: '0'"),
+    (["soccer", "--repeats", "40"], 2, "tailor coordinate: error: argument --repeats: must be at most 31: '40'"),
     (["hockey"], 3, "tailor coordinate: error: hockey: no such domain folder"),
     (["arm"], 11, "simulator 'arm' has no team scene: it cannot run coordination experiments"),
 ])

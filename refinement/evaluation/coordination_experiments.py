@@ -54,6 +54,7 @@ class Setup:
     perception: Perception = field(default_factory=Perception)
     duration: float = DURATION
     warmup: float = WARMUP
+    repeats: int = 1  # static: each approach again under this many other noise seeds
 
 
 def dynamic_episode(scene: TeamScene, predictor: Predictor, setup: Setup, index: int) -> dict:
@@ -92,7 +93,7 @@ def static_situation(scene: TeamScene, predictor: Predictor, setup: Setup, index
     """One static situation: whom each robot chose (models, and distance) when they stood still, and the time
     each robot then really took to the target (None where it failed)."""
     seed = stream_seed(setup.seed, STATIC_STREAM, index)
-    situation = scene.static(setup.kinds, seed)
+    situation = scene.static(setup.kinds, seed, setup.repeats)
     view = team_view(situation.log, scene, setup.perception, seed)
     last = situation.log.at(slice(-1, None))
     truth = predictor.times(np.array(last.kinds), last.states[0], np.repeat(last.target, len(last.kinds), axis=0))
@@ -102,12 +103,31 @@ def static_situation(scene: TeamScene, predictor: Predictor, setup: Setup, index
             "chosen_true_states": int(np.argmin(truth)),
             "predicted": truth.tolist(),
             "measured": [None if t is None else float(t) for t in situation.measured],
-            "repeated": [None if t is None else float(t) for t in situation.repeated]}
+            "repeated": [[None if t is None else float(t) for t in run] for run in situation.repeated]}
 
 
 def _share(values) -> float | None:
     values = np.asarray(values, dtype=float)
     return float(values.mean()) if values.size else None
+
+
+def _repeat_statistics(usable: list[dict], chosen: np.ndarray) -> tuple[float | None, float | None, float | None]:
+    """From each situation's runs (the measured one and its repeats under other noise): how often two runs have
+    the same quickest robot; how often an oracle of the expected times (the mean of the other runs, from the true
+    states) chose the quickest of the held-out run, the best any predictor can do; and how often the robots'
+    own choices did, over the same held-out runs (chose_quickest, with less noise in its label)."""
+    pairs, oracle, every = [], [], []
+    for row, choice in zip(usable, chosen):
+        if not row["repeated"]:
+            continue
+        runs = np.array([[np.inf if t is None else t for t in run] for run in [row["measured"], *row["repeated"]]])
+        quickest = np.argmin(runs, axis=1)
+        pairs += [quickest[0] == q for q in quickest[1:]]
+        for h in range(len(runs)):
+            others = np.delete(runs, h, axis=0).mean(axis=0)
+            oracle.append(np.argmin(others) == quickest[h])
+            every += list(choice == quickest[h])
+    return _share(pairs), _share(oracle), _share(every)
 
 
 def summarize_static(rows: list[dict]) -> dict:
@@ -125,9 +145,7 @@ def summarize_static(rows: list[dict]) -> dict:
     chosen = np.array([r["chosen"] for r in usable]).reshape(len(usable), -1)
     agreement_distance, quick_distance = stats("chosen_distance")
     predicted = np.array([r["predicted"] for r in usable]).reshape(len(usable), -1)
-    repeated = [r for r in usable if r["repeated"] and any(t is not None for t in r["repeated"])]
-    again = [int(np.argmin([np.inf if t is None else t for t in r["repeated"]])) ==
-             int(np.argmin([np.inf if t is None else t for t in r["measured"]])) for r in repeated]
+    again, oracle, every = _repeat_statistics(usable, chosen)
     ok = np.isfinite(measured)
     return {
         "situations": len(rows), "usable": len(usable),
@@ -137,7 +155,10 @@ def summarize_static(rows: list[dict]) -> dict:
         "agreement": agreement, "chose_quickest": quick,
         "agreement_distance": agreement_distance, "chose_quickest_distance": quick_distance,
         "chose_quickest_target_known": _share(chose_quickest(chosen, measured)[known]),
-        "quickest_repeatable": _share(again),
+        "quickest_repeatable": again,
+        "repeats": min((len(r["repeated"]) for r in usable), default=0),
+        "chose_quickest_every_run": every,
+        "chose_quickest_oracle": oracle,
         "chose_quickest_true_states": _share([r["chosen_true_states"] for r in usable] == quickest),
         "prediction_mae": _share(np.abs(predicted[ok] - measured[ok])),
         "mean_time": _share(measured[ok]),

@@ -137,8 +137,9 @@ class SoccerTeam:
         vg = 0.0 if KINDS[kind].navigate == "goToPosition" else float(rng.uniform(*NAVIGATION_SPEEDS))
         return p[0], p[1], float(rng.uniform(-math.pi, math.pi)), vg
 
-    def static(self, kinds: tuple[str, ...], seed: int) -> StaticSituation:
-        """Drive to random waiting poses, look around once, stand WAIT; then each approaches alone (Fig. 7.7)."""
+    def static(self, kinds: tuple[str, ...], seed: int, repeats: int = 1) -> StaticSituation:
+        """Drive to random waiting poses, look around once, stand WAIT; then each approaches alone (Fig. 7.7), and
+        again `repeats` times under other noise."""
         rng = np.random.default_rng(_seed(seed, 1))
         ball = _point(rng)
         waiting = _separated(rng, len(kinds), [ball])
@@ -178,9 +179,9 @@ class SoccerTeam:
         rows += [final] * int(round(WAIT / PERIOD))
         states = np.array(rows)
         log = TeamLog(PERIOD, states, np.tile(ball, (len(states), 1)), tuple(kinds))
-        measured, repeated = (tuple(self.approach_time(kind, tuple(final[k]), ball, _seed(seed, stream, k))
-                                    for k, kind in enumerate(kinds)) for stream in (3, 4))
-        return StaticSituation(log, measured, repeated)
+        measured, *repeated = (tuple(self.approach_time(kind, tuple(final[k]), ball, _seed(seed, stream, k))
+                                     for k, kind in enumerate(kinds)) for stream in range(3, 4 + repeats))
+        return StaticSituation(log, measured, tuple(repeated))
 
     @staticmethod
     def approach_time(kind: str, robot: tuple[float, float, float, float], ball: tuple[float, float],
