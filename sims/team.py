@@ -113,6 +113,11 @@ class TeamScene(Protocol):
         """Robots drive to random poses and wait; then each approaches the target in turn (Fig. 7.7), and again
         `repeats` times under other noise."""
 
+    def approach_time(self, kind: str, state: tuple[float, float, float, float], target: tuple[float, float],
+                      seed: int) -> float | None:
+        """Fig. 7.7b: the time a robot of `kind` takes from `state` (standing) to `target`, alone; None if it
+        fails."""
+
     def observe(self, log: TeamLog, perception: Perception, rng: np.random.Generator) -> Observations:
         """Noisy, field-of-view limited perception of every robot at every tick of `log`. The noise drawn does
         not depend on the field of view (only what is masked does), so settings can be compared pairwise."""

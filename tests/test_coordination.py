@@ -177,6 +177,10 @@ def test_the_oracle_of_expected_times_and_repeatability_by_hand():
     assert s["chose_quickest_oracle"] == pytest.approx(2 / 3)
     assert s["chose_quickest_every_run"] == pytest.approx(1 / 3)
     assert summarize_static([{**row, "repeated": [[5.5, 5.1]]}])["chose_quickest_oracle"] == 0.0  # = repeatable
+    # the oracle fed the belief: the mean of its runs from the believed states picks robot 0, right on run 0 only
+    believed = summarize_static([{**row, "believed": [[5.0, 5.3], [5.2, 5.1]]}])
+    assert believed["chose_quickest_oracle_belief"] == pytest.approx(1 / 3)
+    assert s["chose_quickest_oracle_belief"] is None
 
 
 # --- the command -----------------------------------------------------------------------------------------

@@ -156,9 +156,11 @@ def _print_text(report: dict) -> None:
     out(f"     ... from the true states (the models alone)      {_pct(s['chose_quickest_true_states'])}\n")
     out(f"     the same robot is quickest under other noise     {_pct(s['quickest_repeatable'])}\n")
     if s["repeats"] >= 2:
-        out(f"     over all {s['repeats'] + 1} runs of each approach: chose the quickest   "
-            f"{_pct(s['chose_quickest_every_run'])}\n")
-        out(f"       an oracle of the expected times (true states)  {_pct(s['chose_quickest_oracle'])}\n")
+        rows = ((f"     ... scored on all {s['repeats'] + 1} runs of each approach", s["chose_quickest_every_run"]),
+                ("     an oracle of the expected times (true states)", s["chose_quickest_oracle"]),
+                ("     ... fed the team's belief instead", s["chose_quickest_oracle_belief"]))
+        for label, value in rows:
+            out(f"{label:<54}{_pct(value)}\n")
     out(f"  predicted vs measured approach time: MAE {s['prediction_mae']:.2f} s (mean {s['mean_time']:.2f} s)\n"
         if s["prediction_mae"] is not None else "")
     out("\nQ1 by strategy (dynamic): agreement / exactly one robot goes\n")

@@ -42,7 +42,7 @@ TRAIN_SHARE = 2.0 / 3.0  # Q5: the failure tree learns from the first episodes, 
 # with an omnidirectional camera, so that a failure comes from estimation errors in the situation, not from a
 # teammate out of sight (with the shared belief of the default perception failures are too rare to learn from)
 FAILURE_STRATEGY, FAILURE_FIELD_OF_VIEW, FAILURE_COMMUNICATION = "implicit", 360.0, 0.0
-DYNAMIC_STREAM, STATIC_STREAM, NOISE_STREAM = 1, 2, 3
+DYNAMIC_STREAM, STATIC_STREAM, NOISE_STREAM, ORACLE_STREAM = 1, 2, 3, 4
 
 
 @dataclass(frozen=True)
@@ -98,6 +98,7 @@ def static_situation(scene: TeamScene, predictor: Predictor, setup: Setup, index
     last = situation.log.at(slice(-1, None))
     truth = predictor.times(np.array(last.kinds), last.states[0], np.repeat(last.target, len(last.kinds), axis=0))
     return {"index": index, "seed": seed,
+            "believed": _believed_runs(scene, setup, view, seed) if setup.repeats >= 2 else None,
             "chosen": choices(view.utilities("shared", predictor))[-1].tolist(),
             "chosen_distance": choices(view.utilities("distance", predictor))[-1].tolist(),
             "chosen_true_states": int(np.argmin(truth)),
@@ -106,17 +107,33 @@ def static_situation(scene: TeamScene, predictor: Predictor, setup: Setup, index
             "repeated": [[None if t is None else float(t) for t in run] for run in situation.repeated]}
 
 
+def _believed_runs(scene: TeamScene, setup: Setup, view, seed: int) -> list[list[float | None]] | None:
+    """The oracle fed the team's belief: each robot's approach simulated repeats + 1 times from the states and
+    the target the first robot believes at the static decision (its shared belief); None where it knows no
+    target, a None time where it knows no state of that robot or the approach failed."""
+    belief = view.beliefs("shared")
+    states, target = belief.states[-1, 0], belief.target[-1, 0]
+    if not np.isfinite(target).all():
+        return None
+    return [[float(t) if np.isfinite(states[k]).all() and (t := scene.approach_time(
+                kind, tuple(map(float, states[k])), tuple(map(float, target)),
+                stream_seed(seed, ORACLE_STREAM, r, k))) is not None else None
+             for k, kind in enumerate(setup.kinds)] for r in range(setup.repeats + 1)]
+
+
 def _share(values) -> float | None:
     values = np.asarray(values, dtype=float)
     return float(values.mean()) if values.size else None
 
 
-def _repeat_statistics(usable: list[dict], chosen: np.ndarray) -> tuple[float | None, float | None, float | None]:
+def _repeat_statistics(usable: list[dict], chosen: np.ndarray) -> tuple[float | None, ...]:
     """From each situation's runs (the measured one and its repeats under other noise): how often two runs have
     the same quickest robot; how often an oracle of the expected times (the mean of the other runs, from the true
-    states) chose the quickest of the held-out run, the best any predictor can do; and how often the robots'
-    own choices did, over the same held-out runs (chose_quickest, with less noise in its label)."""
-    pairs, oracle, every = [], [], []
+    states) chose the quickest of the held-out run, the best any predictor can do from the true states; how
+    often the robots' own choices did, over the same held-out runs (chose_quickest, with less noise in its
+    label); and how often the oracle fed the team's belief did (the mean of its runs from the believed states),
+    the best any predictor of the expected time can do from that belief."""
+    pairs, oracle, every, believed = [], [], [], []
     for row, choice in zip(usable, chosen):
         if not row["repeated"]:
             continue
@@ -127,7 +144,10 @@ def _repeat_statistics(usable: list[dict], chosen: np.ndarray) -> tuple[float | 
             others = np.delete(runs, h, axis=0).mean(axis=0)
             oracle.append(np.argmin(others) == quickest[h])
             every += list(choice == quickest[h])
-    return _share(pairs), _share(oracle), _share(every)
+        if row.get("believed") is not None:
+            guess = np.argmin(np.array([[np.inf if t is None else t for t in run] for run in row["believed"]]).mean(0))
+            believed += list(guess == quickest)
+    return _share(pairs), _share(oracle), _share(every), _share(believed)
 
 
 def summarize_static(rows: list[dict]) -> dict:
@@ -145,7 +165,7 @@ def summarize_static(rows: list[dict]) -> dict:
     chosen = np.array([r["chosen"] for r in usable]).reshape(len(usable), -1)
     agreement_distance, quick_distance = stats("chosen_distance")
     predicted = np.array([r["predicted"] for r in usable]).reshape(len(usable), -1)
-    again, oracle, every = _repeat_statistics(usable, chosen)
+    again, oracle, every, believed = _repeat_statistics(usable, chosen)
     ok = np.isfinite(measured)
     return {
         "situations": len(rows), "usable": len(usable),
@@ -159,6 +179,7 @@ def summarize_static(rows: list[dict]) -> dict:
         "repeats": min((len(r["repeated"]) for r in usable), default=0),
         "chose_quickest_every_run": every,
         "chose_quickest_oracle": oracle,
+        "chose_quickest_oracle_belief": believed,
         "chose_quickest_true_states": _share([r["chosen_true_states"] for r in usable] == quickest),
         "prediction_mae": _share(np.abs(predicted[ok] - measured[ok])),
         "mean_time": _share(measured[ok]),
