@@ -1,8 +1,11 @@
-"""dribbleBall brakes within a bound of the distance to go, not only of the sensed speed (issue 13, Sec. 2).
+"""dribbleBall brakes within a bound of the distance to go, not only of the sensed speed (issue 13, Sec. 2), and
+drives a gentle correction at the speed its turn allows rather than creeping along at the arc speed.
 
 Braking "A_DRIBBLE_BRAKE below the believed speed" alone is a random walk under sensing and motor noise: under
 noise seed 13 a run of same-signed draws kept the robot at 0.85-0.9 m/s (above V_DRIBBLE) until its last arc,
-entered at 0.67 m/s instead of 0.24, and lost the ball ~22 s into this sequence.
+entered at 0.67 m/s instead of 0.24, and lost the ball ~22 s into this sequence. Since gentle corrections are
+driven at speed the same sequence runs differently; without the bound it loses the ball under seeds 34, 57, 61
+and 76 of the first 120.
 """
 
 import dataclasses
@@ -23,8 +26,11 @@ def _run(seed: int):
     return result, result.trajectory
 
 
-def test_seed_13_keeps_the_ball_and_the_top_speed():
-    result, _ = _run(13)
+LOSES_WITHOUT_BOUND = 34
+
+
+def test_seed_34_keeps_the_ball_and_the_top_speed():
+    result, _ = _run(LOSES_WITHOUT_BOUND)
     assert [r.outcome for r in result.results] == ["success", "success"]
     v = result.columns.index("v")
     dribble_start = result.results[0].duration
@@ -32,13 +38,34 @@ def test_seed_13_keeps_the_ball_and_the_top_speed():
     assert max(speeds) < V_DRIBBLE * 1.1  # the motors' 3% noise on top of the bound, never a drift
 
 
-def test_without_the_bound_seed_13_loses_the_ball(monkeypatch):
+def test_without_the_bound_seed_34_loses_the_ball(monkeypatch):
     monkeypatch.setattr(dribble, "DRIBBLE", dataclasses.replace(dribble.DRIBBLE, bounded_braking=False))
-    result, _ = _run(13)
+    result, _ = _run(LOSES_WITHOUT_BOUND)
     assert result.results[-1].outcome == "ball_lost"
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+@pytest.mark.parametrize("seed", [0, 1, 2, 3, 13])
 def test_other_seeds_keep_the_ball(seed):
     result, _ = _run(seed)
     assert all(r.outcome == "success" for r in result.results)
+
+
+# a 7 m dribble whose first arc is a small correction: the start heading 2.19 rad needs none, 2.0 rad one of 0.19
+GENTLE = (1.25, -1.79, 2.19, 0.3, -1.94, 1.02, -1.2, 0.0)
+
+
+def _dribble_time(heading: float) -> float:
+    from tailor.sims.soccer.scenarios import subgoal_episode
+
+    episode = subgoal_episode("dribbleBall", (*GENTLE[:2], heading, *GENTLE[3:]), 1)
+    assert episode.succeeded
+    return episode.duration
+
+
+def test_a_small_start_heading_error_costs_no_seconds():
+    assert abs(_dribble_time(2.0) - _dribble_time(2.19)) < 0.3
+
+
+def test_without_gentle_corrections_at_speed_the_robot_creeps(monkeypatch):
+    monkeypatch.setattr(dribble, "DRIBBLE", dataclasses.replace(dribble.DRIBBLE, gentle_at_speed=False))
+    assert _dribble_time(2.0) - _dribble_time(2.19) > 2.0  # it crept at 0.24 m/s for seconds (measured 3.3 s)
