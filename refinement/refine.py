@@ -175,9 +175,14 @@ def resolve_risk(risk: float | None, models) -> float:
     return float(risk)
 
 
+def is_neighbourhood(share) -> bool:
+    """Whether `share` is a neighbourhood: a number, a share of each free range in [0, 0.5)."""
+    return not isinstance(share, bool) and isinstance(share, (int, float)) and 0.0 <= share < 0.5
+
+
 def check_neighbourhood(share: float) -> None:
-    """A neighbourhood is a share of each free range in [0, 0.5)."""
-    if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0.0 <= share < 0.5:
+    """An ArgumentValueError unless `share` is a neighbourhood (is_neighbourhood)."""
+    if not is_neighbourhood(share):
         raise ArgumentValueError(f"the neighbourhood must be a share of each free range in [0, 0.5), not {share!r}")
 
 

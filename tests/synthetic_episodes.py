@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from tailor.refinement.models.features import norm
+from tailor.sims.pose import norm
 from tailor.sims.episode import Episode
 from tailor.sims.experience import scenario as find_scenario
 

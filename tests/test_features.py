@@ -16,9 +16,9 @@ from tailor.refinement.models.features import (
     feature_names,
     first_examples,
     intermediate_examples,
-    norm,
 )
 from tailor.sims.episode import Episode
+from tailor.sims.pose import norm
 from synthetic_episodes import COLUMNS, random_params
 
 PI = math.pi

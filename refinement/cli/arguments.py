@@ -25,8 +25,8 @@ def positive_seconds(text: str) -> float:
     return value
 
 
-def whole_number(minimum: int) -> Callable[[str], int]:
-    """An argparse type: an integer of at least `minimum`."""
+def whole_number(minimum: int, maximum: int | None = None) -> Callable[[str], int]:
+    """An argparse type: an integer of at least `minimum` (and at most `maximum`)."""
 
     def parse(text: str) -> int:
         try:
@@ -35,6 +35,8 @@ def whole_number(minimum: int) -> Callable[[str], int]:
             raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
         if value < minimum:
             raise argparse.ArgumentTypeError(f"must be at least {minimum}: {text!r}")
+        if maximum is not None and value > maximum:
+            raise argparse.ArgumentTypeError(f"must be at most {maximum}: {text!r}")
         return value
 
     parse.__name__ = f"whole number >= {minimum}"
@@ -143,9 +145,11 @@ def number(text: str) -> float:
 
 
 def neighbourhood_share(text: str) -> float:
-    """A number in [0, 0.5)."""
+    """A number in [0, 0.5) (refine.is_neighbourhood)."""
+    from tailor.refinement.refine import is_neighbourhood
+
     value = number(text)
-    if not 0.0 <= value < 0.5:
+    if not is_neighbourhood(value):
         raise argparse.ArgumentTypeError(f"must be a share of each free range in [0, 0.5), not {text}")
     return value
 

@@ -22,13 +22,14 @@ MAX_REPEATS = 31
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("domain", metavar="DOMAIN", help="bundled domain name, a domain folder, or its domain.pddl")
-    parser.add_argument("--robots", type=_robots, default=3, metavar="N", help="robots in the team (2-8, default 3)")
+    parser.add_argument("--robots", type=whole_number(2, MAX_ROBOTS), default=3, metavar="N",
+                        help=f"robots in the team (2-{MAX_ROBOTS}, default 3)")
     parser.add_argument("--heterogeneous", action="store_true",
                         help="one robot of the team is of the simulator's other kind, with its own action model")
     parser.add_argument("--episodes", type=whole_number(1), default=DEFAULT_EPISODES, metavar="N",
                         help=f"dynamic episodes (30 s each) and static situations (default {DEFAULT_EPISODES})")
     parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed of situations, noise and channel")
-    parser.add_argument("--repeats", type=_repeats, default=1, metavar="K",
+    parser.add_argument("--repeats", type=whole_number(1, MAX_REPEATS), default=1, metavar="K",
                         help="static: every approach again under K other noise seeds (default 1); with K >= 2 the "
                              "oracle of the expected times (the mean of the other runs) shows the best any "
                              f"predictor can do (at most {MAX_REPEATS})")
@@ -37,20 +38,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_models_argument(parser)
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
     parser.add_argument("--plot", metavar="DIR", default=None, help="draw Figs. 7.9-7.12 as PNG files in DIR")
-
-
-def _robots(text: str) -> int:
-    value = whole_number(2)(text)
-    if value > MAX_ROBOTS:
-        raise argparse.ArgumentTypeError(f"must be at most {MAX_ROBOTS}: {text!r}")
-    return value
-
-
-def _repeats(text: str) -> int:
-    value = whole_number(1)(text)
-    if value > MAX_REPEATS:
-        raise argparse.ArgumentTypeError(f"must be at most {MAX_REPEATS}: {text!r}")
-    return value
 
 
 def _scene(binding):

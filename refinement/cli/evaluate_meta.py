@@ -138,13 +138,11 @@ def run_meta(args: argparse.Namespace, domain_dir: Path, binding, plan, source) 
         return draw_situations(domain_dir, binding, plan.comparison, seeds, args.seed, planned, source.path)
 
     train_items, fresh_items = situations(0, train_n), situations(train_n, fresh_n)
-    if train_items:  # models loaded once up front: a missing or bad model file fails before any work
-        job, _, objects = train_items[0]
-        job_models(job, situation_sequence(job, objects))
     risk = 0.0 if args.risk is None else args.risk
-    if train_items:  # the refinement judged is the one `tailor evaluate` and `tailor refine` run
-        from tailor.refinement.refine import resolve_risk
+    if train_items:  # models loaded up front (a bad model file fails before any work) for the risk lambda of
+        from tailor.refinement.refine import resolve_risk  # the refinement judged: the one evaluate and refine run
 
+        job, _, objects = train_items[0]
         risk = resolve_risk(args.risk, job_models(job, situation_sequence(job, objects)).values())
     neighbourhood = plan.neighbourhood if args.neighbourhood is None else args.neighbourhood
     announce_models("evaluate", source)

@@ -115,10 +115,20 @@ def _believed_runs(scene: TeamScene, setup: Setup, view, seed: int) -> list[list
     states, target = belief.states[-1, 0], belief.target[-1, 0]
     if not np.isfinite(target).all():
         return None
-    return [[float(t) if np.isfinite(states[k]).all() and (t := scene.approach_time(
-                kind, tuple(map(float, states[k])), tuple(map(float, target)),
-                stream_seed(seed, ORACLE_STREAM, r, k))) is not None else None
-             for k, kind in enumerate(setup.kinds)] for r in range(setup.repeats + 1)]
+
+    def run(r: int, k: int, kind: str) -> float | None:
+        if not np.isfinite(states[k]).all():
+            return None
+        t = scene.approach_time(kind, tuple(map(float, states[k])), tuple(map(float, target)),
+                                stream_seed(seed, ORACLE_STREAM, r, k))
+        return None if t is None else float(t)
+
+    return [[run(r, k, kind) for k, kind in enumerate(setup.kinds)] for r in range(setup.repeats + 1)]
+
+
+def _times(runs: list) -> np.ndarray:
+    """(runs, robots) approach times, inf where an approach failed (None)."""
+    return np.array([[np.inf if t is None else t for t in run] for run in runs], dtype=float).reshape(len(runs), -1)
 
 
 def _share(values) -> float | None:
@@ -137,7 +147,7 @@ def _repeat_statistics(usable: list[dict], chosen: np.ndarray) -> tuple[float | 
     for row, choice in zip(usable, chosen):
         if not row["repeated"]:
             continue
-        runs = np.array([[np.inf if t is None else t for t in run] for run in [row["measured"], *row["repeated"]]])
+        runs = _times([row["measured"], *row["repeated"]])
         quickest = np.argmin(runs, axis=1)
         pairs += [quickest[0] == q for q in quickest[1:]]
         for h in range(len(runs)):
@@ -145,7 +155,7 @@ def _repeat_statistics(usable: list[dict], chosen: np.ndarray) -> tuple[float | 
             oracle.append(np.argmin(others) == quickest[h])
             every += list(choice == quickest[h])
         if row.get("believed") is not None:
-            guess = np.argmin(np.array([[np.inf if t is None else t for t in run] for run in row["believed"]]).mean(0))
+            guess = np.argmin(_times(row["believed"]).mean(axis=0))
             believed += list(guess == quickest)
     return _share(pairs), _share(oracle), _share(every), _share(believed)
 
@@ -153,7 +163,7 @@ def _repeat_statistics(usable: list[dict], chosen: np.ndarray) -> tuple[float | 
 def summarize_static(rows: list[dict]) -> dict:
     """Table 7.1 from the static situations: agreement and chose-the-quickest, with models and by distance."""
     usable = [r for r in rows if any(t is not None for t in r["measured"])]
-    measured = np.array([[np.inf if t is None else t for t in r["measured"]] for r in usable]).reshape(len(usable), -1)
+    measured = _times([r["measured"] for r in usable])
     quickest = np.argmin(measured, axis=1) if len(usable) else np.array([], dtype=int)
 
     def stats(key: str) -> tuple[float | None, float | None]:

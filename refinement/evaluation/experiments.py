@@ -34,7 +34,7 @@ from tailor.refinement.action_sequence import ActionSequence
 from tailor.refinement.binding import Binding
 from tailor.refinement.dispatch import dispatch
 from tailor.errors import BindingError
-from tailor.refinement.refine import refine
+from tailor.refinement.refine import is_neighbourhood, refine
 from tailor.refinement.meta_filter import decide
 from tailor.refinement.models.meta_model import EQUAL_BAND  # "equal" within 1% (Table 5.4), as the meta model's
 from tailor.refinement.situations import Job, asserted_situation, job_meta_model, job_models, stream_seed
@@ -103,7 +103,7 @@ def binding_neighbourhood(binding: Binding) -> float:
     """The binding's `[evaluation] neighbourhood` (default 0): the share of each free range around a choice
     whose worst predicted time refinement minimizes."""
     value = dict(binding.evaluation).get("neighbourhood", 0.0)
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= value < 0.5:
+    if not is_neighbourhood(value):
         raise BindingError(f"[evaluation] neighbourhood must be a share of each free range in [0, 0.5), not {value!r}",
                            file=binding.file)
     return float(value)

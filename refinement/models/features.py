@@ -21,49 +21,21 @@ from tailor.errors import DataError
 from tailor.sims import registry
 from tailor.sims.episode import Episode
 from tailor.sims.invariances import rigid_motion, shift_mirror_axes
+from tailor.sims.pose import POSE, POSE_PARAMETERS, pose_parts, sgn
 from tailor.sims.protocol import FeatureSpace
 
 Transform = Callable[[np.ndarray, np.random.Generator], np.ndarray]
 
 
-def norm(angle: np.ndarray) -> np.ndarray:
-    """Wrap angles (rad) to [-pi, pi) by adding or subtracting 2 pi (norm() of Table 4.1)."""
-    return np.mod(np.asarray(angle, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
-
-
-def _sgn(a: np.ndarray) -> np.ndarray:
-    """Sign with sgn(0) = +1, so that a feature keeps its information when the goal lies dead ahead."""
-    return np.where(a < 0.0, -1.0, 1.0)
-
-
-# --- pose: navigation to a pose (x, y, phi, v -> xg, yg, phig, vg) ------------------------------------
-POSE_PARAMETERS = ("x", "y", "phi", "v", "xg", "yg", "phig", "vg")
-
-
-def _pose_parts(params: np.ndarray) -> dict[str, np.ndarray]:
-    x, y, phi, v, xg, yg, phig, vg = params.T
-    dx, dy = xg - x, yg - y
-    bearing = np.arctan2(dy, dx)  # direction from the robot to the goal position; constant for fixed positions
-    angle_to_signed = norm(bearing - phi)
-    return {
-        "v": v,
-        "vg": vg,
-        "dist": np.hypot(dx, dy),
-        "angle_to": np.abs(angle_to_signed),
-        "angle_at": _sgn(angle_to_signed) * norm(phig - bearing),
-        "delta_angle": np.abs(norm(phig - phi)),
-    }
-
-
+# --- pose: navigation to a pose (x, y, phi, v -> xg, yg, phig, vg): Table 4.1's row, tailor.sims.pose ------
 def _pose_selection(names: tuple[str, ...]) -> Callable[[np.ndarray], np.ndarray]:
     def compute(params: np.ndarray) -> np.ndarray:
-        parts = _pose_parts(params)
+        parts = pose_parts(params)
         return np.column_stack([parts[name] for name in names])
 
     return compute
 
 
-POSE = ("v", "vg", "dist", "angle_to", "angle_at")
 POSE_DELTA = POSE + ("delta_angle",)
 POSITION = ("v", "dist", "angle_to")  # Table 4.1's goToPosition row: no goal heading, arrival speed fixed
 
@@ -94,7 +66,7 @@ def _reach(params: np.ndarray) -> np.ndarray:
 def _joints(params: np.ndarray) -> np.ndarray:
     """Per joint: the distance to go and the start and goal velocities along it (signed toward the goal)."""
     delta, w, wg = _joint_vectors(params)
-    s = _sgn(delta)
+    s = sgn(delta)
     return np.column_stack([np.abs(delta[:, 0]), w[:, 0] * s[:, 0], wg[:, 0] * s[:, 0],
                             np.abs(delta[:, 1]), w[:, 1] * s[:, 1], wg[:, 1] * s[:, 1]])
 
@@ -121,7 +93,7 @@ def _joint_rotation(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
 def _line(params: np.ndarray) -> np.ndarray:
     """Distance to go and the start and goal velocities signed toward the goal."""
     x, v, xg, vg = params.T
-    s = _sgn(xg - x)
+    s = sgn(xg - x)
     return np.column_stack([np.abs(xg - x), v * s, vg * s])
 
 

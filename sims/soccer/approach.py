@@ -35,7 +35,7 @@ APPROACH = Follower(
     decel_plan=0.5 * A_MAX, decel_limit=10.0 * A_MAX, final_straight=PRE_DISTANCE,
     corridor_heading=math.radians(30.0), corridor_width=0.05, corridor_slope=0.2, corridor_extra=0.2,
     r_line=0.3, line_gain_max=5.0, capture_radial=0.1, capture_heading=0.5, capture_angle=math.pi,
-    box=(-_HX, _HX, -_HY, _HY), lead_time=0.5 * W_APPROACH / ALPHA_MAX + 0.05, gentle_at_speed=True,
+    box=(-_HX, _HX, -_HY, _HY), lead_time=0.5 * W_APPROACH / ALPHA_MAX + 0.05,
 )
 
 

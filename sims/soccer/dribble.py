@@ -47,7 +47,7 @@ DRIBBLE = Follower(
     decel_plan=A_DRIBBLE_PLAN, decel_limit=A_DRIBBLE_BRAKE, final_straight=FINAL_STRAIGHT,
     corridor_heading=math.radians(50.0), corridor_width=0.1, corridor_slope=0.3, corridor_extra=0.3,
     r_line=0.5, line_gain_max=20.0, capture_radial=0.2, capture_heading=0.6, capture_angle=2.0 * math.pi,
-    box=(-_HX, _HX, -_HY, _HY), bounded_braking=True, gentle_at_speed=True,
+    box=(-_HX, _HX, -_HY, _HY), bounded_braking=True,
 )
 
 

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 from tailor.sims.invariances import rigid_motion
+from tailor.sims.pose import POSE, POSE_PARAMETERS, pose_row
 from tailor.sims.protocol import FeatureSpace
 from tailor.sims.soccer.approach import PRE_DISTANCE, R_APPROACH
 from tailor.sims.soccer.dribble import DRIBBLE as DRIBBLE_FOLLOWER
@@ -37,9 +38,8 @@ from tailor.sims.soccer.world import BALL_POINT_OFFSET
 
 TWO_PI = 2.0 * np.pi
 DRIBBLE_BOX = DRIBBLE_FOLLOWER.box  # where dribbleBall's axle path keeps the ball clear of the walls
-POSE_PARAMETERS = ("x", "y", "phi", "v", "xg", "yg", "phig", "vg")
 # Table 4.1's pose row (as the generic space "pose" computes it), then the planned path's length and its arcs'
-APPROACH_FEATURES = ("v", "vg", "dist", "angle_to", "angle_at", "path", "arcs", "exact_path")
+APPROACH_FEATURES = POSE + ("path", "arcs", "exact_path")
 
 
 ARC = np.array([[kind != "S" for kind in word] for word in WORDS])  # (6, 3): which segments of each word are arcs
@@ -194,24 +194,12 @@ def dribble_path(params: np.ndarray) -> np.ndarray:
     return shortest_word_inside(*axle_poses(params, FINAL_STRAIGHT), R_DRIBBLE, FINAL_STRAIGHT, DRIBBLE_BOX)
 
 
-def _norm(angle: np.ndarray) -> np.ndarray:
-    return np.mod(angle + np.pi, TWO_PI) - np.pi
-
-
-def _pose(params: np.ndarray) -> np.ndarray:
-    x, y, phi, v, xg, yg, phig, vg = params.T
-    bearing = np.arctan2(yg - y, xg - x)
-    angle_to = _norm(bearing - phi)
-    sign = np.where(angle_to < 0.0, -1.0, 1.0)
-    return np.column_stack([v, vg, np.hypot(xg - x, yg - y), np.abs(angle_to), sign * _norm(phig - bearing)])
-
-
 def _approach(params: np.ndarray) -> np.ndarray:
-    return np.column_stack([_pose(params), planned_path(params)])
+    return np.column_stack([pose_row(params), planned_path(params)])
 
 
 def _dribble(params: np.ndarray) -> np.ndarray:
-    return np.column_stack([_pose(params), dribble_path(params)])
+    return np.column_stack([pose_row(params), dribble_path(params)])
 
 
 APPROACH = FeatureSpace("approach", POSE_PARAMETERS, APPROACH_FEATURES, _approach,

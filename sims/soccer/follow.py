@@ -60,11 +60,12 @@ class Follower:
     # not of the sensed speed): without it, braking "decel_limit below the believed speed" is a random walk
     # under sensing and motor noise, which a run of same-signed draws turns into no braking at all
     bounded_braking: bool = False
-    # a small first arc before a long straight is turned gently (a curvature below 1 / radius); with this, it is
-    # driven at the speed its turn rate allows (w_plan / |curvature|), not crept along at the arc speed: without
-    # it a 0.1 rad error at the start of a 7 m dribble cost 2-3 s (the robot crept at w_plan * radius while the
-    # gentle turn converged), a smooth valley in the start heading that no planned-path feature can see
-    gentle_at_speed: bool = False
+    # a small first arc before a long straight is turned gently (a curvature below 1 / radius) and driven at the
+    # speed that curvature allows at the arcs' lateral acceleration (w_plan * sqrt(radius / |curvature|)), not
+    # crept along at the arc speed: creeping, a 0.19 rad error at the start of a 7 m dribble cost 3.3 s while the
+    # gentle turn converged, a smooth valley in the start heading that no planned-path feature can see. Off only
+    # for goToPose, whose models were not retrained for it (sims.soccer.goto)
+    gentle_at_speed: bool = True
 
     def pre_pose(self, goal: Pose) -> Pose:
         """The pose on the goal line final_straight behind the (axle) goal, where the Dubins path ends."""

@@ -13,39 +13,26 @@ Invariant to mirroring the field about either axis (the walls are symmetric), no
 from __future__ import annotations
 
 import numpy as np
+from tailor.sims.pose import POSE, POSE_PARAMETERS, norm, pose_row, sgn
 from tailor.sims.protocol import FeatureSpace
 from tailor.sims.soccer.world import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, WALL_RUNOFF
 
-PARAMETERS = ("x", "y", "phi", "v", "xg", "yg", "phig", "vg")
-POSE = ("v", "vg", "dist", "angle_to", "angle_at")
 WALLS = ("wall_x", "wall_y", "heading_x", "heading_y")
 NAMES = POSE + tuple(f"start_{n}" for n in WALLS) + tuple(f"goal_{n}" for n in WALLS)
 WALL_X = FIELD_HALF_LENGTH + WALL_RUNOFF  # m, the end walls stand at x = +-WALL_X
 WALL_Y = FIELD_HALF_WIDTH + WALL_RUNOFF  # m, the side walls at y = +-WALL_Y
 
 
-def _wrap(angle: np.ndarray) -> np.ndarray:
-    return np.mod(angle + np.pi, 2.0 * np.pi) - np.pi
-
-
-def _sgn(a: np.ndarray) -> np.ndarray:
-    return np.where(a < 0.0, -1.0, 1.0)
-
-
 def wall_features(x: np.ndarray, y: np.ndarray, phi: np.ndarray) -> list[np.ndarray]:
     """Clearance to the nearer end wall and side wall, and the heading's angle from each wall's direction."""
     return [WALL_X - np.abs(x), WALL_Y - np.abs(y),
-            np.abs(_wrap(phi - np.where(x < 0.0, np.pi, 0.0))),
-            np.abs(_wrap(phi - _sgn(y) * 0.5 * np.pi))]
+            np.abs(norm(phi - np.where(x < 0.0, np.pi, 0.0))),
+            np.abs(norm(phi - sgn(y) * 0.5 * np.pi))]
 
 
 def _pose_walls(params: np.ndarray) -> np.ndarray:
-    x, y, phi, v, xg, yg, phig, vg = params.T
-    dx, dy = xg - x, yg - y
-    bearing = np.arctan2(dy, dx)
-    angle_to = _wrap(bearing - phi)
-    pose = [v, vg, np.hypot(dx, dy), np.abs(angle_to), _sgn(angle_to) * _wrap(phig - bearing)]
-    return np.column_stack(pose + wall_features(x, y, phi) + wall_features(xg, yg, phig))
+    x, y, phi, _, xg, yg, phig, _ = params.T
+    return np.column_stack([pose_row(params), *wall_features(x, y, phi), *wall_features(xg, yg, phig)])
 
 
 def mirror_field(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -60,5 +47,5 @@ def mirror_field(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return out
 
 
-POSE_WALLS = FeatureSpace("pose_walls", PARAMETERS, NAMES, _pose_walls,
+POSE_WALLS = FeatureSpace("pose_walls", POSE_PARAMETERS, NAMES, _pose_walls,
                           "mirroring the field about either axis", mirror_field)
