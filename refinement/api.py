@@ -188,17 +188,17 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
         sequence, assertions = asserted.sequence, asserted.assertions
     action_models = load_action_models(source.path, tuple(sorted({a.action for a in sequence.actions})))
     risk = resolve_risk(risk, action_models.values())
+    refined = refine_sequence(sequence, action_models, horizon=horizon, method=optimizer, seed=seed,
+                              success_models=success_models, risk=risk, neighbourhood=neighbourhood)
     decision = None
     if meta is not None and horizon > 1 and sequence.actions:  # refine, or keep greedy (Sec. 5.5.4)
         from tailor.refinement.meta_filter import decide
 
         greedy = refine_sequence(sequence, action_models, horizon=1, method=optimizer, seed=seed,
                                  success_models=success_models)
-        decision = decide(meta, greedy.sequence, action_models)
+        decision = decide(meta, greedy.sequence, action_models, refined.sequence)
         if not decision.refine:
-            return Refinement(abstract, sequence, greedy, source.path, tuple(assertions), decision)
-    refined = refine_sequence(sequence, action_models, horizon=horizon, method=optimizer, seed=seed,
-                              success_models=success_models, risk=risk, neighbourhood=neighbourhood)
+            refined = greedy
     return Refinement(abstract, sequence, refined, source.path, tuple(assertions), decision)
 
 

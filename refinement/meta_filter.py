@@ -8,8 +8,14 @@ chain of navigation actions they say how well start, subgoal and goal line up (t
 subgoal against the direction of the next leg) and how far apart they are: what the dissertation's tree
 splits on.
 
+Beside them the meta model sees what the action models predict refinement gains there (`REFINEMENT_FEATURES`:
+the whole sequence's predicted gain over greedy, relative and in seconds). The situation's features say where
+refinement tends to hurt; the prediction says how much it expects to win, and a refinement that expects to win
+little is the one the models' errors can overturn. Both are invariant, as the window features are.
+
 The decision is per situation, "refine or keep greedy", so it composes with however the refined sequence is
-computed (horizon, optimizer, any other objective): `decide` needs only the greedy sequence.
+computed (horizon, optimizer, any other objective): `decide` needs the greedy sequence and, for a meta model
+that judges refinement's prediction, the refined one.
 """
 
 from __future__ import annotations
@@ -22,6 +28,9 @@ import numpy as np
 from tailor.refinement.action_sequence import ActionSequence
 
 BETTER = "better"  # the class where refinement is applied
+# what the action models predict refinement gains over greedy for the whole sequence: 1 - t_refined / t_greedy,
+# and t_greedy - t_refined in seconds
+REFINEMENT_FEATURES = ("refinement.predicted_gain", "refinement.predicted_seconds")
 
 
 @dataclass(frozen=True)
@@ -47,6 +56,27 @@ def window_features(sequence: ActionSequence, models: Mapping[str, object], size
                           np.concatenate(values) if values else np.empty(0))
 
 
+def refinement_features(greedy: ActionSequence, refined: ActionSequence, models: Mapping[str, object]
+                        ) -> np.ndarray:
+    """REFINEMENT_FEATURES of a situation: the predicted gain of its refined sequence over its greedy one."""
+    from tailor.refinement.refine import predicted_durations
+
+    t_greedy = float(sum(predicted_durations(greedy, models)))
+    t_refined = float(sum(predicted_durations(refined, models)))
+    return np.array([1.0 - t_refined / t_greedy if t_greedy > 0 else 0.0, t_greedy - t_refined])
+
+
+def meta_features(greedy: ActionSequence, refined: ActionSequence | None, models: Mapping[str, object], size: int
+                  ) -> WindowFeatures:
+    """What the meta model judges a situation by: the first window's features at the greedy parameterization,
+    then (given the `refined` sequence) refinement's predicted gain."""
+    window = window_features(greedy, models, size)
+    if refined is None:
+        return window
+    return WindowFeatures(window.signature, window.names + REFINEMENT_FEATURES,
+                          np.concatenate([window.values, refinement_features(greedy, refined, models)]))
+
+
 @dataclass(frozen=True)
 class MetaDecision:
     """What the meta filter decided for one situation, and why."""
@@ -60,11 +90,15 @@ class MetaDecision:
         return {"prediction": self.prediction, "refine": self.refine, "leaf": self.leaf, "reason": self.reason}
 
 
-def decide(meta, greedy: ActionSequence, models: Mapping[str, object]) -> MetaDecision:
-    """Refine or keep greedy, from the greedy (h = 1) sequence of a situation: refine where the meta model
+def decide(meta, greedy: ActionSequence, models: Mapping[str, object], refined: ActionSequence | None = None
+           ) -> MetaDecision:
+    """Refine or keep greedy, from the greedy (h = 1) sequence of a situation and, where the meta model judges
+    refinement's prediction (`meta.judges_refinement`), its refined sequence: refine where the meta model
     predicts "better"; where its window differs from the one it was trained on (other actions, e.g. an asserted
     subgoal) it cannot judge, and refinement is applied as without the filter."""
-    features = window_features(greedy, models, len(meta.window))
+    if meta.judges_refinement and refined is None:
+        raise ValueError("this meta model judges refinement's predicted gain: give the refined sequence")
+    features = meta_features(greedy, refined if meta.judges_refinement else None, models, len(meta.window))
     if features.signature != meta.window:
         got = ", ".join(a for a, _ in features.signature) or "none"
         return MetaDecision(None, True, None, f"not judged: the first window holds {got}, the meta model knows "

@@ -132,9 +132,17 @@ class Outcome:
     simulated: SequenceResult | None
 
 
+def refine_prepared(prepared: Prepared, horizon: int, method: str, seed: int, risk: float = 0.0,
+                    neighbourhood: float = 0.0) -> RefinedSequence:
+    return refine(prepared.sequence, prepared.models, horizon=horizon, method=method, seed=seed,
+                  success_models=prepared.success_models, risk=risk, neighbourhood=neighbourhood)
+
+
+def dispatched(refined: RefinedSequence, seed: int, simulate: bool) -> Outcome:
+    """The refined sequence with, if `simulate`, what the simulator measured executing it."""
+    return Outcome(refined, dispatch(refined.sequence, seed=seed) if simulate else None)
+
+
 def refine_and_dispatch(prepared: Prepared, horizon: int, method: str, seed: int, simulate: bool,
                         risk: float = 0.0, neighbourhood: float = 0.0) -> Outcome:
-    refined = refine(prepared.sequence, prepared.models, horizon=horizon, method=method, seed=seed,
-                     success_models=prepared.success_models, risk=risk, neighbourhood=neighbourhood)
-    simulated = dispatch(refined.sequence, seed=seed) if simulate else None
-    return Outcome(refined, simulated)
+    return dispatched(refine_prepared(prepared, horizon, method, seed, risk, neighbourhood), seed, simulate)

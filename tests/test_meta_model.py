@@ -17,10 +17,11 @@ from tailor.refinement.evaluation import experiments
 from tailor.refinement.evaluation.meta_episodes import label_gain, outcome_table
 from tailor.refinement.evaluation.meta_experiment import fresh_report
 from tailor.refinement.learning.meta_learning import CLASSES, confusion, episode_label, learn_meta_model
-from tailor.refinement.meta_filter import decide, window_features
+from tailor.refinement.meta_filter import REFINEMENT_FEATURES, decide, meta_features, window_features
 from tailor.refinement.models.action_models import load_action_models
 from tailor.refinement.models.decision_tree import LabelTree
 from tailor.refinement.models.meta_model import MetaModel, load_meta_model
+from tailor.refinement.refine import predicted_durations
 
 SOCCER = DOMAINS_DIR / "soccer"
 WINDOW = (("goToPose", "pose"), ("dribbleBall", "dribble"))
@@ -117,23 +118,25 @@ def test_meta_model_json_round_trip_and_bad_files(tmp_path):
         assert str(folder / "meta.json") in str(err.value) and "\n" not in str(err.value)
 
 
-def _one_leaf(label: str) -> MetaModel:
+def _one_leaf(label: str, judges_refinement: bool = False) -> MetaModel:
     counts = np.zeros((1, 3), dtype=np.int64)
     counts[0, CLASSES.index(label)] = 10
     tree = LabelTree(np.array([-1]), np.array([-1]), np.array([-1]), np.array([0.0]),
                      np.array([CLASSES.index(label)]), counts, CLASSES)
-    return MetaModel(WINDOW, NAMES, tree, 2, 0.01)
+    return MetaModel(WINDOW, NAMES + (REFINEMENT_FEATURES if judges_refinement else ()), tree, 2, 0.01)
 
 
-def _models_with_meta(tmp_path, label: str):
-    folder = tmp_path / f"models-{label}"
+def _models_with_meta(tmp_path, label: str, judges_refinement: bool = False):
+    folder = tmp_path / f"models-{label}-{judges_refinement}"
     shutil.copytree(SOCCER / "models", folder)
-    (folder / "meta.json").write_text(json.dumps(_one_leaf(label).to_json()))
+    (folder / "meta.json").write_text(json.dumps(_one_leaf(label, judges_refinement).to_json()))
     return folder
 
 
-def test_filter_keeps_greedy_where_the_meta_model_predicts_no_gain(tmp_path):
-    equal, better = _models_with_meta(tmp_path, "equal"), _models_with_meta(tmp_path, "better")
+@pytest.mark.parametrize("judges_refinement", [False, True])
+def test_filter_keeps_greedy_where_the_meta_model_predicts_no_gain(tmp_path, judges_refinement):
+    equal = _models_with_meta(tmp_path, "equal", judges_refinement)
+    better = _models_with_meta(tmp_path, "better", judges_refinement)
     plain = tailor.refine("soccer", "score", models=equal)  # the filter is off by default
     greedy = tailor.refine("soccer", "score", models=equal, horizon=1)
     kept = tailor.refine("soccer", "score", models=equal, filter=True)
@@ -162,8 +165,9 @@ def test_window_features_are_the_action_models_features():
     assert other.signature == WINDOW[:1] and decision.prediction is None and decision.refine
 
 
-def test_refine_cli_filter_and_bad_meta_file(tmp_path, capsys):
-    equal = _models_with_meta(tmp_path, "equal")
+@pytest.mark.parametrize("judges_refinement", [False, True])
+def test_refine_cli_filter_and_bad_meta_file(tmp_path, capsys, judges_refinement):
+    equal = _models_with_meta(tmp_path, "equal", judges_refinement)
     assert main(["refine", "soccer", "score", "--models", str(equal), "--filter", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["filter"]["refine"] is False and out["filter"]["prediction"] == "equal"
@@ -195,7 +199,7 @@ def test_binding_filter_option(tmp_path):
 
 
 def test_evaluate_filter_and_tiny_meta_run(tmp_path, capsys):
-    equal = _models_with_meta(tmp_path, "equal")
+    equal = _models_with_meta(tmp_path, "equal", judges_refinement=True)
     assert main(["-q", "evaluate", "soccer", "--episodes", "2", "--oracle-episodes", "0", "--horizon-episodes", "0",
                  "--models", str(equal), "--filter", "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
@@ -213,6 +217,7 @@ def test_evaluate_filter_and_tiny_meta_run(tmp_path, capsys):
     assert len(report["episodes"]["fresh"]) == 4 and plot.stat().st_size > 0
     model = load_meta_model(out / "models")  # beside copies of the action models it judges
     assert model.window == WINDOW and (out / "models" / "goToPose.json").is_file()
+    assert model.judges_refinement and report["features"] == list(NAMES + REFINEMENT_FEATURES)
     assert report["rules"] == model.rules_text().splitlines()
 
 
@@ -251,3 +256,59 @@ def test_meta_model_must_sit_beside_the_models_it_judges(tmp_path):
     with pytest.raises(OutputFileError, match="holds another goToPose.json"):
         _check_companions(target, SOCCER / "models")
     assert _check_companions(SOCCER / "models", SOCCER / "models") == []
+
+
+def _planted_on_prediction(n, rng):
+    """The window's features are noise; refinement helps where it predicts a gain above 3%, hurts below 1%."""
+    rows = []
+    for _ in range(n):
+        x = rng.uniform(0, 4, len(NAMES))
+        predicted = rng.uniform(-0.02, 0.1)
+        gain = 0.08 if predicted > 0.03 else -0.04 if predicted < 0.01 else 0.0
+        row = _row(10.0, 10.0 * (1 - gain), np.concatenate([x, [predicted, 10.0 * predicted]]))
+        row["feature_names"] = list(NAMES + REFINEMENT_FEATURES)
+        rows.append(row)
+    return rows
+
+
+def test_meta_model_learns_where_refinement_predicts_too_little():
+    rng = np.random.default_rng(4)
+    model = learn_meta_model(_planted_on_prediction(400, rng), horizon=2, seed=0).model
+    assert model.judges_refinement and model.feature_names == NAMES + REFINEMENT_FEATURES
+    assert "refinement.predicted" in model.rules_text()
+    report = fresh_report(model, _planted_on_prediction(200, rng))
+    assert report["floor"]["worse_drop_met"] and report["floor"]["improvement_kept"]
+    assert report["filtered"]["worse"] == 0 < report["unfiltered"]["worse"]
+    data = json.loads(json.dumps(model.to_json()))
+    assert data["schema"] == "tailor.meta_model/2" and MetaModel.from_json(data, "m.json").to_json() == data
+    window_only = learn_meta_model(_planted(100, rng), horizon=2, seed=0).model  # the older files still read
+    assert not window_only.judges_refinement and window_only.to_json()["schema"] == "tailor.meta_model/1"
+    with pytest.raises(ModelFileError, match="feature_names"):  # /2 names the refinement block
+        MetaModel.from_json(dict(data, feature_names=list(NAMES)), "m.json")
+
+
+def test_meta_features_add_refinements_predicted_gain():
+    greedy = tailor.refine("soccer", "score", horizon=1)
+    refined = tailor.refine("soccer", "score")
+    models = load_action_models(SOCCER / "models", ("dribbleBall", "goToPose"))
+    f = meta_features(greedy.sequence, refined.sequence, models, 2)
+    t_greedy = sum(predicted_durations(greedy.sequence, models))
+    t_refined = sum(predicted_durations(refined.sequence, models))
+    assert f.names == NAMES + REFINEMENT_FEATURES and t_refined < t_greedy
+    assert np.array_equal(f.values[:len(NAMES)], window_features(greedy.sequence, models, 2).values)
+    assert f.values[-2:] == pytest.approx([1 - t_refined / t_greedy, t_greedy - t_refined], abs=1e-12)
+    # a meta model that keeps greedy where refinement predicts less than its gain on this problem
+    gain = 1 - t_refined / t_greedy
+    tree = LabelTree(np.array([1, -1, -1]), np.array([2, -1, -1]), np.array([len(NAMES), -1, -1]),
+                     np.array([gain + 0.001, 0.0, 0.0]), np.array([0, 1, 0]),
+                     np.array([[10, 10, 0], [0, 10, 0], [10, 0, 0]], dtype=np.int64), CLASSES)
+    meta = MetaModel(WINDOW, NAMES + REFINEMENT_FEATURES, tree, 2, 0.01)
+    decision = decide(meta, greedy.sequence, models, refined.sequence)
+    assert (decision.prediction, decision.refine) == ("equal", False)
+    assert decide(meta, greedy.sequence, models, greedy.sequence).refine is False  # no predicted gain either
+    stricter = MetaModel(WINDOW, NAMES + REFINEMENT_FEATURES, LabelTree(
+        tree.children_left, tree.children_right, tree.feature, np.array([gain - 0.001, 0.0, 0.0]), tree.label,
+        tree.counts, CLASSES), 2, 0.01)
+    assert decide(stricter, greedy.sequence, models, refined.sequence).refine
+    with pytest.raises(ValueError, match="give the refined sequence"):
+        decide(meta, greedy.sequence, models)

@@ -251,7 +251,8 @@ def _meta_model(args: argparse.Namespace, task, source):
 
 
 def run(args: argparse.Namespace) -> int:
-    from tailor.refinement.pipeline import GREEDY_HORIZON, prepare, refine_and_dispatch, resolve_task
+    from tailor.refinement.pipeline import (GREEDY_HORIZON, dispatched, prepare, refine_and_dispatch, refine_prepared,
+                                             resolve_task)
     from tailor.refinement.progress import showing_progress
 
     if args.plot:  # before planning and refining: a plot that cannot be written must not cost their time
@@ -287,13 +288,12 @@ def run(args: argparse.Namespace) -> int:
     decision = None
     with showing_progress(getattr(args, "progress", True)):  # the genetic algorithm takes seconds per window
         outcomes = {"greedy": refine_and_dispatch(prepared, GREEDY_HORIZON, method, seed, simulate)}
+        refined = refine_prepared(prepared, args.horizon, method, seed, risk, neighbourhood)
         if meta is not None and args.horizon > GREEDY_HORIZON:  # refine, or keep greedy (Sec. 5.5.4)
             from tailor.refinement.meta_filter import decide
 
-            decision = decide(meta, outcomes["greedy"].refined.sequence, prepared.models)
-        refined = decision is None or decision.refine
-        outcomes["refined"] = (refine_and_dispatch(prepared, args.horizon, method, seed, simulate, risk,
-                                                   neighbourhood) if refined
+            decision = decide(meta, outcomes["greedy"].refined.sequence, prepared.models, refined.sequence)
+        outcomes["refined"] = (dispatched(refined, seed, simulate) if decision is None or decision.refine
                                else outcomes["greedy"])
     log.debug("refined greedy and with h=%d%s in %.2f s", args.horizon,
               " and simulated both" if simulate else "", time.perf_counter() - started)

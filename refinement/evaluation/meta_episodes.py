@@ -12,7 +12,7 @@ import numpy as np
 
 from tailor.refinement.dispatch import dispatch
 from tailor.refinement.evaluation.experiments import EQUAL_BAND, outcome_of, situation_seed
-from tailor.refinement.meta_filter import window_features
+from tailor.refinement.meta_filter import meta_features
 from tailor.refinement.refine import refine
 from tailor.refinement.situations import Job, asserted_situation, job_models
 
@@ -28,8 +28,8 @@ def label_gain(gain: float, band: float = EQUAL_BAND) -> str:
 def meta_episode(job: Job, index: int, objects: dict, horizon: int, risk: float = 0.0,
                  neighbourhood: float = 0.0) -> dict:
     """One situation: greedy and refined (analytic, `horizon`, with the risk lambda and neighbourhood the
-    filtered refinement uses), both dispatched with the situation's seed; the first window's features at the
-    greedy parameterization."""
+    filtered refinement uses), both dispatched with the situation's seed; what the meta model judges it by (the
+    first window's features at the greedy parameterization, refinement's predicted gain)."""
     seed = situation_seed(job.seed, index)
     sequence, success = asserted_situation(job, objects)
     models = job_models(job, sequence)
@@ -37,7 +37,7 @@ def meta_episode(job: Job, index: int, objects: dict, horizon: int, risk: float 
     refined = refine(sequence, models, horizon=horizon, method="analytic", seed=seed, success_models=success,
                      risk=risk, neighbourhood=neighbourhood)
     g, r = dispatch(greedy.sequence, seed=seed), dispatch(refined.sequence, seed=seed)
-    features = window_features(greedy.sequence, models, horizon)
+    features = meta_features(greedy.sequence, refined.sequence, models, horizon)
     return {"index": index, "seed": seed, "problem": job.plan.problem, "situation": objects,
             "greedy": g.duration, "refined": r.duration, "greedy_ok": g.succeeded, "refined_ok": r.succeeded,
             "greedy_outcome": outcome_of(g), "refined_outcome": outcome_of(r),

@@ -4,7 +4,8 @@ refinement makes a situation's execution better, equal or worse than greedy exec
 Each episode is labelled by its simulated gain 1 - t_refined / t_greedy: better above +1%, worse below -1%,
 equal between (the tolerance `tailor evaluate` counts with); a refined execution that failed where greedy
 succeeded is worse, the other way round better; where both failed the episode teaches nothing. The features
-are those of the first refinement window at the greedy parameterization (tailor.refinement.meta_filter).
+are those of the first refinement window at the greedy parameterization and refinement's predicted gain
+(tailor.refinement.meta_filter.meta_features).
 
 The tree is a scikit-learn DecisionTreeClassifier with a cost matrix, as the success classifier's: a "worse"
 episode weighs `cost` times as much as the others, so the tree is pessimistic where refinement has hurt. The

@@ -2,7 +2,8 @@
 execution better, equal or worse than greedy execution, stored as JSON (`models/meta.json`, never pickle).
 
 It is an action model of applying action models: learned from evaluated episodes, judged by the features the
-action models of the first refinement window see at the greedy parameterization (tailor.refinement.meta_filter).
+action models of the first refinement window see at the greedy parameterization and by what they predict refinement
+gains there (tailor.refinement.meta_filter).
 It belongs to the action models it was learned with, so it lives in their folder and is found like them
 (`--models DIR`, `$TAILOR_MODELS`, the bundled folder).
 """
@@ -18,7 +19,10 @@ from tailor.errors import ModelFileError, TailorError
 from tailor.refinement.models.action_models import META_FILE, read_json
 from tailor.refinement.models.decision_tree import LabelTree
 
-META_MODEL_SCHEMA = "tailor.meta_model/1"
+# /2 judges the window's features and refinement's predicted gain (meta_filter.REFINEMENT_FEATURES), /1 (still
+# read) the window's features alone
+META_MODEL_SCHEMA = "tailor.meta_model/2"
+WINDOW_ONLY_SCHEMA = "tailor.meta_model/1"
 # |1 - t_refined / t_greedy| within this counts as "equal" (Table 5.4): the meta model's labels and the better /
 # equal / worse counts of `tailor evaluate` use this one tolerance
 EQUAL_BAND = 0.01
@@ -41,6 +45,13 @@ class MetaModel:
         if np.any((self.tree.feature[inner] < 0) | (self.tree.feature[inner] >= len(self.feature_names))):
             raise ValueError(f"a node tests a feature outside 0..{len(self.feature_names) - 1}")
 
+    @property
+    def judges_refinement(self) -> bool:
+        """Whether the features end with refinement's predicted gain (decide then needs the refined sequence)."""
+        from tailor.refinement.meta_filter import REFINEMENT_FEATURES
+
+        return self.feature_names[-len(REFINEMENT_FEATURES):] == REFINEMENT_FEATURES
+
     def predict(self, X: np.ndarray) -> np.ndarray:
         return self.tree.predict(X)
 
@@ -48,7 +59,8 @@ class MetaModel:
         return self.tree.export_text(self.feature_names)
 
     def to_json(self) -> dict:
-        return {"schema": META_MODEL_SCHEMA, "horizon": self.horizon, "equal_band": self.equal_band,
+        schema = META_MODEL_SCHEMA if self.judges_refinement else WINDOW_ONLY_SCHEMA
+        return {"schema": schema, "horizon": self.horizon, "equal_band": self.equal_band,
                 "window": [{"action": a, "feature_set": f} for a, f in self.window],
                 "feature_names": list(self.feature_names), "rules": self.rules_text().splitlines(),
                 "tree": self.tree.to_json(), "report": self.report}
@@ -58,8 +70,12 @@ class MetaModel:
         """Build from parsed JSON; anything malformed raises ModelFileError naming `source`."""
         from tailor.refinement.models.features import feature_names
 
-        if data.get("schema") != META_MODEL_SCHEMA:
-            raise ModelFileError(f"schema is {data.get('schema')!r}, expected {META_MODEL_SCHEMA!r}", file=source)
+        from tailor.refinement.meta_filter import REFINEMENT_FEATURES
+
+        schema = data.get("schema")
+        if schema not in (META_MODEL_SCHEMA, WINDOW_ONLY_SCHEMA):
+            raise ModelFileError(f"schema is {schema!r}, expected {META_MODEL_SCHEMA!r} (or the older "
+                                 f"{WINDOW_ONLY_SCHEMA!r})", file=source)
         horizon, band = data.get("horizon"), data.get("equal_band")
         if not isinstance(horizon, int) or isinstance(horizon, bool) or horizon < 2:
             raise ModelFileError(f"'horizon' must be an integer of at least 2, got {horizon!r}", file=source)
@@ -73,6 +89,7 @@ class MetaModel:
         signature = tuple((w["action"], w["feature_set"]) for w in window)
         try:
             expected = tuple(f"{k + 1}.{a}.{n}" for k, (a, space) in enumerate(signature) for n in feature_names(space))
+            expected += REFINEMENT_FEATURES if schema == META_MODEL_SCHEMA else ()
         except TailorError as exc:  # an unknown feature space
             raise ModelFileError(f"'window': {exc.message}", file=source) from None
         names = data.get("feature_names")
