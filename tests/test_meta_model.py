@@ -312,3 +312,18 @@ def test_meta_features_add_refinements_predicted_gain():
     assert decide(stricter, greedy.sequence, models, refined.sequence).refine
     with pytest.raises(ValueError, match="give the refined sequence"):
         decide(meta, greedy.sequence, models)
+
+
+def test_meta_model_for_another_domain_judges_refinements_prediction(tmp_path, capsys):
+    """No soccer names: the kitchen's meta model learns from its own window and refinement's prediction, and the
+    filter judges a kitchen plan with it."""
+    out = tmp_path / "out"
+    assert main(["-q", "evaluate", "kitchen", "--meta", "--episodes", "20", "--fresh-episodes", "2", "--seed", "5",
+                 "--out", str(out), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    model = load_meta_model(out / "models")
+    assert model.judges_refinement and model.window == (("navigate", "route"), ("grip", "grasp"))
+    assert report["features"] == list(model.feature_names) and report["features"][-2:] == list(REFINEMENT_FEATURES)
+    kitchen = DOMAINS_DIR / "kitchen" / "domain.pddl"
+    judged = tailor.refine(kitchen, "scenario1", models=out / "models", filter=True)
+    assert judged.filter.prediction in CLASSES and judged.filter.leaf is not None
