@@ -134,6 +134,7 @@ class Outcome:
 
 def refine_prepared(prepared: Prepared, horizon: int, method: str, seed: int, risk: float = 0.0,
                     neighbourhood: float = 0.0) -> RefinedSequence:
+    """The prepared sequence with its free parameters fixed by refinement with `horizon` (1: greedy)."""
     return refine(prepared.sequence, prepared.models, horizon=horizon, method=method, seed=seed,
                   success_models=prepared.success_models, risk=risk, neighbourhood=neighbourhood)
 
