@@ -196,7 +196,7 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
 
         greedy = refine_sequence(sequence, action_models, horizon=1, method=optimizer, seed=seed,
                                  success_models=success_models)
-        decision = decide(meta, greedy.sequence, action_models, refined.sequence)
+        decision = decide(meta, greedy, action_models, refined)
         if not decision.refine:
             refined = greedy
     return Refinement(abstract, sequence, refined, source.path, tuple(assertions), decision)

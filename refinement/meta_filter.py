@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tailor.refinement.action_sequence import ActionSequence
+from tailor.refinement.refine import RefinedSequence
 
 BETTER = "better"  # the class where refinement is applied
 # what the action models predict refinement gains over greedy for the whole sequence: 1 - t_refined / t_greedy,
@@ -56,25 +57,22 @@ def window_features(sequence: ActionSequence, models: Mapping[str, object], size
                           np.concatenate(values) if values else np.empty(0))
 
 
-def refinement_features(greedy: ActionSequence, refined: ActionSequence, models: Mapping[str, object]
-                        ) -> np.ndarray:
-    """REFINEMENT_FEATURES of a situation: the predicted gain of its refined sequence over its greedy one."""
-    from tailor.refinement.refine import predicted_durations
-
-    t_greedy = float(sum(predicted_durations(greedy, models)))
-    t_refined = float(sum(predicted_durations(refined, models)))
+def refinement_features(greedy: RefinedSequence, refined: RefinedSequence) -> np.ndarray:
+    """REFINEMENT_FEATURES of a situation: the predicted gain of its refined sequence over its greedy one, from
+    the durations refinement predicted for each."""
+    t_greedy, t_refined = greedy.predicted_total, refined.predicted_total
     return np.array([1.0 - t_refined / t_greedy if t_greedy > 0 else 0.0, t_greedy - t_refined])
 
 
-def meta_features(greedy: ActionSequence, refined: ActionSequence | None, models: Mapping[str, object], size: int
+def meta_features(greedy: RefinedSequence, refined: RefinedSequence | None, models: Mapping[str, object], size: int
                   ) -> WindowFeatures:
     """What the meta model judges a situation by: the first window's features at the greedy parameterization,
     then (given the `refined` sequence) refinement's predicted gain."""
-    window = window_features(greedy, models, size)
+    window = window_features(greedy.sequence, models, size)
     if refined is None:
         return window
     return WindowFeatures(window.signature, window.names + REFINEMENT_FEATURES,
-                          np.concatenate([window.values, refinement_features(greedy, refined, models)]))
+                          np.concatenate([window.values, refinement_features(greedy, refined)]))
 
 
 @dataclass(frozen=True)
@@ -90,7 +88,7 @@ class MetaDecision:
         return {"prediction": self.prediction, "refine": self.refine, "leaf": self.leaf, "reason": self.reason}
 
 
-def decide(meta, greedy: ActionSequence, models: Mapping[str, object], refined: ActionSequence | None = None
+def decide(meta, greedy: RefinedSequence, models: Mapping[str, object], refined: RefinedSequence | None = None
            ) -> MetaDecision:
     """Refine or keep greedy, from the greedy (h = 1) sequence of a situation and, where the meta model judges
     refinement's prediction (`meta.judges_refinement`), its refined sequence: refine where the meta model

@@ -3,6 +3,7 @@ refine-or-greedy (CLI, API, binding), and a tiny `tailor evaluate --meta` run.""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import shutil
 
@@ -159,9 +160,9 @@ def test_window_features_are_the_action_models_features():
                                models["dribbleBall"].features(second.values()[None, :])[0]])
     assert np.array_equal(f.values, expected)
     other = window_features(greedy.sequence, models, 1)  # another window: the meta model does not judge it
-    decision = decide(_one_leaf("worse"), greedy.sequence.__class__(
+    decision = decide(_one_leaf("worse"), dataclasses.replace(greedy.refined, sequence=greedy.sequence.__class__(
         greedy.sequence.domain, greedy.sequence.problem, greedy.sequence.actions[:1], greedy.sequence.scene,
-        greedy.sequence.simulator), models)
+        greedy.sequence.simulator)), models)
     assert other.signature == WINDOW[:1] and decision.prediction is None and decision.refine
 
 
@@ -291,7 +292,7 @@ def test_meta_features_add_refinements_predicted_gain():
     greedy = tailor.refine("soccer", "score", horizon=1)
     refined = tailor.refine("soccer", "score")
     models = load_action_models(SOCCER / "models", ("dribbleBall", "goToPose"))
-    f = meta_features(greedy.sequence, refined.sequence, models, 2)
+    f = meta_features(greedy.refined, refined.refined, models, 2)
     t_greedy = sum(predicted_durations(greedy.sequence, models))
     t_refined = sum(predicted_durations(refined.sequence, models))
     assert f.names == NAMES + REFINEMENT_FEATURES and t_refined < t_greedy
@@ -303,15 +304,15 @@ def test_meta_features_add_refinements_predicted_gain():
                      np.array([gain + 0.001, 0.0, 0.0]), np.array([0, 1, 0]),
                      np.array([[10, 10, 0], [0, 10, 0], [10, 0, 0]], dtype=np.int64), CLASSES)
     meta = MetaModel(WINDOW, NAMES + REFINEMENT_FEATURES, tree, 2, 0.01)
-    decision = decide(meta, greedy.sequence, models, refined.sequence)
+    decision = decide(meta, greedy.refined, models, refined.refined)
     assert (decision.prediction, decision.refine) == ("equal", False)
-    assert decide(meta, greedy.sequence, models, greedy.sequence).refine is False  # no predicted gain either
+    assert decide(meta, greedy.refined, models, greedy.refined).refine is False  # no predicted gain either
     stricter = MetaModel(WINDOW, NAMES + REFINEMENT_FEATURES, LabelTree(
         tree.children_left, tree.children_right, tree.feature, np.array([gain - 0.001, 0.0, 0.0]), tree.label,
         tree.counts, CLASSES), 2, 0.01)
-    assert decide(stricter, greedy.sequence, models, refined.sequence).refine
+    assert decide(stricter, greedy.refined, models, refined.refined).refine
     with pytest.raises(ValueError, match="give the refined sequence"):
-        decide(meta, greedy.sequence, models)
+        decide(meta, greedy.refined, models)
 
 
 def test_meta_model_for_another_domain_judges_refinements_prediction(tmp_path, capsys):

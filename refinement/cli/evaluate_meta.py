@@ -139,8 +139,8 @@ def run_meta(args: argparse.Namespace, domain_dir: Path, binding, plan, source) 
 
     train_items, fresh_items = situations(0, train_n), situations(train_n, fresh_n)
     risk = 0.0 if args.risk is None else args.risk
-    if train_items:  # models loaded up front (a bad model file fails before any work) for the risk lambda of
-        from tailor.refinement.refine import resolve_risk  # the refinement judged: the one evaluate and refine run
+    if train_items:  # the models, loaded up front (a bad model file fails before any work), give the risk lambda
+        from tailor.refinement.refine import resolve_risk  # of the refinement judged: the one evaluate and refine run
 
         job, _, objects = train_items[0]
         risk = resolve_risk(args.risk, job_models(job, situation_sequence(job, objects)).values())

@@ -292,7 +292,7 @@ def run(args: argparse.Namespace) -> int:
         if meta is not None and args.horizon > GREEDY_HORIZON:  # refine, or keep greedy (Sec. 5.5.4)
             from tailor.refinement.meta_filter import decide
 
-            decision = decide(meta, outcomes["greedy"].refined.sequence, prepared.models, refined.sequence)
+            decision = decide(meta, outcomes["greedy"].refined, prepared.models, refined)
         outcomes["refined"] = (dispatched(refined, seed, simulate) if decision is None or decision.refine
                                else outcomes["greedy"])
     log.debug("refined greedy and with h=%d%s in %.2f s", args.horizon,

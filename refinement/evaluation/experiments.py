@@ -131,7 +131,7 @@ def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: 
     greedy = refine(sequence, models, horizon=1, method="analytic", seed=seed, success_models=success)
     optimized = refine(sequence, models, horizon=2, method="analytic", seed=seed, success_models=success, risk=risk,
                        neighbourhood=neighbourhood)
-    decision = decide(job_meta_model(job), greedy.sequence, models, optimized.sequence) if meta else None
+    decision = decide(job_meta_model(job), greedy, models, optimized) if meta else None
     refined = optimized if decision is None or decision.refine else greedy
     # where the analytic minimization fell back to the GA everywhere, the GA run is that same run
     fell_back = optimized.windows and all(w.method == "ga" for w in optimized.windows)

@@ -37,7 +37,7 @@ def meta_episode(job: Job, index: int, objects: dict, horizon: int, risk: float 
     refined = refine(sequence, models, horizon=horizon, method="analytic", seed=seed, success_models=success,
                      risk=risk, neighbourhood=neighbourhood)
     g, r = dispatch(greedy.sequence, seed=seed), dispatch(refined.sequence, seed=seed)
-    features = meta_features(greedy.sequence, refined.sequence, models, horizon)
+    features = meta_features(greedy, refined, models, horizon)
     return {"index": index, "seed": seed, "problem": job.plan.problem, "situation": objects,
             "greedy": g.duration, "refined": r.duration, "greedy_ok": g.succeeded, "refined_ok": r.succeeded,
             "greedy_outcome": outcome_of(g), "refined_outcome": outcome_of(r),

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from tailor.errors import ModelFileError, TailorError
+from tailor.refinement.meta_filter import REFINEMENT_FEATURES
 from tailor.refinement.models.action_models import META_FILE, read_json
 from tailor.refinement.models.decision_tree import LabelTree
 
@@ -48,8 +49,6 @@ class MetaModel:
     @property
     def judges_refinement(self) -> bool:
         """Whether the features end with refinement's predicted gain (decide then needs the refined sequence)."""
-        from tailor.refinement.meta_filter import REFINEMENT_FEATURES
-
         return self.feature_names[-len(REFINEMENT_FEATURES):] == REFINEMENT_FEATURES
 
     def predict(self, X: np.ndarray) -> np.ndarray:
@@ -69,8 +68,6 @@ class MetaModel:
     def from_json(cls, data: dict, source: str) -> MetaModel:
         """Build from parsed JSON; anything malformed raises ModelFileError naming `source`."""
         from tailor.refinement.models.features import feature_names
-
-        from tailor.refinement.meta_filter import REFINEMENT_FEATURES
 
         schema = data.get("schema")
         if schema not in (META_MODEL_SCHEMA, WINDOW_ONLY_SCHEMA):
