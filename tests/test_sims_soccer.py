@@ -80,6 +80,31 @@ def test_dribbling_straight_keeps_the_ball():
     assert ep.outcome == "success"
 
 
+@pytest.mark.parametrize("noise", [Noise.off(), Noise()])
+def test_dribble_ends_lost_when_robot_and_ball_rest_apart_at_the_goal(noise):
+    # standing at the goal (vg 0) with the ball at rest 8 cm ahead (out of the guide: > 6 cm), neither moves
+    # again: the action ends at once as "ball_lost" (it used to wait for the 30 s timeout: seed 1000's
+    # situation 218 stopped so after braking at its goal)
+    phi = 0.5
+    ahead = (0.08 * math.cos(phi), 0.08 * math.sin(phi))
+    sim = SoccerSim(3, noise)
+    sim.place((0.0, 0.0, phi, 0.0), ahead)
+    assert (sim.run(ActionCall("dribbleBall", (0.0, 0.0, phi, 0.0))).outcome, sim.time) == ("ball_lost", 0.0)
+
+
+def test_dribble_waits_while_the_ball_is_held_rolling_or_the_goal_is_reached_moving():
+    phi = 0.5
+    sim = SoccerSim(3, Noise.off())
+    sim.place((0.0, 0.0, phi, 0.0), (0.03 * math.cos(phi), 0.03 * math.sin(phi)))  # in the guide
+    assert sim.run(ActionCall("dribbleBall", (0.0, 0.0, phi, 0.0))).outcome == "success"
+    sim.place((0.0, 0.0, phi, 0.0), (0.08 * math.cos(phi), 0.08 * math.sin(phi)))
+    sim.ball.velocity = (-0.2 * math.cos(phi), -0.2 * math.sin(phi))  # rolling back into the guide
+    assert sim.run(ActionCall("dribbleBall", (0.0, 0.0, phi, 0.0))).outcome == "success"
+    sim.place((0.0, 0.0, phi, 0.1), (0.08 * math.cos(phi), 0.08 * math.sin(phi)))
+    ep = sim.run(ActionCall("dribbleBall", (0.0, 0.0, phi, 0.1)))  # to pass the goal at 0.1 m/s: it drives on
+    assert ep.outcome == "success" and sim.time > 0.0  # and takes the ball into the guide
+
+
 def _dribble_then(sim, v_cmd, w_cmd, seconds):
     for _ in range(int(2.0 * CONTROL_HZ)):  # accelerate straight to 0.8 m/s with the ball
         sim.command(0.8, 0.0)

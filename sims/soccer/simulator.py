@@ -11,7 +11,9 @@ An action ends (Episode.outcome) on
   ball sits in the guide (within BALL_HELD_DISTANCE of the ball point);
 - "collision": a ball is in the scene, the action does not dribble, and the ball moved (by more than
   BUMP_DISTANCE) before the goal pose was reached;
-- "ball_lost": dribbling, the ball is further than BALL_LOST_DISTANCE from the ball point;
+- "ball_lost": dribbling, the ball is further than BALL_LOST_DISTANCE from the ball point, or it lies at rest
+  outside the guide while the robot stands at a goal it was to reach standing (nothing would move either again:
+  without this the action waited for its timeout);
 - "timeout": TIMEOUT simulated seconds passed.
 Termination is judged on the true state; the action sees (and the Episode logs) the believed state.
 """
@@ -373,7 +375,8 @@ class SoccerSim:
             return "collision"
         if at_goal:
             if dribbling and ball_gap > BALL_HELD_DISTANCE:
-                return None
+                resting = v == 0.0 and vg <= 0.0 and _get_velocity(self.ball) == (0.0, 0.0)
+                return "ball_lost" if resting else None
             if action == "approachBall" and ball_gap > POS_TOL:
                 return None
             return "success"
