@@ -1,5 +1,5 @@
 """A small first correction before a long straight is driven at the speed its curvature allows, not crept along
-at the arc speed (dribbleBall and approachBall; sims.soccer.follow.Follower.gentle_at_speed): a start heading a
+at the arc speed (dribbleBall, approachBall and goToPose; sims.soccer.follow.Follower.gentle_at_speed): a start heading a
 little off the path must not cost seconds."""
 
 import dataclasses
@@ -46,7 +46,21 @@ def test_without_gentle_corrections_at_speed_the_approach_creeps(monkeypatch):
     assert _approach_time(2.12) - _approach_time(2.42) > 0.6  # measured 0.95 s (6.35 against 5.4 s)
 
 
-def test_go_to_pose_is_left_as_it_was():
-    from tailor.sims.soccer.goto import GOTO, LURE_CORRIDOR
+def _goto_time(heading: float) -> float:
+    """goToPose from rest 4.3 m from its goal, arriving in the direction of the straight line (2.42 rad)."""
+    sim = SoccerSim(1)
+    sim.place((1.25, -1.79, heading, 0.0))
+    episode = sim.run(ActionCall("goToPose", (-1.94, 1.02, 2.42, 0.1)))
+    assert episode.succeeded
+    return episode.duration
 
-    assert not GOTO.gentle_at_speed and not LURE_CORRIDOR.gentle_at_speed
+
+def test_a_small_start_heading_error_costs_go_to_pose_no_seconds():
+    assert max(_goto_time(h) for h in (2.12, 2.22, 2.52)) - _goto_time(2.42) < 0.1
+
+
+def test_without_gentle_corrections_at_speed_go_to_pose_creeps(monkeypatch):
+    from tailor.sims.soccer import goto
+
+    monkeypatch.setattr(goto, "GOTO", dataclasses.replace(goto.GOTO, gentle_at_speed=False))
+    assert _goto_time(2.12) - _goto_time(2.42) > 0.6

@@ -25,10 +25,11 @@ from tailor.refinement.models.meta_model import MetaModel, load_meta_model
 from tailor.refinement.refine import predicted_durations
 
 SOCCER = DOMAINS_DIR / "soccer"
-WINDOW = (("goToPose", "pose"), ("dribbleBall", "dribble"))
+WINDOW = (("goToPose", "goto"), ("dribbleBall", "dribble"))
 POSE = ("v", "vg", "dist", "angle_to", "angle_at")
-NAMES = tuple(f"{k}.{a}.{n}" for k, a, names in ((1, "goToPose", POSE), (2, "dribbleBall", POSE + ("path", "arcs",
-                                                                                                 "exact_path")))
+PATH = POSE + ("path", "arcs", "exact_path")
+NAMES = tuple(f"{k}.{a}.{n}" for k, a, names in ((1, "goToPose", PATH + ("detour", "lure_path", "lure_bearing",
+                                                                         "lure_turn")), (2, "dribbleBall", PATH))
               for n in names)
 
 

@@ -8,7 +8,7 @@ and approachBall's own feature space (sims.soccer.features).
 
 from tailor.sims.protocol import ActionSpec, Scenario, SimulatorEntry
 from tailor.sims.soccer.actions import ACTION_FUNCTIONS, approachBall, dribbleBall, goToPose
-from tailor.sims.soccer.features import APPROACH, DRIBBLE
+from tailor.sims.soccer.features import APPROACH, DRIBBLE, GOTO_SPACE
 from tailor.sims.soccer.scenarios import RANGES, SITUATIONS, subgoal_episode
 from tailor.sims.soccer.simulator import Noise, SoccerSim, simulate_sequence
 from tailor.sims.soccer.team import TEAM
@@ -32,8 +32,9 @@ SIMULATOR = SimulatorEntry(
     views=((("x", "y", "phi"), ("ball_x", "ball_y")),),  # the field from above: robot with heading, and ball
     subgoal_episode=subgoal_episode,
     team=TEAM,
-    # approachBall's: the pose features and the path its controller plans; the success classifier's: the walls
-    feature_spaces=(APPROACH, DRIBBLE, POSE_WALLS),
+    # approachBall's, goToPose's and dribbleBall's: the pose features and the path each controller plans; the success
+    # classifier's: the walls
+    feature_spaces=(APPROACH, DRIBBLE, GOTO_SPACE, POSE_WALLS),
     description="RoboCup mid-size field, Pioneer-like robot with a ball guide, a ball (pymunk)",
 )
 

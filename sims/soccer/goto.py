@@ -44,13 +44,11 @@ from tailor.sims.soccer.dubins import DubinsPath, shortest_path_inside
 from tailor.sims.soccer.world import wrap
 
 GOTO_STRAIGHT = 0.1  # m, the Dubins path ends this little behind the goal
-# goToPose still creeps along a gentle first correction at the arc speed (gentle_at_speed off): driving it at
-# speed, as approachBall and dribbleBall do, would change every plan's first action, its collision classifier and
-# the subgoal assertion built on them, which were not retrained for it
-GOTO = replace(APPROACH, final_straight=GOTO_STRAIGHT, gentle_at_speed=False)
+# a gentle first correction is driven at the speed its curvature allows, as approachBall and dribbleBall drive
+# it (sims.soccer.follow): creeping along it at the arc speed cost 0.8 s of a 6.7 s goToPose on average
+GOTO = replace(APPROACH, final_straight=GOTO_STRAIGHT)
 LURE_CORRIDOR = replace(APPROACH, final_straight=0.3, corridor_extra=0.6, corridor_heading=math.radians(45.0),
-                        corridor_width=0.05, corridor_slope=0.5,
-                        gentle_at_speed=False)  # where the line follower takes over from the lure
+                        corridor_width=0.05, corridor_slope=0.5)  # where the line follower takes over from the lure
 MAX_DETOUR = 1.0  # m, a Dubins path at most this much longer than the straight line to its end is followed
 LURE_MIN = 0.3  # m, the IP lies at least this far behind the (axle) goal ...
 LURE_GAIN = 0.5  # ... plus this times the robot's own distance behind the goal (0 in front of it)
