@@ -89,7 +89,7 @@ def test_refine_reports_what_was_free_and_what_it_was_set_to():
     assert refined.free == {p["id"]: (p["low"], p["high"]) for p in golden["free_parameters"]}
     assert refined.chosen == pytest.approx({p["id"]: p["value"] for p in golden["free_parameters"]}, abs=1e-6)
     assert refined.predicted_total == pytest.approx(golden["refined"]["predicted_total"], abs=1e-3)
-    greedy = tailor.refine("soccer", "score", horizon=1)
+    greedy = tailor.refine("soccer", "score", horizon=1, risk=0, neighbourhood=0)  # the CLI's greedy: h = 1, plain
     assert greedy.chosen == pytest.approx({p["id"]: p["greedy"] for p in golden["free_parameters"]}, abs=1e-6)
     result = tailor.dispatch(refined, seed=0)
     assert result.succeeded and result.duration == pytest.approx(golden["refined"]["simulated_total"], abs=1e-3)

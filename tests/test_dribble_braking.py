@@ -3,8 +3,8 @@
 Braking "A_DRIBBLE_BRAKE below the believed speed" alone is a random walk under sensing and motor noise: under
 noise seed 13 a run of same-signed draws kept the robot at 0.85-0.9 m/s (above V_DRIBBLE) until its last arc,
 entered at 0.67 m/s instead of 0.24, and lost the ball ~22 s into this sequence. Since gentle corrections are
-driven at speed the same sequence runs differently; without the bound it loses the ball under seeds 34, 57, 61
-and 76 of the first 120.
+driven at speed the same sequence runs differently; without the bound it lost the ball under seeds 34, 57, 61
+and 76 of the first 120, and since goToPose (the approach before it) drives them at speed too, under seed 77.
 """
 
 import dataclasses
@@ -25,10 +25,10 @@ def _run(seed: int):
     return result, result.trajectory
 
 
-LOSES_WITHOUT_BOUND = 34
+LOSES_WITHOUT_BOUND = 77
 
 
-def test_seed_34_keeps_the_ball_and_the_top_speed():
+def test_seed_77_keeps_the_ball_and_the_top_speed():
     result, _ = _run(LOSES_WITHOUT_BOUND)
     assert [r.outcome for r in result.results] == ["success", "success"]
     v = result.columns.index("v")
@@ -37,7 +37,7 @@ def test_seed_34_keeps_the_ball_and_the_top_speed():
     assert max(speeds) < V_DRIBBLE * 1.1  # the motors' 3% noise on top of the bound, never a drift
 
 
-def test_without_the_bound_seed_34_loses_the_ball(monkeypatch):
+def test_without_the_bound_seed_77_loses_the_ball(monkeypatch):
     monkeypatch.setattr(dribble, "DRIBBLE", dataclasses.replace(dribble.DRIBBLE, bounded_braking=False))
     result, _ = _run(LOSES_WITHOUT_BOUND)
     assert result.results[-1].outcome == "ball_lost"

@@ -140,7 +140,7 @@ def test_filter_keeps_greedy_where_the_meta_model_predicts_no_gain(tmp_path, jud
     equal = _models_with_meta(tmp_path, "equal", judges_refinement)
     better = _models_with_meta(tmp_path, "better", judges_refinement)
     plain = tailor.refine("soccer", "score", models=equal)  # the filter is off by default
-    greedy = tailor.refine("soccer", "score", models=equal, horizon=1)
+    greedy = tailor.refine("soccer", "score", models=equal, horizon=1, risk=0, neighbourhood=0)  # the filter's greedy: plain h = 1
     kept = tailor.refine("soccer", "score", models=equal, filter=True)
     assert plain.filter is None and plain.chosen != greedy.chosen  # refinement moves the approach heading
     assert kept.chosen == greedy.chosen and kept.predicted_total == greedy.predicted_total
@@ -191,7 +191,7 @@ def test_binding_filter_option(tmp_path):
     binding = (domain / "actions.toml").read_text()
     (domain / "actions.toml").write_text(binding + "filter = true\n")  # the last table is [evaluation]
     pddl = domain / "domain.pddl"
-    greedy = tailor.refine(pddl, "score", horizon=1)
+    greedy = tailor.refine(pddl, "score", horizon=1, risk=0, neighbourhood=0)  # the filter's greedy: plain h = 1
     kept = tailor.refine(pddl, "score")
     assert kept.filter is not None and kept.chosen == greedy.chosen
     assert tailor.refine(pddl, "score", filter=False).chosen != greedy.chosen

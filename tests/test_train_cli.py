@@ -121,7 +121,7 @@ def test_train_is_reproducible_and_prints_the_table(tmp_path, monkeypatch, capsy
     for name in ("goToPose.json", "approachBall.json", "dribbleBall.json", "goToPose.collision.json"):
         assert (tmp_path / "a" / "models" / name).read_text() == (tmp_path / "b" / "models" / name).read_text()
     model = load_action_models(tmp_path / "a" / "models")["goToPose"]
-    assert model.duration.predict(compute_features("pose", random_params(5, 2))).shape == (5,)
+    assert model.duration.predict(compute_features("goto", random_params(5, 2))).shape == (5,)
 
 
 def test_only_learns_the_named_models(tmp_path, monkeypatch, capsys):

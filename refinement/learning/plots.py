@@ -169,7 +169,7 @@ POSE_SPACES = ("pose", "pose_delta")  # the duration models' feature spaces Fig.
 
 
 def _posed(feature_set: str) -> bool:
-    """Whether Fig. 4.8 applies to a classifier: its feature space reads a start and a goal pose."""
+    """Whether Figs. 4.7 and 4.8 apply to a model: its feature space reads a start and a goal pose."""
     return feature_space(feature_set).parameters == POSE_PARAMETERS
 
 
@@ -188,7 +188,9 @@ def training_plots(simulator: str, models: Mapping[str, ActionModel],
         "mae_vs_n_i.png": lambda p: plot_mae_vs_n_i(reports, p),
         "mae_vs_episodes.png": lambda p: plot_mae_vs_episodes(reports, p),
     }
-    posed = {action: m for action, m in models.items() if m.feature_set in POSE_SPACES}
+    # every duration model that reads a start and a goal pose, whatever features it derives from them (a robot's
+    # own space that adds the path its controller plans, as the soccer robot's goToPose)
+    posed = {action: m for action, m in models.items() if m.feature_set in POSE_SPACES or _posed(m.feature_set)}
     if posed:
         plots["angle_at_polar.png"] = lambda p: plot_angle_at(posed, p)
     for action, classifier in classifiers.items():
