@@ -164,13 +164,16 @@ def shortest_word_inside(start: np.ndarray, pre: np.ndarray, radius: float, fina
     same choice among the exact words (the shortest word inside where no exact word exists)."""
     words, exact = dubins_words(start, pre, radius)
     total = _lengths(words)
-    bounds = word_bounds(start, words, radius)
-    excess = np.max(np.stack([box[0] - bounds[..., 0], bounds[..., 1] - box[1], box[2] - bounds[..., 2],
-                              bounds[..., 3] - box[3]]), axis=0)
-    excess = np.where(np.isfinite(total), excess, np.inf)
     m = 4.0 * radius  # surely_inside: every word stays in the box (no word strays 4 radii from its ends)
     surely = np.all([(box[0] + m <= a) & (a <= box[1] - m) & (box[2] + m <= b) & (b <= box[3] - m)
                      for a, b in ((start[:, 0], start[:, 1]), (pre[:, 0], pre[:, 1]))], axis=0)
+    excess = np.zeros(total.shape)  # where surely inside the shortest word is taken: its bounds are not needed
+    near = ~surely
+    if near.any():
+        bounds = word_bounds(start[near], words[near], radius)
+        excess[near] = np.max(np.stack([box[0] - bounds[..., 0], bounds[..., 1] - box[1], box[2] - bounds[..., 2],
+                                        bounds[..., 3] - box[3]]), axis=0)
+    excess = np.where(np.isfinite(total), excess, np.inf)
     rows = np.arange(len(start))
 
     def choose(usable: np.ndarray) -> np.ndarray:
