@@ -189,7 +189,7 @@ def training_plots(simulator: str, models: Mapping[str, ActionModel],
         "mae_vs_episodes.png": lambda p: plot_mae_vs_episodes(reports, p),
     }
     # every duration model that reads a start and a goal pose, whatever features it derives from them (a robot's
-    # own space that adds the path its controller plans, as the soccer robot's goToPose)
+    # own space that adds the path its controller plans)
     posed = {action: m for action, m in models.items() if m.feature_set in POSE_SPACES or _posed(m.feature_set)}
     if posed:
         plots["angle_at_polar.png"] = lambda p: plot_angle_at(posed, p)
