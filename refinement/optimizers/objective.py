@@ -36,6 +36,11 @@ class Term:
     region: object | None = None
     region_features: Callable[[np.ndarray], np.ndarray] | None = None
     region_margin: tuple[float, ...] = ()  # per free parameter: how far inside the region a choice must lie
+    # optional, for a batch shared with other terms: theta -> the action's parameter rows, and the (row-wise)
+    # features of such rows; terms with the same `derive` and `model` are evaluated in one call of each
+    # (Objective.cost), so costly features (a planned path per row) pay numpy's per-call cost once per batch
+    inputs: Callable[[np.ndarray], np.ndarray] | None = None
+    derive: Callable[[np.ndarray], np.ndarray] | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,9 +68,20 @@ class Objective:
     def cost(self, theta: np.ndarray) -> np.ndarray:
         """Summed predicted duration (s) of each row of theta (batch, n_free)."""
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        predicted: dict[int, np.ndarray] = {}
+        shared: dict[tuple[int, int], list[int]] = {}
+        for i, term in enumerate(self.terms):
+            if term.inputs is not None and term.derive is not None:
+                shared.setdefault((id(term.model), id(term.derive)), []).append(i)
+        for group in shared.values():
+            model, derive = self.terms[group[0]].model, self.terms[group[0]].derive
+            rows = np.concatenate([self.terms[i].inputs(theta) for i in group])
+            for i, part in zip(group, np.split(np.asarray(model.predict(derive(rows)), dtype=float), len(group))):
+                predicted[i] = part
         total = np.zeros(len(theta))
-        for term in self.terms:
-            total += np.asarray(term.model.predict(term.features(theta)), dtype=float)
+        for i, term in enumerate(self.terms):  # summed in the terms' order, shared or not
+            total += predicted[i] if i in predicted else np.asarray(term.model.predict(term.features(theta)),
+                                                                    dtype=float)
         return total
 
     def robust_cost(self, theta: np.ndarray) -> np.ndarray:

@@ -55,6 +55,9 @@ GOTO_FEATURES = APPROACH_FEATURES + ("detour", "lure_path", "lure_bearing", "lur
 
 
 ARC = np.array([[kind != "S" for kind in word] for word in WORDS])  # (6, 3): which segments of each word are arcs
+SIGN = np.array([[{"L": 1.0, "R": -1.0, "S": 0.0}[kind] for kind in word] for word in WORDS])  # (6, 3) turn sense
+_COMPASS = np.array([0.0, 0.5 * np.pi, np.pi, 1.5 * np.pi])  # east, north, west, south on an arc's circle
+_EAST_X, _NORTH_Y = np.array([1.0, 0.0, -1.0, 0.0]), np.array([0.0, 1.0, 0.0, -1.0])
 
 
 def _lengths(words: np.ndarray) -> np.ndarray:
@@ -124,69 +127,94 @@ def shortest_word(start: np.ndarray, pre: np.ndarray, radius: float, final: floa
     return np.column_stack([total[rows, best] + final, arcs, np.where(exact, total, np.inf).min(axis=1) + final])
 
 
+def path_bounds(start: np.ndarray, lengths: np.ndarray, signs: np.ndarray, radius: float) -> np.ndarray:
+    """(N, 4) the bounding box (xmin, xmax, ymin, ymax) of N paths driven from `start` (N, 3), segment lengths
+    `lengths` (N, 3; NaN read as 0) and kinds `signs` (N, 3: 1 left arc, -1 right arc, 0 straight): the segment
+    ends and the arcs' extreme points, as sims.soccer.dubins.word_bounds (tests). All paths at once, whatever
+    their words: the genetic algorithm asks for a few hundred at a time, where numpy's per-call cost dominates."""
+    x, y, h = start[:, 0], start[:, 1], start[:, 2]
+    xmin, xmax, ymin, ymax = x, x, y, y
+    for s in range(3):
+        length, sign = np.nan_to_num(lengths[:, s]), signs[:, s]
+        arc = sign != 0.0
+        k = np.where(arc, sign, 1.0) / radius
+        sin_h, cos_h = np.sin(h), np.cos(h)
+        eh = np.where(arc, h + k * length, h)
+        ex = np.where(arc, x + (np.sin(eh) - sin_h) / k, x + length * cos_h)
+        ey = np.where(arc, y - (np.cos(eh) - cos_h) / k, y + length * sin_h)
+        cx, cy = x - sin_h / k, y + cos_h / k  # the arc's centre; its points furthest east, north, west, south
+        theta0 = np.arctan2(y - cy, x - cx)
+        passed = (arc & (length > 0.0))[:, None] & (
+            np.mod(np.sign(k)[:, None] * (_COMPASS - theta0[:, None]), TWO_PI) <= (np.abs(k) * length)[:, None])
+        px = np.where(passed, cx[:, None] + radius * _EAST_X, ex[:, None])  # (the end point where not passed)
+        py = np.where(passed, cy[:, None] + radius * _NORTH_Y, ey[:, None])
+        xmin, xmax = np.minimum(xmin, px.min(axis=1)), np.maximum(xmax, px.max(axis=1))
+        ymin, ymax = np.minimum(ymin, py.min(axis=1)), np.maximum(ymax, py.max(axis=1))
+        x, y, h = ex, ey, eh
+    return np.column_stack([xmin, xmax, ymin, ymax])
+
+
 def word_bounds(start: np.ndarray, words: np.ndarray, radius: float) -> np.ndarray:
-    """(M, 6, 4) the bounding box (xmin, xmax, ymin, ymax) of each word of WORDS driven from `start` (M, 3) with
-    the segment lengths `words` (M, 6, 3; NaN where a word does not exist): segment ends and the arcs' extreme
-    points, as sims.soccer.dubins.word_bounds (tests)."""
-    out = np.full((len(start), len(WORDS), 4), np.nan)
-    for j, word in enumerate(WORDS):
-        x, y, h = start[:, 0].copy(), start[:, 1].copy(), start[:, 2].copy()
-        xmin, xmax, ymin, ymax = x.copy(), x.copy(), y.copy(), y.copy()
-        for s, kind in enumerate(word):
-            length = np.nan_to_num(words[:, j, s])
-            if kind == "S":
-                ex, ey, eh = x + length * np.cos(h), y + length * np.sin(h), h
-            else:
-                k = (1.0 if kind == "L" else -1.0) / radius
-                eh = h + k * length
-                ex, ey = x + (np.sin(eh) - np.sin(h)) / k, y - (np.cos(eh) - np.cos(h)) / k
-                cx, cy = x - np.sin(h) / k, y + np.cos(h) / k
-                theta0 = np.arctan2(y - cy, x - cx)
-                sweep = abs(k) * length
-                sign = 1.0 if k > 0.0 else -1.0
-                for angle, px, py in ((0.0, cx + radius, cy), (0.5 * np.pi, cx, cy + radius),
-                                      (np.pi, cx - radius, cy), (1.5 * np.pi, cx, cy - radius)):
-                    passed = (length > 0.0) & (np.mod(sign * (angle - theta0), TWO_PI) <= sweep)
-                    xmin, xmax = np.where(passed, np.minimum(xmin, px), xmin), np.where(passed, np.maximum(xmax, px), xmax)
-                    ymin, ymax = np.where(passed, np.minimum(ymin, py), ymin), np.where(passed, np.maximum(ymax, py), ymax)
-            xmin, xmax = np.minimum(xmin, ex), np.maximum(xmax, ex)
-            ymin, ymax = np.minimum(ymin, ey), np.maximum(ymax, ey)
-            x, y, h = ex, ey, eh
-        out[:, j] = np.column_stack([xmin, xmax, ymin, ymax])
+    """(M, 6, 4) path_bounds of each word of WORDS driven from `start` (M, 3) with the segment lengths `words`
+    (M, 6, 3); NaN where a word does not exist."""
+    m = len(start)
+    out = path_bounds(np.repeat(start, len(WORDS), axis=0), words.reshape(-1, 3), np.tile(SIGN, (m, 1)),
+                      radius).reshape(m, len(WORDS), 4)
     out[np.isnan(words).any(axis=2)] = np.nan
     return out
+
+
+def _excess(bounds: np.ndarray, box: tuple[float, float, float, float]) -> np.ndarray:
+    """How far paths with these bounds (..., 4) leave the box (<= 0: inside)."""
+    return np.max(np.stack([box[0] - bounds[..., 0], bounds[..., 1] - box[1], box[2] - bounds[..., 2],
+                            bounds[..., 3] - box[3]]), axis=0)
 
 
 def shortest_word_inside(start: np.ndarray, pre: np.ndarray, radius: float, final: float,
                          box: tuple[float, float, float, float]) -> np.ndarray:
     """(M, 3) as shortest_word, of the word sims.soccer.dubins.shortest_path_inside plans: the shortest that
     stays inside box = (xmin, xmax, ymin, ymax), else the one that leaves it least; the third column the
-    same choice among the exact words (the shortest word inside where no exact word exists)."""
+    same choice among the exact words (the shortest word inside where no exact word exists). Bounds are
+    computed only where needed: not where every word surely stays inside, and where the shortest word and the
+    shortest exact one stay inside, not for the other words."""
     words, exact = dubins_words(start, pre, radius)
     total = _lengths(words)
-    m = 4.0 * radius  # surely_inside: every word stays in the box (no word strays 4 radii from its ends)
-    surely = np.all([(box[0] + m <= a) & (a <= box[1] - m) & (box[2] + m <= b) & (b <= box[3] - m)
-                     for a, b in ((start[:, 0], start[:, 1]), (pre[:, 0], pre[:, 1]))], axis=0)
-    excess = np.zeros(total.shape)  # where surely inside the shortest word is taken: its bounds are not needed
-    near = ~surely
-    if near.any():
-        bounds = word_bounds(start[near], words[near], radius)
-        excess[near] = np.max(np.stack([box[0] - bounds[..., 0], bounds[..., 1] - box[1], box[2] - bounds[..., 2],
-                                        bounds[..., 3] - box[3]]), axis=0)
-    excess = np.where(np.isfinite(total), excess, np.inf)
     rows = np.arange(len(start))
+    shortest = np.argmin(total, axis=1)
+    shortest_exact = np.where(exact.any(axis=1), np.argmin(np.where(exact, total, np.inf), axis=1), shortest)
+    def ends_within(m: float) -> np.ndarray:
+        return np.all([(box[0] + m <= a) & (a <= box[1] - m) & (box[2] + m <= b) & (b <= box[3] - m)
+                       for a, b in ((start[:, 0], start[:, 1]), (pre[:, 0], pre[:, 1]))], axis=0)
 
-    def choose(usable: np.ndarray) -> np.ndarray:
+    # surely_inside: every word stays in the box (no word strays 4 radii from its ends); where no CCC word
+    # exists, 2 radii (a CSC word lies on the circles through its ends and a tangent between them)
+    simple = ends_within(4.0 * radius) | (ends_within(2.0 * radius) & np.isnan(words[:, 4:]).all(axis=(1, 2)))
+    near = np.flatnonzero(~simple)
+    if len(near):  # where both shortest words stay inside, they are the choice
+        picks = np.concatenate([shortest[near], shortest_exact[near]])
+        ends = np.concatenate([start[near], start[near]])
+        both = _excess(path_bounds(ends, words[np.concatenate([near, near]), picks], SIGN[picks], radius), box)
+        simple[near] = (both[:len(near)] <= 0.0) & (both[len(near):] <= 0.0)
+    hard = ~simple
+    if not hard.any():  # the shortest words everywhere
+        return np.column_stack([total[rows, shortest] + final,
+                                (np.nan_to_num(words[rows, shortest]) * ARC[shortest]).sum(axis=1),
+                                total[rows, shortest_exact] + final])
+    excess = np.zeros(total.shape)  # where simple the shortest words are taken: the others' bounds are not needed
+    excess[hard] = _excess(word_bounds(start[hard], words[hard], radius), box)
+    excess = np.where(np.isfinite(total), excess, np.inf)
+
+    def choose(usable: np.ndarray, simple_pick: np.ndarray) -> np.ndarray:
         length = np.where(usable, total, np.inf)
         inside = np.where(excess <= 0.0, length, np.inf)
         least = np.where(usable, excess, np.inf)  # the shortest of those leaving it least (ties within 1e-9)
         least = np.where(least <= least.min(axis=1, keepdims=True) + 1e-9, length, np.inf)
         pick = np.where(np.isfinite(inside.min(axis=1)), np.argmin(inside, axis=1), np.argmin(least, axis=1))
-        return np.where(surely, np.argmin(length, axis=1), pick)
+        return np.where(simple, simple_pick, pick)
 
-    best = choose(np.isfinite(total))
+    best = choose(np.isfinite(total), shortest)
     arcs = (np.nan_to_num(words[rows, best]) * ARC[best]).sum(axis=1)
-    best_exact = np.where(exact.any(axis=1), choose(np.isfinite(total) & exact), best)
+    best_exact = np.where(exact.any(axis=1), choose(np.isfinite(total) & exact, shortest_exact), best)
     return np.column_stack([total[rows, best] + final, arcs, total[rows, best_exact] + final])
 
 
