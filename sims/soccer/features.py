@@ -79,37 +79,39 @@ def dubins_words(start: np.ndarray, goal: np.ndarray, radius: float) -> tuple[np
     alpha, beta = _mod(start[:, 2] - th0), _mod(goal[:, 2] - th0)
     sa, ca, sb, cb = np.sin(alpha), np.cos(alpha), np.sin(beta), np.cos(beta)
     cab = np.cos(alpha - beta)
-    out = np.full((len(d), 6, 3), np.nan)
+    out = np.empty((len(d), 6, 3))
     exact = np.ones((len(d), 6), dtype=bool)
+    exists = np.empty((len(d), 6), dtype=bool)
     with np.errstate(invalid="ignore"):
         p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb)  # LSL
         th = np.arctan2(cb - ca, d + sa - sb)
-        out[:, 0] = np.where((p2 >= 0.0)[:, None], np.column_stack([_mod(th - alpha), np.sqrt(p2), _mod(beta - th)]),
-                             np.nan)
+        exists[:, 0] = p2 >= 0.0
+        out[:, 0, 0], out[:, 0, 1], out[:, 0, 2] = _mod(th - alpha), np.sqrt(p2), _mod(beta - th)
         p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa)  # RSR
         th = np.arctan2(ca - cb, d - sa + sb)
-        out[:, 1] = np.where((p2 >= 0.0)[:, None], np.column_stack([_mod(alpha - th), np.sqrt(p2), _mod(th - beta)]),
-                             np.nan)
+        exists[:, 1] = p2 >= 0.0
+        out[:, 1, 0], out[:, 1, 1], out[:, 1, 2] = _mod(alpha - th), np.sqrt(p2), _mod(th - beta)
         p2 = -2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb)  # LSR
         p = np.sqrt(np.maximum(p2, 0.0))
         th = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, p)
-        exact[:, 2] = p2 >= 0.0
-        out[:, 2] = np.where((p2 >= -TANGENT_SLACK)[:, None], np.column_stack([_mod(th - alpha), p, _mod(th - beta)]),
-                             np.nan)
+        exact[:, 2], exists[:, 2] = p2 >= 0.0, p2 >= -TANGENT_SLACK
+        out[:, 2, 0], out[:, 2, 1], out[:, 2, 2] = _mod(th - alpha), p, _mod(th - beta)
         p2 = -2.0 + d * d + 2.0 * cab - 2.0 * d * (sa + sb)  # RSL
         p = np.sqrt(np.maximum(p2, 0.0))
         th = np.arctan2(ca + cb, d - sa - sb) - np.arctan2(2.0, p)
-        exact[:, 3] = p2 >= 0.0
-        out[:, 3] = np.where((p2 >= -TANGENT_SLACK)[:, None], np.column_stack([_mod(alpha - th), p, _mod(beta - th)]),
-                             np.nan)
+        exact[:, 3], exists[:, 3] = p2 >= 0.0, p2 >= -TANGENT_SLACK
+        out[:, 3, 0], out[:, 3, 1], out[:, 3, 2] = _mod(alpha - th), p, _mod(beta - th)
         c = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0  # RLR
         p = _mod(TWO_PI - np.arccos(np.clip(c, -1.0, 1.0)))
         t = _mod(alpha - np.arctan2(ca - cb, d - sa + sb) + p / 2.0)
-        out[:, 4] = np.where((np.abs(c) <= 1.0)[:, None], np.column_stack([t, p, _mod(alpha - beta - t + p)]), np.nan)
+        exists[:, 4] = np.abs(c) <= 1.0
+        out[:, 4, 0], out[:, 4, 1], out[:, 4, 2] = t, p, _mod(alpha - beta - t + p)
         c = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa)) / 8.0  # LRL
         p = _mod(TWO_PI - np.arccos(np.clip(c, -1.0, 1.0)))
         t = _mod(-alpha + np.arctan2(-ca + cb, d + sa - sb) + p / 2.0)
-        out[:, 5] = np.where((np.abs(c) <= 1.0)[:, None], np.column_stack([t, p, _mod(beta - alpha - t + p)]), np.nan)
+        exists[:, 5] = np.abs(c) <= 1.0
+        out[:, 5, 0], out[:, 5, 1], out[:, 5, 2] = t, p, _mod(beta - alpha - t + p)
+    out[~exists] = np.nan
     full = TWO_PI - 1e-9  # an arc of (almost) a full turn is numerically zero, as in candidates()
     out = np.where((out > full) & ARC[None], 0.0, out)
     return out * radius, exact
