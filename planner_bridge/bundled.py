@@ -45,12 +45,14 @@ def _looks_like_path(arg: str) -> bool:
 
 
 def resolve_problem(domain_arg: str | Path, problem_arg: str | Path) -> tuple[Path, Path]:
-    """(domain file, problem file) for a bundled domain and problem name, for two file paths, or for a domain file and the name of
-    a problem in the `problems/` folder beside it. An existing file wins over a bundled name; InputFileError
-    names the argument that matches neither."""
+    """(domain file, problem file) for a bundled domain and problem name, for two file paths, or for a domain file
+    (or the folder holding it) and the name of a problem in the `problems/` folder beside it. An existing file
+    wins over a bundled name; InputFileError names the argument that matches neither."""
     domain_arg, problem_arg = str(domain_arg), str(problem_arg)
     domain = Path(domain_arg)
-    if not domain.is_file() and not _looks_like_path(domain_arg):
+    if domain.is_dir():
+        domain = resolve_domain_dir(domain) / DOMAIN_FILE
+    elif not domain.is_file() and not _looks_like_path(domain_arg):
         if domain_arg not in bundled_domains():
             raise InputFileError(
                 f"no such file or bundled domain (bundled: {', '.join(bundled_domains()) or 'none'})", domain_arg

@@ -143,6 +143,12 @@ def test_an_empty_plan_is_done_in_every_mode(soccer, capsys, flags):
     (["train", "soccer", "--episodes", "5"], 2), (["train", "soccer", "--fresh-episodes", "0"], 2),
     (["evaluate", "soccer", "--episodes", "-1"], 2), (["refine", "soccer", "score", "--horizon", "0"], 2),
     (["refine", "soccer"], 2), (["train", "soccer", "--no-such-option"], 2), (["nosuch"], 2),
+    # a negative seed (numpy's generators refuse it), counts beyond what a machine can run
+    (["refine", "arm", "letter-f", "--seed", "-1"], 2), (["evaluate", "arm", "--seed", "-1"], 2),
+    (["coordinate", "soccer", "--seed", "-1"], 2), (["train", "arm", "--seed", "-1"], 2),
+    (["gather", "arm", "--seeds", "0:2", "--seed", "-1"], 2), (["gather", "arm", "--seeds", "0:10000000000"], 2),
+    (["evaluate", "kitchen", "--episodes", "99999999999999999999999"], 2),
+    (["coordinate", "soccer", "--episodes", "99999999999999999999999"], 2),
 ])
 def test_usage_faults_are_one_line_with_one_status(argv, status, capsys, monkeypatch):
     monkeypatch.setattr("tailor.sims.experience.gather", _no_work)
@@ -362,3 +368,32 @@ def test_ctrl_c_after_the_models_are_written_reports_done(tmp_path, monkeypatch,
     assert main(["train", "soccer", "--out", str(tmp_path), "--json"]) == 0
     assert capsys.readouterr().err.strip() == (f"tailor train: interrupted while printing the report; the models in "
                                                f"{tmp_path / 'models'} are complete")
+
+
+# --- standard output that cannot be written; a domain given as its folder ----------------------------------
+@pytest.mark.parametrize("argv", [["plan", "arm", "letter-f", "--json"], ["refine", "arm", "letter-f"]])
+@pytest.mark.parametrize("closed", [False, True])
+def test_results_that_cannot_be_written_are_one_line(argv, closed):
+    """A full disk (/dev/full) or a closed standard output: one line, the output status, no traceback."""
+    if not closed and not Path("/dev/full").exists():
+        pytest.skip("no /dev/full here")
+    with open("/dev/full", "w") if not closed else open(os.devnull, "w") as sink:
+        run = subprocess.run([sys.executable, "-m", "tailor.refinement.cli", "-q", *argv], check=False,
+                             stdout=sink, stderr=subprocess.PIPE, text=True,
+                             preexec_fn=(lambda: os.close(1)) if closed else None)
+    assert run.returncode == 16, run.stderr
+    assert run.stderr.strip().splitlines() == [f"tailor {argv[0]}: error: cannot write to standard output: "
+                                               + ("standard output is closed" if closed else "No space left on device")]
+
+
+def test_plan_and_refine_take_a_domain_folder(tmp_path, capsys):
+    folder = shutil.copytree(DOMAINS_DIR / "arm", tmp_path / "arm")
+    assert main(["plan", "arm", "letter-f"]) == 0
+    bundled = capsys.readouterr().out
+    assert main(["plan", str(folder), "letter-f"]) == 0
+    assert capsys.readouterr().out == bundled.replace(str(DOMAINS_DIR / "arm"), str(folder))
+    assert main(["refine", str(folder), "letter-f", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["refined"]["actions"]
+    (tmp_path / "empty").mkdir()
+    assert main(["plan", str(tmp_path / "empty"), "letter-f"]) == 3
+    assert capsys.readouterr().err.strip() == f"tailor plan: error: {tmp_path / 'empty'}: a domain folder needs a domain.pddl"

@@ -7,6 +7,9 @@ import math
 from collections.abc import Callable
 
 MAX_SECONDS = 1e6  # about 11.6 days: longer limits (and inf) are refused; leave the option out for no limit
+# episodes or situations of one command: a million simulated runs take days on one machine; larger counts are
+# typing mistakes, and some commands list their seeds up front
+MAX_EPISODES = 1_000_000
 
 
 def positive_seconds(text: str) -> float:
@@ -160,3 +163,12 @@ def risk_lambda(text: str) -> float:
     if not 0.0 <= value < float("inf"):
         raise argparse.ArgumentTypeError(f"must be a finite number >= 0, not {text}")
     return value
+
+
+def seed(text: str) -> int:
+    """An argparse type: a seed, a whole number of at least 0 (numpy's and the simulators' generators take no
+    negative seed)."""
+    return whole_number(0)(text)
+
+
+seed.__name__ = "seed"

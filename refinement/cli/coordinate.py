@@ -12,7 +12,8 @@ import argparse
 import sys
 import time
 
-from tailor.refinement.cli.arguments import add_models_argument, announce_models, whole_number, worker_count
+from tailor.refinement.cli.arguments import (MAX_EPISODES, add_models_argument, announce_models, seed, whole_number,
+                                            worker_count)
 
 HELP = "measure implicit coordination of a robot team with learned action models (Ch. 7)"
 DEFAULT_EPISODES = 200
@@ -26,9 +27,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"robots in the team (2-{MAX_ROBOTS}, default 3)")
     parser.add_argument("--heterogeneous", action="store_true",
                         help="one robot of the team is of the simulator's other kind, with its own action model")
-    parser.add_argument("--episodes", type=whole_number(1), default=DEFAULT_EPISODES, metavar="N",
+    parser.add_argument("--episodes", type=whole_number(1, MAX_EPISODES), default=DEFAULT_EPISODES, metavar="N",
                         help=f"dynamic episodes (30 s each) and static situations (default {DEFAULT_EPISODES})")
-    parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed of situations, noise and channel")
+    parser.add_argument("--seed", type=seed, default=0, metavar="S", help="seed of situations, noise and channel")
     parser.add_argument("--repeats", type=whole_number(1, MAX_REPEATS), default=1, metavar="K",
                         help="static: every approach again under K other noise seeds (default 1); with K >= 2 the "
                              "oracle of the expected times (the mean of the other runs) shows the best any "

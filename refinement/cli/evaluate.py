@@ -14,7 +14,9 @@ from tailor.refinement.cli.arguments import (
     add_risk_argument,
     announce_models,
     backend_session,
+    MAX_EPISODES,
     risk_lambda,
+    seed,
     whole_number,
     worker_count,
 )
@@ -26,16 +28,16 @@ HORIZONS = (1, 2, 3, 4)
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("domain", metavar="DOMAIN", help="bundled domain name, a domain folder, or its domain.pddl")
-    parser.add_argument("--episodes", type=whole_number(0), default=1000, metavar="N",
+    parser.add_argument("--episodes", type=whole_number(0, MAX_EPISODES), default=1000, metavar="N",
                         help="random situations refined greedily and with h=2 (default 1000)")
-    parser.add_argument("--oracle-episodes", type=whole_number(0), default=100, metavar="N",
+    parser.add_argument("--oracle-episodes", type=whole_number(0, MAX_EPISODES), default=100, metavar="N",
                         help="of these, how many are also searched in the simulator (default 100)")
-    parser.add_argument("--horizon-episodes", type=whole_number(0), default=100, metavar="N",
+    parser.add_argument("--horizon-episodes", type=whole_number(0, MAX_EPISODES), default=100, metavar="N",
                         help="situations run with horizons 1-4 (Table 5.3; default 100)")
     parser.add_argument("--situations", metavar="NAME", default=None,
                         help="a situation generator of the domain's simulator to evaluate on (greedy vs refined and "
                              "the horizons) instead of the binding's [evaluation] ones, e.g. another scenario")
-    parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed of situations and simulator")
+    parser.add_argument("--seed", type=seed, default=0, metavar="S", help="seed of situations and simulator")
     parser.add_argument("--jobs", type=worker_count, default=1, metavar="J",
                         help="worker processes (default 1; at most the number of CPUs)")
     add_models_argument(parser)
@@ -50,7 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--meta", action="store_true",
                         help="learn the meta action model (Sec. 5.5.4) from --episodes situations and measure "
                              "refinement unfiltered vs filtered by it on --fresh-episodes others (Tables 5.4-5.6)")
-    parser.add_argument("--fresh-episodes", type=whole_number(1), default=None, metavar="M",
+    parser.add_argument("--fresh-episodes", type=whole_number(1, MAX_EPISODES), default=None, metavar="M",
                         help="with --meta: fresh situations it is measured on (default: as many as --episodes)")
     parser.add_argument("--worse-cost", type=positive_number, default=None, metavar="C",
                         help="with --meta: weight of a worse episode in the tree (its cost matrix; default: chosen "

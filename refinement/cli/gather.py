@@ -12,7 +12,7 @@ import sys
 import time
 from pathlib import Path
 
-from tailor.refinement.cli.arguments import add_backend_arguments, backend_session, worker_count
+from tailor.refinement.cli.arguments import MAX_EPISODES, add_backend_arguments, backend_session, seed, worker_count
 
 HELP = "simulate episodes A..B-1 of the domain's experience scenarios and keep them as shards for `tailor train`"
 
@@ -28,6 +28,8 @@ def seed_range(text: str) -> tuple[int, int]:
         raise argparse.ArgumentTypeError(f"expected A:B (episodes A to B-1), got {text!r}") from None
     if not 0 <= a < b:
         raise argparse.ArgumentTypeError(f"expected 0 <= A < B, got {text!r}")
+    if b - a > MAX_EPISODES:
+        raise argparse.ArgumentTypeError(f"at most {MAX_EPISODES} episodes at a time, got {text!r}")
     return a, b
 
 
@@ -39,7 +41,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seeds", type=seed_range, required=True, metavar="A:B",
                         help="the episodes to simulate, A to B-1 of each scenario's seed stream (e.g. 0:3000 here and "
                              "3000:6000 elsewhere make the 6000 episodes of `tailor train --episodes 6000`)")
-    parser.add_argument("--seed", type=int, default=0, metavar="S",
+    parser.add_argument("--seed", type=seed, default=0, metavar="S",
                         help="the seed of the streams, as `tailor train --seed` (default 0)")
     parser.add_argument("--scenario", action="append", default=None, metavar="NAME",
                         help="only this experience scenario (repeatable; default: every one the recipe uses)")

@@ -9,13 +9,16 @@ diagnostics go through `logging` (tailor.refinement.cli.logs), results to stdout
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
+import io
+import os
 import signal
 import sys
 import threading
 
 from tailor import __version__
-from tailor.errors import TailorError
+from tailor.errors import OutputFileError, TailorError
 from tailor.refinement.cli.logs import cli_logging, set_verbosity, verbosity_of
 
 COMMANDS = {
@@ -122,12 +125,47 @@ def main(argv: list[str] | None = None) -> int:
         return _run(args)
 
 
+class _ClosedOutput(io.TextIOBase):
+    """Standard output when the process started with it closed: writing to it is an error, as for `ls >&-`."""
+
+    def write(self, text: str) -> int:
+        raise OSError(errno.EBADF, "standard output is closed")
+
+
+# errors of writing a stream (no file name: the results on standard output, as every command writes them)
+WRITE_ERRORS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO, errno.EBADF, errno.EPIPE}
+
+
+def _stdout_failed(exc: OSError | None = None) -> bool:
+    """Whether standard output cannot be written (closed, a full disk, an I/O error); if so, later writes and the
+    interpreter's last flush go to the null device, so the one-line error stays the only message."""
+    if isinstance(sys.stdout, _ClosedOutput):
+        return True
+    failed = exc is not None and exc.filename is None and exc.errno in WRITE_ERRORS
+    try:
+        sys.stdout.flush()
+    except (OSError, ValueError):
+        failed = True
+    if failed:
+        try:
+            null = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(null, sys.stdout.fileno())
+            os.close(null)
+        except (OSError, ValueError):
+            sys.stdout = _ClosedOutput()
+    return failed
+
+
 def _run(args: argparse.Namespace) -> int:
     previous = None
     if threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGTERM, _terminate)
+    if sys.stdout is None:  # started with standard output closed
+        sys.stdout = _ClosedOutput()
     try:
-        return int(args.run(args) or 0)
+        code = int(args.run(args) or 0)
+        sys.stdout.flush()  # a full disk shows here, not in the interpreter's last flush
+        return code
     except TailorError as exc:
         print(f"tailor {args.command}: error: {exc}", file=sys.stderr)
         return exc.exit_code
@@ -138,7 +176,15 @@ def _run(args: argparse.Namespace) -> int:
         print(f"tailor {args.command}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except BrokenPipeError:
+        _stdout_failed()
         return 0
+    except OSError as exc:  # not a project error: writing the results failed, or an unforeseen system error
+        if _stdout_failed(exc):
+            print(f"tailor {args.command}: error: cannot write to standard output: {exc.strerror or exc}",
+                  file=sys.stderr)
+            return OutputFileError.exit_code
+        print(f"tailor {args.command}: error: {exc}", file=sys.stderr)
+        return TailorError.exit_code
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)

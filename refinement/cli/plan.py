@@ -11,7 +11,7 @@ HELP = "plan a PDDL domain/problem pair into a validated partial-order plan with
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("domain", metavar="DOMAIN", help="domain.pddl file, or the name of a bundled domain (see `tailor domains`)")
+    parser.add_argument("domain", metavar="DOMAIN", help="domain.pddl file, the folder holding it, or the name of a bundled domain (see `tailor domains`)")
     parser.add_argument("problem", metavar="PROBLEM", help="problem .pddl file, or the name of one of its problems")
     parser.add_argument(
         "--planner", default="pyperplan", metavar="NAME", help="any installed unified-planning engine, or pocl (our POCL planner; default: pyperplan)"

@@ -19,6 +19,7 @@ from tailor.refinement.cli.arguments import (
     add_risk_argument,
     announce_models,
     positive_seconds,
+    seed,
     whole_number,
 )
 
@@ -28,14 +29,14 @@ HELP = "refine the free parameters of a plan for the fastest predicted execution
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from tailor.refinement.optimizers import OPTIMIZERS
 
-    parser.add_argument("domain", metavar="DOMAIN", help="domain.pddl file, or the name of a bundled domain (see `tailor domains`)")
+    parser.add_argument("domain", metavar="DOMAIN", help="domain.pddl file, the folder holding it, or the name of a bundled domain (see `tailor domains`)")
     parser.add_argument("problem", metavar="PROBLEM", help="problem .pddl file, or the name of one of its problems")
     parser.add_argument("--optimizer", choices=sorted(OPTIMIZERS), default="analytic",
                         help="analytic model-tree minimization (falls back to ga where it does not apply), "
                              "genetic algorithm, or random sampling (default: analytic)")
     parser.add_argument("--horizon", type=whole_number(1), default=2, metavar="H",
                         help="actions optimized together (default 2; 1 is greedy)")
-    parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed of optimizer and simulator (default 0)")
+    parser.add_argument("--seed", type=seed, default=0, metavar="S", help="seed of optimizer and simulator (default 0)")
     parser.add_argument("--belief", metavar="FILE", help="belief state file (default: PROBLEM's stem + .toml)")
     add_models_argument(parser)
     parser.add_argument("--planner", default="pyperplan", metavar="NAME", help="unified-planning engine, or pocl")

@@ -8,7 +8,8 @@ import logging
 import sys
 from pathlib import Path
 
-from tailor.refinement.cli.arguments import add_backend_arguments, backend_session, whole_number, worker_count
+from tailor.refinement.cli.arguments import (MAX_EPISODES, add_backend_arguments, backend_session, seed, whole_number,
+                                            worker_count)
 
 MIN_EPISODES = 8  # a quarter of the episodes is the test set
 
@@ -21,13 +22,13 @@ DESCRIPTION = (f"{HELP}. Prints a short summary and names every file written: th
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("domain", help="bundled domain name, a domain folder, or its domain.pddl")
-    parser.add_argument("--episodes", type=whole_number(MIN_EPISODES), default=None, metavar="N",
+    parser.add_argument("--episodes", type=whole_number(MIN_EPISODES, MAX_EPISODES), default=None, metavar="N",
                         help="episodes gathered per scenario, at least 8: a quarter of them is the test set "
                              "(default: the domain's [training] episodes, and a model's own episodes where its "
                              "[training.models.ACTION] names them)")
-    parser.add_argument("--fresh-episodes", type=whole_number(1), default=None, metavar="M",
+    parser.add_argument("--fresh-episodes", type=whole_number(1, MAX_EPISODES), default=None, metavar="M",
                         help="fresh episodes each success classifier is evaluated on (default: the domain's)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of experience and training (default 0)")
+    parser.add_argument("--seed", type=seed, default=0, help="seed of experience and training (default 0)")
     parser.add_argument("--jobs", type=worker_count, default=1, metavar="J",
                         help="simulator worker processes (default 1; at most the number of CPUs)")
     parser.add_argument("--out", type=Path, default=None, metavar="DIR",
