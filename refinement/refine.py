@@ -61,8 +61,8 @@ class LastBatch:
     """A row-wise function (here an action's features) that computes each distinct row of a batch once and
     reuses the rows of the batch before: the genetic algorithm's offspring keep many parents' values of the
     parameters one action reads, and a neighbourhood repeats the point for every free parameter that action
-    does not read. Same output as the function itself; worth it where its features are costly (goToPose's
-    planned Dubins word inside the walls: the GA on the way-point chain took 0.72 s a window at h = 3)."""
+    does not read. Same output as the function itself; worth it where features are costly (a path planned
+    per row)."""
 
     def __init__(self, function):
         self.function = function
