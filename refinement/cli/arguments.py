@@ -165,10 +165,5 @@ def risk_lambda(text: str) -> float:
     return value
 
 
-def seed(text: str) -> int:
-    """An argparse type: a seed, a whole number of at least 0 (numpy's and the simulators' generators take no
-    negative seed)."""
-    return whole_number(0)(text)
-
-
+seed = whole_number(0)  # an argparse type: numpy's and the simulators' generators take no negative seed
 seed.__name__ = "seed"

@@ -133,7 +133,7 @@ class _ClosedOutput(io.TextIOBase):
 
 
 # errors of writing a stream (no file name: the results on standard output, as every command writes them)
-WRITE_ERRORS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO, errno.EBADF, errno.EPIPE}
+WRITE_ERRORS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO, errno.EBADF}  # (EPIPE: BrokenPipeError)
 
 
 def _stdout_failed(exc: OSError | None = None) -> bool:

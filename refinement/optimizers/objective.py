@@ -8,6 +8,7 @@ that the free values induce; the objective sums the terms. Every optimizer retur
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Callable
 
 import numpy as np
@@ -69,11 +70,7 @@ class Objective:
         """Summed predicted duration (s) of each row of theta (batch, n_free)."""
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         predicted: dict[int, np.ndarray] = {}
-        shared: dict[tuple[int, int], list[int]] = {}
-        for i, term in enumerate(self.terms):
-            if term.inputs is not None and term.derive is not None:
-                shared.setdefault((id(term.model), id(term.derive)), []).append(i)
-        for group in shared.values():
+        for group in self._shared_batches:
             model, derive = self.terms[group[0]].model, self.terms[group[0]].derive
             rows = np.concatenate([self.terms[i].inputs(theta) for i in group])
             for i, part in zip(group, np.split(np.asarray(model.predict(derive(rows)), dtype=float), len(group))):
@@ -83,6 +80,16 @@ class Objective:
             total += predicted[i] if i in predicted else np.asarray(term.model.predict(term.features(theta)),
                                                                     dtype=float)
         return total
+
+    @cached_property
+    def _shared_batches(self) -> list[list[int]]:
+        """Indices of the terms evaluated as one batch: those with the same `derive` and `model` (once per
+        objective, not per call: the genetic algorithm calls `cost` every generation)."""
+        shared: dict[tuple[int, int], list[int]] = {}
+        for i, term in enumerate(self.terms):
+            if term.inputs is not None and term.derive is not None:
+                shared.setdefault((id(term.model), id(term.derive)), []).append(i)
+        return list(shared.values())
 
     def robust_cost(self, theta: np.ndarray) -> np.ndarray:
         """The worst summed predicted duration (s) within the neighbourhood of each row of theta: over the

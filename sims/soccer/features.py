@@ -197,26 +197,24 @@ def shortest_word_inside(start: np.ndarray, pre: np.ndarray, radius: float, fina
         ends = np.concatenate([start[near], start[near]])
         both = _excess(path_bounds(ends, words[np.concatenate([near, near]), picks], SIGN[picks], radius), box)
         simple[near] = (both[:len(near)] <= 0.0) & (both[len(near):] <= 0.0)
+    best, best_exact = shortest, shortest_exact  # where simple; elsewhere chosen by the words' bounds
     hard = ~simple
-    if not hard.any():  # the shortest words everywhere
-        return np.column_stack([total[rows, shortest] + final,
-                                (np.nan_to_num(words[rows, shortest]) * ARC[shortest]).sum(axis=1),
-                                total[rows, shortest_exact] + final])
-    excess = np.zeros(total.shape)  # where simple the shortest words are taken: the others' bounds are not needed
-    excess[hard] = _excess(word_bounds(start[hard], words[hard], radius), box)
-    excess = np.where(np.isfinite(total), excess, np.inf)
+    if hard.any():
+        excess = np.zeros(total.shape)  # (where simple the other words' bounds are not needed)
+        excess[hard] = _excess(word_bounds(start[hard], words[hard], radius), box)
+        excess = np.where(np.isfinite(total), excess, np.inf)
 
-    def choose(usable: np.ndarray, simple_pick: np.ndarray) -> np.ndarray:
-        length = np.where(usable, total, np.inf)
-        inside = np.where(excess <= 0.0, length, np.inf)
-        least = np.where(usable, excess, np.inf)  # the shortest of those leaving it least (ties within 1e-9)
-        least = np.where(least <= least.min(axis=1, keepdims=True) + 1e-9, length, np.inf)
-        pick = np.where(np.isfinite(inside.min(axis=1)), np.argmin(inside, axis=1), np.argmin(least, axis=1))
-        return np.where(simple, simple_pick, pick)
+        def choose(usable: np.ndarray, simple_pick: np.ndarray) -> np.ndarray:
+            length = np.where(usable, total, np.inf)
+            inside = np.where(excess <= 0.0, length, np.inf)
+            least = np.where(usable, excess, np.inf)  # the shortest of those leaving it least (ties within 1e-9)
+            least = np.where(least <= least.min(axis=1, keepdims=True) + 1e-9, length, np.inf)
+            pick = np.where(np.isfinite(inside.min(axis=1)), np.argmin(inside, axis=1), np.argmin(least, axis=1))
+            return np.where(simple, simple_pick, pick)
 
-    best = choose(np.isfinite(total), shortest)
+        best = choose(np.isfinite(total), shortest)
+        best_exact = np.where(exact.any(axis=1), choose(np.isfinite(total) & exact, shortest_exact), best)
     arcs = (np.nan_to_num(words[rows, best]) * ARC[best]).sum(axis=1)
-    best_exact = np.where(exact.any(axis=1), choose(np.isfinite(total) & exact, shortest_exact), best)
     return np.column_stack([total[rows, best] + final, arcs, total[rows, best_exact] + final])
 
 
