@@ -15,3 +15,12 @@ def _user_folders(tmp_path_factory, monkeypatch):
     """No test reads or writes the real user's data folder or follows the user's $TAILOR_MODELS."""
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path_factory.mktemp("user-data")))
     monkeypatch.delenv("TAILOR_MODELS", raising=False)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_auto_num_workers(config):
+    """Benchmarks time one process on a quiet machine: a run that selects them is never spread over cores."""
+    expression = config.option.markexpr or ""
+    if "benchmark" in expression and expression.strip() != "not benchmark":
+        return 0
+    return None

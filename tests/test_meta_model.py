@@ -211,12 +211,12 @@ def test_evaluate_filter_and_tiny_meta_run(tmp_path, capsys):
         assert row["filter"]["refine"] is False and row["refined"]["simulated"] == row["greedy"]["simulated"]
     out = tmp_path / "out"
     plot = tmp_path / "fig.png"
-    assert main(["-q", "evaluate", "soccer", "--meta", "--episodes", "20", "--fresh-episodes", "4", "--seed", "5",
+    assert main(["-q", "evaluate", "soccer", "--meta", "--episodes", "20", "--fresh-episodes", "2", "--seed", "5",
                  "--out", str(out), "--plot", str(plot), "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["schema"] == "tailor.evaluate_meta/1" and report["training"]["situations"] == [0, 20]
-    assert report["fresh"]["situations"] == [20, 24] and report["fresh"]["unfiltered"]["scenarios"] == 4
-    assert len(report["episodes"]["fresh"]) == 4 and plot.stat().st_size > 0
+    assert report["fresh"]["situations"] == [20, 22] and report["fresh"]["unfiltered"]["scenarios"] == 2
+    assert len(report["episodes"]["fresh"]) == 2 and plot.stat().st_size > 0
     model = load_meta_model(out / "models")  # beside copies of the action models it judges
     assert model.window == WINDOW and (out / "models" / "goToPose.json").is_file()
     assert model.judges_refinement and report["features"] == list(NAMES + REFINEMENT_FEATURES)
@@ -320,7 +320,7 @@ def test_meta_model_for_another_domain_judges_refinements_prediction(tmp_path, c
     """No soccer names: the kitchen's meta model learns from its own window and refinement's prediction, and the
     filter judges a kitchen plan with it."""
     out = tmp_path / "out"
-    assert main(["-q", "evaluate", "kitchen", "--meta", "--episodes", "20", "--fresh-episodes", "2", "--seed", "5",
+    assert main(["-q", "evaluate", "kitchen", "--meta", "--episodes", "20", "--fresh-episodes", "1", "--seed", "5",
                  "--out", str(out), "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     model = load_meta_model(out / "models")

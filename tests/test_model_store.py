@@ -84,12 +84,12 @@ def test_train_without_out_writes_the_users_folder_and_never_the_bundled_models(
     monkeypatch.setattr("tailor.sims.experience.gather", synthetic_episodes.gather)
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path))
     bundled = {p.name: p.read_bytes() for p in (DOMAINS / "soccer" / "models").iterdir()}
-    assert main(["train", "soccer", "--episodes", "24", "--fresh-episodes", "20", "--n-i", "1,3"]) == 0
+    assert main(["train", "soccer", "--only", "goToPosition", "--episodes", "24", "--n-i", "1,3"]) == 0
     out = tmp_path / "tailor" / "soccer"
     printed = capsys.readouterr().out
-    assert f"  {out / 'models' / 'goToPose.json'}" in printed  # every file named, in the user's folder
+    assert f"  {out / 'models' / 'goToPosition.json'}" in printed  # every file named, in the user's folder
     assert f"--models {out}` or TAILOR_MODELS={out.parent}" in printed
-    assert {p.name for p in (out / "models").iterdir()} >= {"goToPose.json", "approachBall.json", "dribbleBall.json"}
+    assert {p.name for p in (out / "models").iterdir()} == {"goToPosition.json"}
     assert {p.name: p.read_bytes() for p in (DOMAINS / "soccer" / "models").iterdir()} == bundled
     monkeypatch.setenv("TAILOR_MODELS", str(out.parent))  # what the printed hint says: refine now uses them
     assert resolve_models(DOMAINS / "soccer").path == out / "models"
