@@ -4,8 +4,13 @@ top-level modules, since pytest puts this folder on the import path for test mod
 from __future__ import annotations
 
 import os
+import signal
 
 os.environ.setdefault("MPLBACKEND", "Agg")  # plots are written to files; never open a window
+# A test run started as a background job inherits Ctrl-C ignored, and so would every process it starts: the
+# tests of Ctrl-C (in this process and in child commands) need it to raise, as in a terminal.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 import pytest  # noqa: E402
 

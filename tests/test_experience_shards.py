@@ -228,13 +228,6 @@ def test_a_missing_backend_is_named(monkeypatch):
             pass
 
 
-def _ctrl_c_raises():
-    """In the child: SIGINT as in a terminal, even where the test run inherited it ignored (a background job)."""
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-
-
 def test_ctrl_c_in_a_gather_with_workers_leaves_complete_shards_only(tmp_path):
     import signal
     import subprocess
@@ -243,8 +236,7 @@ def test_ctrl_c_in_a_gather_with_workers_leaves_complete_shards_only(tmp_path):
 
     process = subprocess.Popen([sys.executable, "-m", "tailor.refinement.cli", "gather", "soccer", "--seeds", "0:20000",
                                 "--scenario", SCENARIO, "--jobs", "2", "--out", str(tmp_path)],
-                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True,
-                               preexec_fn=_ctrl_c_raises)
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:
         time.sleep(8)  # the workers started, some batches done (or not: then no shard at all)
         process.send_signal(signal.SIGINT)
