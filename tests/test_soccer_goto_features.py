@@ -31,6 +31,19 @@ def test_the_goto_space_is_the_pose_space_plus_the_word_and_the_lure():
     np.testing.assert_array_equal(features[:, 9:], lure_features(params))
 
 
+def test_a_batch_with_repeated_poses_gives_each_row_its_own_features():
+    """The paths are planned once per distinct pair of poses (speeds do not change them): in a batch where
+    speeds vary over repeated poses, as a genetic algorithm's or a neighbourhood's, each row still gets exactly
+    the features it gets alone, in every soccer space."""
+    rng = np.random.default_rng(5)
+    poses = _params(rng, 6)
+    batch = poses[rng.integers(0, 6, 40)]
+    batch[:, [3, 7]] = rng.uniform(0, 0.6, (40, 2))
+    for space in ("goto", "approach", "dribble"):
+        alone = np.vstack([compute_features(space, row[None, :]) for row in batch])
+        np.testing.assert_array_equal(compute_features(space, batch), alone)
+
+
 def test_word_and_detour_are_the_ones_the_controller_compares_with_max_detour():
     """For 1000 random poses: the length of the word goto_path plans (plus the final straight) and its detour over
     the straight line to the pre-pose, the quantity goToPose compares with MAX_DETOUR to choose the lure."""

@@ -266,16 +266,36 @@ def lure_features(params: np.ndarray) -> np.ndarray:
                             np.abs(_wrapped(np.arctan2(goal[:, 1] - iy, goal[:, 0] - ix) - to_ip))])
 
 
+# the columns of POSE_PARAMETERS a planned path depends on: the poses (x, y, phi, xg, yg, phig), not the speeds
+PATH_COLUMNS = [0, 1, 2, 4, 5, 6]
+
+
+def _per_pose(path, params: np.ndarray) -> np.ndarray:
+    """path(params), computed once per distinct pair of poses: the speeds do not change a planned path, and the
+    genetic algorithm (a mutated speed) and the neighbourhood (a speed moved, the poses not) ask for the same
+    path again within one batch. The same rows as path(params) (row-wise functions)."""
+    poses = np.ascontiguousarray(params[:, PATH_COLUMNS], dtype=float)
+    keys = poses.view(np.dtype((np.void, poses.itemsize * poses.shape[1]))).ravel()
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    if len(first) == len(params):
+        return path(params)
+    return path(params[first])[inverse.ravel()]
+
+
+def _goto_paths(params: np.ndarray) -> np.ndarray:
+    return np.column_stack([goto_path_features(params), lure_features(params)])
+
+
 def _goto(params: np.ndarray) -> np.ndarray:
-    return np.column_stack([pose_row(params), goto_path_features(params), lure_features(params)])
+    return np.column_stack([pose_row(params), _per_pose(_goto_paths, params)])
 
 
 def _approach(params: np.ndarray) -> np.ndarray:
-    return np.column_stack([pose_row(params), planned_path(params)])
+    return np.column_stack([pose_row(params), _per_pose(planned_path, params)])
 
 
 def _dribble(params: np.ndarray) -> np.ndarray:
-    return np.column_stack([pose_row(params), dribble_path(params)])
+    return np.column_stack([pose_row(params), _per_pose(dribble_path, params)])
 
 
 APPROACH = FeatureSpace("approach", POSE_PARAMETERS, APPROACH_FEATURES, _approach,
