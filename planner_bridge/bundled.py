@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 from tailor.errors import InputFileError
@@ -27,6 +28,7 @@ def resolve_domain_dir(domain_arg: str | Path) -> Path:
     """The folder of a domain given as a bundled name, a folder holding domain.pddl, or a domain.pddl file."""
     arg = str(domain_arg)
     path = Path(arg)
+    _warn_if_shadowing(arg)
     if path.is_dir():
         if not (path / DOMAIN_FILE).is_file():
             raise InputFileError(f"a domain folder needs a {DOMAIN_FILE}", arg)
@@ -40,6 +42,19 @@ def resolve_domain_dir(domain_arg: str | Path) -> Path:
         arg)
 
 
+_WARNED: set[str] = set()
+
+
+def _warn_if_shadowing(arg: str) -> None:
+    """A bare name that is both a file or folder here and a bundled domain means the one here (an existing path
+    wins): say so, once per command, since the bundled domain may have been meant."""
+    if not _looks_like_path(arg) and Path(arg).exists() and arg in bundled_domains() and arg not in _WARNED:
+        _WARNED.add(arg)
+        logging.getLogger(__name__).warning(
+            "%s: the %s here, not the bundled domain of that name (write ./%s to say so; run elsewhere for the "
+            "bundled one)", arg, "folder" if Path(arg).is_dir() else "file", arg)
+
+
 def _looks_like_path(arg: str) -> bool:
     return "/" in arg or "\\" in arg or arg.endswith(".pddl")
 
@@ -51,8 +66,10 @@ def resolve_problem(domain_arg: str | Path, problem_arg: str | Path) -> tuple[Pa
     domain_arg, problem_arg = str(domain_arg), str(problem_arg)
     domain = Path(domain_arg)
     if domain.is_dir():
-        domain = resolve_domain_dir(domain) / DOMAIN_FILE
-    elif not domain.is_file() and not _looks_like_path(domain_arg):
+        domain = resolve_domain_dir(domain_arg) / DOMAIN_FILE
+    elif domain.is_file():
+        _warn_if_shadowing(domain_arg)
+    elif not _looks_like_path(domain_arg):
         if domain_arg not in bundled_domains():
             raise InputFileError(
                 f"no such file or bundled domain (bundled: {', '.join(bundled_domains()) or 'none'})", domain_arg

@@ -3,13 +3,15 @@
 The models bundled with a domain (`domains/<name>/models/`) are read-only defaults: `tailor train` never
 writes into the installed package; it writes to `--out DIR` or, by default, to the user's data folder,
 `<user data>/<domain>/` (platformdirs; e.g. ~/.local/share/tailor/<domain> on Linux), as `models/` and
-`training/`. Refinement reads, in this order: `--models DIR` (a folder of `<action>.json`, or a training
+`training/`, where <domain> is the folder's `domain_key`: a bundled domain's name, another folder's name with
+a digest of its path, so two folders of one name never share models or experience. Refinement reads, in this order: `--models DIR` (a folder of `<action>.json`, or a training
 output folder holding `models/`), then `$TAILOR_MODELS/<domain>/` when that folder exists (the variable names
 a root laid out like the user data folder), then the bundled models; commands say which in one line.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,9 +40,22 @@ def user_root() -> Path:
     return Path(platformdirs.user_data_dir("tailor", appauthor=False))
 
 
+def domain_key(domain_dir: Path) -> str:
+    """The name of a domain's folder in the user data folder (and under $TAILOR_MODELS): a bundled domain's
+    name; for any other domain folder its name and the first 8 hex digits of the SHA-256 of its resolved path
+    (`robot-1a2b3c4d`): two folders named alike (`a/robot` and `b/robot`, a copy named like a bundled domain)
+    never share models or experience."""
+    from tailor.planner_bridge.bundled import DOMAINS_DIR
+
+    folder = Path(domain_dir).resolve()
+    if folder.parent == DOMAINS_DIR.resolve():
+        return folder.name
+    return f"{folder.name}-{hashlib.sha256(str(folder).encode()).hexdigest()[:8]}"
+
+
 def default_training_out(domain_dir: Path) -> Path:
     """Where `tailor train` writes a domain's models and reports without `--out`."""
-    return user_root() / Path(domain_dir).name
+    return user_root() / domain_key(domain_dir)
 
 
 def models_folder(path: Path) -> Path:
@@ -59,7 +74,7 @@ def resolve_models(domain_dir: Path, explicit: str | Path | None = None) -> Mode
         return ModelSource(folder, "--models")
     root = os.environ.get(ENVIRONMENT_VARIABLE)
     if root:
-        candidate = Path(root).expanduser() / Path(domain_dir).name
+        candidate = Path(root).expanduser() / domain_key(domain_dir)
         if candidate.is_dir():
             return ModelSource(models_folder(candidate), f"${ENVIRONMENT_VARIABLE}")
     return ModelSource(Path(domain_dir) / MODELS, "domain folder")

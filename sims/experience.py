@@ -100,6 +100,7 @@ class Origin:
     seed: int
     first: int
     stop: int
+    code: str = ""  # the simulator's code fingerprint (registry.code_fingerprint); "" for files without one
 
     @property
     def episodes(self) -> int:
@@ -133,6 +134,8 @@ def save_episodes(path: str | os.PathLike, episodes: list[Episode], origin: Orig
         arrays.update(simulator=np.array(origin.simulator), scenario=np.array(origin.scenario),
                       stream_seed=np.array(origin.seed, dtype=np.int64), first=np.array(origin.first, dtype=np.int64),
                       stop=np.array(origin.stop, dtype=np.int64))
+        if origin.code:
+            arrays.update(simulator_code=np.array(origin.code))
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
@@ -177,7 +180,8 @@ def read_origin(path: str | os.PathLike) -> Origin | None:
             if not all(k in data.files for k in _ORIGIN_KEYS):
                 return None
             return Origin(str(data["simulator"]), str(data["scenario"]), int(data["stream_seed"]),
-                          int(data["first"]), int(data["stop"]))
+                          int(data["first"]), int(data["stop"]),
+                          str(data["simulator_code"]) if "simulator_code" in data.files else "")
     except DataError:
         raise
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as exc:

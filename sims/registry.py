@@ -10,7 +10,11 @@ or, in-process, by calling `register(entry)`. The bundled robots register throug
 
 from __future__ import annotations
 
+import functools
+import hashlib
+import inspect
 from importlib.metadata import entry_points
+from pathlib import Path
 
 from tailor.errors import SimError
 from tailor.sims.protocol import SimulatorEntry
@@ -77,3 +81,24 @@ def get(name: str) -> SimulatorEntry:
     why = f" (its entry point failed: {_FAILED[name]})" if name in _FAILED else ""
     known = ", ".join(sorted(_REGISTRY)) or "none"
     raise SimError(f"no simulator {name!r} is installed{why} (known: {known})")
+
+
+@functools.lru_cache(maxsize=None)
+def code_fingerprint(name: str) -> str:
+    """A fingerprint of the simulator `name`'s code: the first 16 hex digits of a SHA-256 over the Python files of
+    the package its `create` comes from (paths and contents); "" where that cannot be found. Experience gathered
+    by other code (an edited controller, a changed constant) is not this simulator's experience."""
+    create = get(name).create
+    module = inspect.getmodule(getattr(create, "func", create))  # (a functools.partial: its function's module)
+    source = getattr(module, "__file__", None)
+    if not source:
+        return ""
+    root = Path(source).parent if module.__package__ else None  # a module of a package: the package's folder
+    files = sorted(root.rglob("*.py")) if root is not None else [Path(source)]
+    digest = hashlib.sha256()
+    for path in files:
+        if "__pycache__" in path.parts:
+            continue
+        digest.update(str(path.relative_to(root) if root is not None else path.name).encode())
+        digest.update(b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()[:16]

@@ -9,7 +9,8 @@ with other workers, merge into exactly the episodes of one serial gather. File n
 (gaps between shards, or past the last one) are simulated and written as new shards, and the merged list is
 returned in episode order. Two shards of one stream that overlap are an error naming both files (which one
 is right cannot be told); a shard of another simulator, a file whose content does not match its name, of an
-unknown schema or not a shard at all is an error naming the file. On Ctrl-C the episodes finished so far are
+unknown schema or not a shard at all is an error naming the file, and so is a shard the simulator's code of now
+did not gather (its code fingerprint differs: an edited controller would otherwise train stale models). On Ctrl-C the episodes finished so far are
 written as a shard of their own (a complete file, renamed into place), so the next run resumes after them.
 """
 
@@ -18,12 +19,12 @@ from __future__ import annotations
 import os
 import re
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from tailor.errors import DataError
 from tailor.sims.episode import Episode
-from tailor.sims import experience
+from tailor.sims import experience, registry
 from tailor.sims.experience import Origin, episode_seeds, load_episodes, read_origin, save_episodes
 
 SUFFIX = ".npz"
@@ -43,15 +44,18 @@ def shard_name(origin: Origin) -> str:
 
 
 def write_shard(directory: str | os.PathLike, origin: Origin, episodes: list[Episode]) -> Shard:
-    """Write `episodes` (those of `origin`, in order) as a shard in `directory`, atomically."""
+    """Write `episodes` (those of `origin`, in order) as a shard in `directory`, atomically, stamped with the
+    simulator's code fingerprint where `origin` has none."""
+    if not origin.code:
+        origin = replace(origin, code=registry.code_fingerprint(origin.simulator))
     path = Path(directory) / shard_name(origin)
     save_episodes(path, episodes, origin)
     return Shard(path, origin)
 
 
 def find_shards(directory: str | os.PathLike, simulator: str) -> list[Shard]:
-    """Every shard in `directory` (none if it does not exist). Each .npz file must be a shard of `simulator`
-    whose content matches its name; anything else is a DataError naming the file."""
+    """Every shard in `directory` (none if it does not exist). Each .npz file must be a shard of `simulator`,
+    gathered by its code of now, whose content matches its name; anything else is a DataError naming the file."""
     directory = Path(directory)
     if not directory.is_dir():
         return []
@@ -64,6 +68,12 @@ def find_shards(directory: str | os.PathLike, simulator: str) -> list[Shard]:
         if origin.simulator != simulator:
             raise DataError(f"a shard of simulator {origin.simulator!r}, not {simulator!r}: one experience folder "
                             "per simulator", file=str(path))
+        code = registry.code_fingerprint(simulator)
+        if origin.code != code:
+            when = f"by simulator code {origin.code}" if origin.code else "before tailor recorded the simulator's code"
+            raise DataError(f"gathered {when}, and {simulator!r} is code {code} now: its episodes would train stale "
+                            "models; move the folder's shards away (or give another --experience / --out) to gather "
+                            "anew", file=str(path))
         if path.name != shard_name(origin):
             raise DataError(f"holds episodes {origin.first}:{origin.stop} of {origin.scenario} seed {origin.seed}, "
                             f"which its name does not say (expected {shard_name(origin)})", file=str(path))

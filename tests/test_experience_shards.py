@@ -13,7 +13,7 @@ import pytest
 
 from tailor.errors import BackendError, DataError
 from tailor.refinement.cli.main import main
-from tailor.sims import experience
+from tailor.sims import experience, registry
 from tailor.sims.experience import SCHEMA, Origin, episode_seeds, gather, load_episodes, read_origin, save_episodes
 from tailor.sims.parallel import backend_session
 from tailor.sims.shards import find_shards, stored_gather, write_shard
@@ -45,7 +45,8 @@ def test_shards_gathered_apart_merge_into_the_serial_gather(tmp_path, serial, mo
         assert main(["gather", "soccer", "--seeds", seeds, "--seed", "3", "--scenario", SCENARIO,
                      "--out", str(tmp_path)]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == [f"{SCENARIO}.seed3.0-6.npz", f"{SCENARIO}.seed3.6-14.npz"]
-    assert read_origin(tmp_path / f"{SCENARIO}.seed3.6-14.npz") == Origin(SIM, SCENARIO, 3, 6, 14)
+    assert read_origin(tmp_path / f"{SCENARIO}.seed3.6-14.npz") == Origin(SIM, SCENARIO, 3, 6, 14,
+                                                                          registry.code_fingerprint(SIM))
     monkeypatch.setattr(experience, "gather", no_simulation)  # everything is on disk: nothing is simulated
     same(stored_gather(tmp_path, SIM, SCENARIO, 14, seed=3, progress=False), serial)
     same(stored_gather(tmp_path, SIM, SCENARIO, 5, seed=3, progress=False, first=4), serial[4:9])  # across shards
@@ -88,6 +89,8 @@ def test_other_streams_in_the_folder_are_left_alone(tmp_path, serial, monkeypatc
     ("no origin", "an episode file without its origin (simulator, scenario, seed range) is not a shard"),
     ("seeds", "its episodes' seeds are not those of approachBall seed 3, episodes 0:4"),
     ("garbage", "not an episode file (not an .npz archive)"),
+    ("code", "gathered by simulator code 0123456789abcdef, and 'soccer' is code "),
+    ("no code", "gathered before tailor recorded the simulator's code, and 'soccer' is code "),
 ])
 def test_a_shard_that_does_not_match_is_one_line_naming_the_file(tmp_path, serial, fault, message):
     path = tmp_path / f"{SCENARIO}.seed3.0-4.npz"
@@ -105,6 +108,10 @@ def test_a_shard_that_does_not_match_is_one_line_naming_the_file(tmp_path, seria
         del arrays["first"]
     elif fault == "seeds":
         arrays["seed"] = arrays["seed"][::-1].copy()
+    elif fault == "code":
+        arrays["simulator_code"] = np.array("0123456789abcdef")
+    elif fault == "no code":
+        del arrays["simulator_code"]
     if fault == "garbage":
         path.write_bytes(b"PK\x03\x04 half a zip")
     else:
@@ -113,6 +120,28 @@ def test_a_shard_that_does_not_match_is_one_line_naming_the_file(tmp_path, seria
         stored_gather(tmp_path, SIM, SCENARIO, 4, seed=3, progress=False)
     assert str(error.value) == f"{path}: {message}" or str(error.value).startswith(f"{path}: {message}")
     assert "\n" not in str(error.value)
+
+
+def test_the_code_fingerprint_follows_the_simulators_package(tmp_path, monkeypatch):
+    """Experience is stamped with a fingerprint of the simulator package's files: editing any of them (a
+    controller's constant) changes it, so shards gathered before are refused rather than trained on."""
+    package = tmp_path / "my_robot"
+    package.mkdir()
+    (package / "__init__.py").write_text("def create(seed, noise=None):\n    return None\n")
+    (package / "controller.py").write_text("A_MAX = 0.6\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    import my_robot
+
+    monkeypatch.setattr(registry, "get", lambda name: type("Entry", (), {"create": staticmethod(my_robot.create)}))
+    fingerprints = []
+    try:
+        for a_max in ("0.6", "0.3", "0.6"):
+            (package / "controller.py").write_text(f"A_MAX = {a_max}\n")
+            registry.code_fingerprint.cache_clear()
+            fingerprints.append(registry.code_fingerprint("my_robot"))
+    finally:
+        registry.code_fingerprint.cache_clear()
+    assert len(fingerprints[0]) == 16 and fingerprints[1] != fingerprints[0] == fingerprints[2]
 
 
 def test_ctrl_c_keeps_the_finished_episodes_as_a_complete_shard(tmp_path, serial, monkeypatch, capsys):

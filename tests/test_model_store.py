@@ -11,7 +11,7 @@ import pytest
 
 from tailor.errors import ModelFileError
 from tailor.refinement.cli.main import main
-from tailor.refinement.model_store import default_training_out, resolve_models, user_root
+from tailor.refinement.model_store import default_training_out, domain_key, resolve_models, user_root
 
 DOMAINS = Path(__file__).resolve().parents[1] / "domains"
 
@@ -20,6 +20,21 @@ def test_the_default_training_folder_is_the_users_not_the_package(tmp_path, monk
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path))
     assert user_root() == tmp_path / "tailor"
     assert default_training_out(DOMAINS / "soccer") == tmp_path / "tailor" / "soccer"
+
+
+def test_folders_named_alike_never_share_a_data_folder(tmp_path, monkeypatch):
+    """A copy named like a bundled domain, and two of your own folders of one name, each get their own data
+    folder (models, experience, and the $TAILOR_MODELS lookup): the name plus a digest of the path."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
+    folders = [tmp_path / "x" / "soccer", tmp_path / "a" / "robot", tmp_path / "b" / "robot"]
+    keys = [domain_key(folder) for folder in folders]
+    assert domain_key(DOMAINS / "soccer") == "soccer" and len({"soccer", *keys}) == 4
+    assert [key.rsplit("-", 1)[0] for key in keys] == ["soccer", "robot", "robot"]
+    assert keys[1] == domain_key(tmp_path / "a" / ".." / "a" / "robot")  # the path resolved: one folder, one key
+    assert [default_training_out(folder) for folder in folders] == [tmp_path / "data" / "tailor" / k for k in keys]
+    monkeypatch.setenv("TAILOR_MODELS", str(tmp_path / "data" / "tailor"))
+    (tmp_path / "data" / "tailor" / "soccer" / "models").mkdir(parents=True)  # trained for the bundled soccer
+    assert resolve_models(folders[0]).origin == "domain folder"  # not the copy's
 
 
 def test_models_are_resolved_from_the_option_then_the_variable_then_the_domain(tmp_path, monkeypatch):

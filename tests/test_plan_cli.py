@@ -4,6 +4,7 @@ tests/golden/plan/ (regenerate them and see the diff with `python tests/regenera
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -82,6 +83,25 @@ def test_resolve_bundled_names_and_paths(tmp_path):
     problem = tmp_path / "mine.pddl"
     problem.write_text("(define (problem mine) (:domain soccer))")
     assert resolve_problem("soccer", str(problem)) == (soccer / "domain.pddl", problem)
+
+
+def test_a_folder_here_named_like_a_bundled_domain_wins_and_says_so(tmp_path, monkeypatch, capsys):
+    """An existing path wins over a bundled name; a bare name that is both warns once per command, a path
+    written as one (./soccer) does not."""
+    import shutil
+
+    from tailor.planner_bridge import bundled
+
+    shutil.copytree(ROOT / "domains" / "soccer", tmp_path / "soccer")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(bundled, "_WARNED", set())
+    assert main(["plan", "soccer", "score", "--json"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("warning: soccer: the folder here, not the bundled domain of that name") == 1
+    assert resolve_problem("soccer", "score")[0] == Path("soccer") / "domain.pddl"  # the copy here
+    monkeypatch.setattr(bundled, "_WARNED", set())
+    assert main(["plan", "./soccer", "score", "--json"]) == 0
+    assert "warning" not in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(

@@ -363,3 +363,14 @@ def test_learning_curve_legends_hide_no_point(name, monkeypatch):
     assert not legend.get_window_extent(renderer).overlaps(ax.get_window_extent(renderer))
     assert legend.get_window_extent(renderer).x1 <= fig.bbox.x1  # not cut off at the figure's edge
     plt.close(fig)
+
+
+def test_a_classifier_without_fresh_failures_does_not_claim_a_false_success_share():
+    """With no failing fresh episode the false-success share is 0 by convention; the reports say there were
+    none instead of printing 0.0% as if it were measured."""
+    from tailor.refinement.learning.report import false_success_text
+
+    none = {"confusion": {"observed_fail": 0.0}, "false_success": 0.0}
+    some = {"confusion": {"observed_fail": 0.2}, "false_success": 0.25}
+    assert false_success_text(none, "failing ones") == "no failing ones among the fresh episodes to predict"
+    assert false_success_text(some) == "25.0% of the failing episodes were predicted to succeed"

@@ -8,7 +8,7 @@ import base64
 import html
 from collections.abc import Mapping
 
-from tailor.refinement.learning.report import hours_minutes, percent
+from tailor.refinement.learning.report import false_success_text, hours_minutes, percent
 from tailor.refinement.learning.trust import classifier_reports
 
 STYLE = """
@@ -69,7 +69,7 @@ def confusion_html(action: str, c: dict) -> str:
     outcomes = ", ".join(f"{k}: {v}" for k, v in c.get("outcomes", {}).items())
     note = (f"Decision tree trained on {c['episodes']} episodes ({outcomes}); cost of a false success "
             f"{c['cost_false_success']:g} relative to the class balance, min_samples_leaf {c['min_samples_leaf']}, "
-            f"{c['leaves']} leaves. {percent(c['false_success'])} of the failing episodes were predicted to succeed.")
+            f"{c['leaves']} leaves. {false_success_text(c).capitalize()}.")
     return f"<h3>{_e(action)}</h3><p class=\"note\">{_e(note)}</p>{table}"
 
 

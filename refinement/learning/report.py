@@ -15,6 +15,14 @@ def percent(share: float) -> str:
     return f"{100.0 * share:.1f}%"
 
 
+def false_success_text(c: dict, failing: str = "failing episodes") -> str:
+    """How many of the fresh failures a classifier predicted to succeed; saying so where there was none (its
+    share is then 0 by convention, which would read as a result)."""
+    if not c["confusion"]["observed_fail"]:
+        return f"no {failing} among the fresh episodes to predict"
+    return f"{percent(c['false_success'])} of the {failing} were predicted to succeed"
+
+
 def duration_table(reports: dict[str, dict]) -> list[str]:
     header = (f"{'action':<14}{'episodes':>9}{'mean t (s)':>11}{'sim. h:mm':>10}{'n_i':>5}{'leaf':>5}{'MAE (s)':>9}"
               f"{'MAE/t':>7}{'HGB MAE (s)':>12}{'MAE/HGB':>8}{'leaves':>7}")
@@ -69,7 +77,7 @@ def _classifier_lines(c: dict) -> list[str]:
         "",
         *confusion_table(c["confusion"]),
         "",
-        f"false success: {percent(c['false_success'])} of the failing episodes were predicted to succeed",
+        f"false success: {false_success_text(c)}",
     ]
 
 
@@ -124,6 +132,5 @@ def summary_lines(report: dict) -> list[str]:
                      f"{percent(r['mae_relative']):>10}{ratio:>8}")
     for action, c in classifier_reports(report).items():
         lines.append(f"  success classifier of {action}: {percent(c['accuracy'])} correct on "
-                     f"{c['confusion']['episodes']} fresh episodes, {percent(c['false_success'])} of the failing ones "
-                     "predicted to succeed")
+                     f"{c['confusion']['episodes']} fresh episodes, {false_success_text(c, 'failing ones')}")
     return lines
