@@ -42,6 +42,22 @@ class DomainSignature:
     constants: set[str] = field(default_factory=set)
     predicates: dict[str, int] = field(default_factory=dict)
     functions: set[str] = field(default_factory=set)
+    actions: set[str] = field(default_factory=set)
+    constant_symbols: list[Symbol] = field(default_factory=list)  # where each constant is declared
+
+
+def _check_object_name(name: Symbol, sig: DomainSignature, what: str, file: str) -> None:
+    """unified-planning reads one namespace: an object named like a type, predicate, function or action is
+    refused by its reader (with a hint at an environment flag that does not help, since its reader then takes
+    the object for the predicate); say so here, at the name."""
+    lower = name.text.lower()
+    for kind, names in (("type", sig.types - set(BUILTIN_TYPES)), ("predicate", sig.predicates),
+                        ("function", sig.functions), ("action", sig.actions)):
+        if lower in {n.lower() for n in names}:
+            article = "an" if kind[0] in "aeiou" else "a"
+            raise PDDLSemanticError(f"{what} '{name.text}' has the name of {article} {kind}: unified-planning "
+                                    "cannot read a problem whose names clash; rename one of them",
+                                    file, name.line, name.col)
 
 
 def _sections(define: SList) -> list[SList]:
@@ -171,6 +187,7 @@ def check_domain(define: SList, file: str) -> DomainSignature:
             for name, type_expr in _typed_names(section.items[1:]):
                 _check_type(type_expr, sig, file)
                 sig.constants.add(name.text)
+                sig.constant_symbols.append(name)
         elif section.head == ":predicates":
             for predicate in section.items[1:]:
                 if isinstance(predicate, SList) and predicate.head:
@@ -180,6 +197,11 @@ def check_domain(define: SList, file: str) -> DomainSignature:
                     sig.predicates[predicate.head] = len(params)
         elif section.head == ":functions":
             sig.functions |= {f.head for f in section.items[1:] if isinstance(f, SList) and f.head}
+    sig.actions |= {section.items[1].text for section in sections
+                    if section.head in (":action", ":durative-action") and len(section.items) > 1
+                    and isinstance(section.items[1], Symbol)}
+    for name in sig.constant_symbols:
+        _check_object_name(name, sig, "constant", file)
     for section in sections:
         if section.head in (":action", ":durative-action"):
             values = _keyword_values(section.items[2:])
@@ -213,6 +235,7 @@ def check_problem(define: SList, sig: DomainSignature, file: str) -> None:
         elif section.head == ":objects":
             for name, type_expr in _typed_names(section.items[1:]):
                 _check_type(type_expr, sig, file)
+                _check_object_name(name, sig, "object", file)
                 objects.add(name.text)
     for section in sections:
         if section.head == ":init":

@@ -97,6 +97,14 @@ def test_wrong_arity_in_problem(capsys):
     )
 
 
+def test_an_object_named_like_a_predicate(capsys):
+    """Valid PDDL that unified-planning's reader cannot take (one namespace): said at the name, not with UP's
+    hint at an environment flag the command line cannot set."""
+    f = BAD / "name_clash_problem.pddl"
+    assert_one_line_error(capsys, [DOMAIN, f], 5, f"{f}:3:23", "object 'seen' has the name of a predicate: "
+                          "unified-planning cannot read a problem whose names clash; rename one of them")
+
+
 def test_problem_naming_another_domain(capsys):
     f = BAD / "other_domain_problem.pddl"
     assert_one_line_error(
