@@ -204,6 +204,14 @@ def load_episodes(path: str | os.PathLike) -> list[Episode]:
             or len(a["seed"]) != n or off.shape != (n + 1,) or off[0] != 0 or np.any(np.diff(off) < 0)
             or off[-1] != len(a["t"]) or (n and a["state"].shape != (len(a["t"]), len(columns)))):
         raise DataError("inconsistent array shapes in episode file", file=name)
+    for key in ("params", "duration", "t", "state", "seed"):
+        if a[key].dtype.kind not in "fiu":
+            raise DataError(f"its {key} are not numbers ({a[key].dtype})", file=name)
+    for key in ("params", "duration", "t"):  # (a state column may be NaN: an object the scene does not have)
+        if not np.all(np.isfinite(a[key])):
+            raise DataError(f"its {key} hold values that are not finite (NaN or infinity)", file=name)
+    if np.any(a["duration"] < 0):
+        raise DataError(f"episode {int(np.argmin(a['duration']))} has a negative duration", file=name)
     return [Episode(str(a["action"][i]), a["params"][i].copy(), a["t"][off[i]:off[i + 1]].copy(),
                     a["state"][off[i]:off[i + 1]].copy(), columns, str(a["outcome"][i]), float(a["duration"][i]),
                     int(a["seed"][i])) for i in range(n)]

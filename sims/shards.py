@@ -125,6 +125,14 @@ def load_piece(piece: Piece) -> list[Episode]:
     path = str(piece.shard.path)
     if len(episodes) != origin.episodes:
         raise DataError(f"holds {len(episodes)} episodes, its origin says {origin.episodes}", file=path)
+    scenario = registry.get(origin.simulator).scenarios.get(origin.scenario)
+    if scenario is not None:  # every episode one of the scenario's action, with that action's parameters
+        spec = registry.get(origin.simulator).actions[scenario.action]
+        for i, episode in enumerate(episodes):
+            if episode.action != scenario.action or len(episode.params) != len(spec.parameters):
+                raise DataError(f"episode {origin.first + i} is {episode.action!r} with {len(episode.params)} "
+                                f"parameters, not {scenario.action!r} of scenario {origin.scenario} with "
+                                f"{len(spec.parameters)}", file=path)
     chosen = episodes[piece.first - origin.first:piece.stop - origin.first]
     if [e.seed for e in chosen] != episode_seeds(origin.seed, piece.stop - piece.first, piece.first):
         raise DataError(f"its episodes' seeds are not those of {origin.scenario} seed {origin.seed}, episodes "

@@ -91,6 +91,12 @@ def test_other_streams_in_the_folder_are_left_alone(tmp_path, serial, monkeypatc
     ("garbage", "not an episode file (not an .npz archive)"),
     ("code", "gathered by simulator code 0123456789abcdef, and 'soccer' is code "),
     ("no code", "gathered before tailor recorded the simulator's code, and 'soccer' is code "),
+    ("nan duration", "its duration hold values that are not finite (NaN or infinity)"),
+    ("inf params", "its params hold values that are not finite (NaN or infinity)"),
+    ("negative duration", "episode 0 has a negative duration"),
+    ("text durations", "its duration are not numbers (<U"),
+    ("other action", "episode 0 is 'fly' with 8 parameters, not 'approachBall' of scenario approachBall with 8"),
+    ("fewer params", "episode 0 is 'approachBall' with 3 parameters, not 'approachBall' of scenario approachBall"),
 ])
 def test_a_shard_that_does_not_match_is_one_line_naming_the_file(tmp_path, serial, fault, message):
     path = tmp_path / f"{SCENARIO}.seed3.0-4.npz"
@@ -112,6 +118,18 @@ def test_a_shard_that_does_not_match_is_one_line_naming_the_file(tmp_path, seria
         arrays["simulator_code"] = np.array("0123456789abcdef")
     elif fault == "no code":
         del arrays["simulator_code"]
+    elif fault == "nan duration":
+        arrays["duration"][0] = np.nan
+    elif fault == "inf params":
+        arrays["params"][0, 0] = np.inf
+    elif fault == "negative duration":
+        arrays["duration"][0] = -5.0
+    elif fault == "text durations":
+        arrays["duration"] = arrays["duration"].astype(str)
+    elif fault == "other action":
+        arrays["action"] = np.array(["fly"] + list(arrays["action"][1:]))
+    elif fault == "fewer params":
+        arrays["params"] = arrays["params"][:, :3].copy()
     if fault == "garbage":
         path.write_bytes(b"PK\x03\x04 half a zip")
     else:
@@ -231,7 +249,11 @@ def test_gather_command_errors_are_one_line(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit:
         main(["gather", "soccer", "--seeds", "5:5"])
     assert exit.value.code == 2
-    assert "expected 0 <= A < B, got '5:5'" in capsys.readouterr().err
+    assert "expected 0 <= A < B <= 9223372036854775807, got '5:5'" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit:  # shards store seeds as 64-bit integers
+        main(["gather", "soccer", "--seeds", "0:2", "--seed", str(2**63)])
+    assert exit.value.code == 2
+    assert "argument --seed: must be at most 9223372036854775807" in capsys.readouterr().err
     assert main(["gather", "soccer", "--seeds", "0:4", "--scheduler", "tcp://x:1", "--out", str(tmp_path)]) == 17
     assert "--scheduler joins a Dask or Ray cluster" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []

@@ -165,5 +165,6 @@ def risk_lambda(text: str) -> float:
     return value
 
 
-seed = whole_number(0)  # an argparse type: numpy's and the simulators' generators take no negative seed
+MAX_SEED = 2**63 - 1  # experience files store seeds as 64-bit integers
+seed = whole_number(0, MAX_SEED)  # an argparse type: numpy's and the simulators' generators take no negative seed
 seed.__name__ = "seed"

@@ -12,7 +12,8 @@ import sys
 import time
 from pathlib import Path
 
-from tailor.refinement.cli.arguments import MAX_EPISODES, add_backend_arguments, backend_session, seed, worker_count
+from tailor.refinement.cli.arguments import (MAX_EPISODES, MAX_SEED, add_backend_arguments, backend_session, seed,
+                                             worker_count)
 
 HELP = "simulate episodes A..B-1 of the domain's experience scenarios and keep them as shards for `tailor train`"
 
@@ -26,8 +27,8 @@ def seed_range(text: str) -> tuple[int, int]:
         a, b = int(first), int(stop)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected A:B (episodes A to B-1), got {text!r}") from None
-    if not 0 <= a < b:
-        raise argparse.ArgumentTypeError(f"expected 0 <= A < B, got {text!r}")
+    if not 0 <= a < b <= MAX_SEED:
+        raise argparse.ArgumentTypeError(f"expected 0 <= A < B <= {MAX_SEED}, got {text!r}")
     if b - a > MAX_EPISODES:
         raise argparse.ArgumentTypeError(f"at most {MAX_EPISODES} episodes at a time, got {text!r}")
     return a, b

@@ -119,6 +119,11 @@ def result_json(prepared, method: str, seed: int, outcomes: dict, decision=None)
     return versioned("refine", data)
 
 
+def _gain(refined: float, greedy: float) -> str:
+    """1 - refined / greedy as a percentage; "-" where greedy takes no time (nothing to compare with)."""
+    return f"{100 * (1 - refined / greedy):.1f}%" if greedy > 0 else "-"
+
+
 def _print_text(prepared, method: str, outcomes: dict, decision=None) -> None:
     from tailor.planner_bridge import render_text
 
@@ -179,9 +184,9 @@ def _print_text(prepared, method: str, outcomes: dict, decision=None) -> None:
     out(f"  {'total':<24}" + "".join(f"{c:>{width}}" for c in totals) + "\n")
     if len(names) == 2:
         g, r = outcomes["greedy"], outcomes["refined"]
-        line = f"\nImprovement of refined over greedy: predicted {100 * (1 - r.refined.predicted_total / g.refined.predicted_total):.1f}%"
+        line = f"\nImprovement of refined over greedy: predicted {_gain(r.refined.predicted_total, g.refined.predicted_total)}"
         if simulate and g.simulated.succeeded and r.simulated.succeeded:
-            line += f", simulated {100 * (1 - r.simulated.duration / g.simulated.duration):.1f}%"
+            line += f", simulated {_gain(r.simulated.duration, g.simulated.duration)}"
         out(line + "\n")
     for w in outcomes["refined"].refined.windows:
         note = f" ({w.note})" if w.note else ""
