@@ -148,6 +148,12 @@ def costs_figure(parameter, values: np.ndarray, curves: list[tuple[str, np.ndarr
     return fig
 
 
+def cost_plot_names(path) -> tuple[Path, Path]:
+    """The names draw_refinement gives the predicted-time plot beside FILE: FILE_polar.png, FILE_costs.png."""
+    path = Path(path)
+    return tuple(path.with_name(path.stem + kind + (path.suffix or ".png")) for kind in ("_polar", "_costs"))
+
+
 def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
     """The executions in `outcomes` (greedy, refined, and any other) in each view of the simulator as FILE, and
     the predicted time of the first actions over the first free parameter as FILE_polar.png (or FILE_costs.png
@@ -188,6 +194,6 @@ def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
         curves.append((f"{action.step} {action.action}", predicted))
     curves.append(("sum over the horizon", total))
     polar = parameter.high - parameter.low >= FULL_CIRCLE
-    costs = path.with_name(path.stem + ("_polar" if polar else "_costs") + (path.suffix or ".png"))
+    costs = cost_plot_names(path)[0 if polar else 1]
     plot_costs(costs, parameter, values, curves, [("greedy", greedy[parameter.id]), ("refined", chosen[parameter.id])])
     return written + [costs]

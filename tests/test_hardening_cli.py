@@ -56,6 +56,19 @@ def test_a_plot_that_cannot_be_written_fails_before_planning(plot, tmp_path, mon
     assert sorted(p.name for p in tmp_path.iterdir()) == ["folder.png"]  # nothing written
 
 
+@pytest.mark.parametrize("companion", ["picture_polar.png", "picture_costs.png"])
+def test_a_plot_whose_companion_cannot_be_written_fails_before_planning(companion, tmp_path, monkeypatch, capsys):
+    """FILE.png comes with FILE_polar.png or FILE_costs.png: both are checked before any work, and the FILE.png
+    there is left as it was."""
+    (tmp_path / "picture.png").write_text("old")
+    (tmp_path / companion).mkdir()
+    monkeypatch.setattr("tailor.refinement.pipeline.prepare", _no_work)
+    assert main(["refine", "soccer", "score", "--plot", str(tmp_path / "picture.png")]) == 16
+    assert one_line(capsys.readouterr().err) == (f"tailor refine: error: {tmp_path / companion}: is a folder, not "
+                                                 "a file name")
+    assert (tmp_path / "picture.png").read_text() == "old"
+
+
 def test_a_plot_in_a_read_only_file_system_fails_before_planning(monkeypatch, capsys):
     if os.access("/sys", os.W_OK) and not os.path.ismount("/sys"):
         pytest.skip("no read-only file system to write into")

@@ -263,8 +263,11 @@ def run(args: argparse.Namespace) -> int:
 
     if args.plot:  # before planning and refining: a plot that cannot be written must not cost their time
         from tailor.refinement.outputs import check_output_file
+        from tailor.refinement.refine_plots import cost_plot_names
 
         check_output_file(args.plot, ".png")
+        for companion in cost_plot_names(args.plot):  # (which one is drawn is known once the plan is instantiated)
+            check_output_file(companion, ".png")
     from dataclasses import replace
 
     from tailor.refinement.model_store import resolve_models
