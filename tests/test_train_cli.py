@@ -139,6 +139,17 @@ def test_only_learns_the_named_models(tmp_path, monkeypatch, capsys):
     assert not (tmp_path / "x").exists()
 
 
+def test_a_folder_where_a_model_file_goes_is_named(tmp_path, monkeypatch, capsys):
+    """The error names the folder in the way (not the last file of the run) and nothing is written."""
+    monkeypatch.setattr("tailor.sims.experience.gather", synthetic_episodes.gather)
+    (tmp_path / "models" / "goToPosition.json").mkdir(parents=True)
+    assert main(["train", "soccer", "--only", "goToPosition", "--episodes", "24", "--n-i", "1",
+                 "--out", str(tmp_path)]) == 16
+    err = capsys.readouterr().err.strip().splitlines()[-1]  # (after the experience it kept)
+    assert err == f"tailor train: error: {tmp_path / 'models' / 'goToPosition.json'}: cannot write: Is a directory"
+    assert not (tmp_path / "training").exists()
+
+
 def test_only_a_model_with_subgoal_experience_refines_with_the_domains_others(tmp_path):
     """--only dribbleBall: its subgoal experience refines `score` situations, which need goToPose (the
     approach): the domain's own model of it, or OUT's where OUT holds one; never the model being learned."""

@@ -215,6 +215,9 @@ def write_outputs(out: Path, recipe: TrainingRecipe, models: dict, classifiers: 
     files = training_files(out, recipe, models, classifiers, report)
     report["files"] = [target.relative_to(Path(out)).as_posix() for target in files]
     staged: list[tuple[Path, Path]] = []
+    for target in files:  # a folder where a file goes would fail the renames: name it before writing anything
+        if target.is_dir():
+            raise write_error(target, IsADirectoryError(21, "Is a directory"))
     target = Path(out)
     try:
         for target, write in files.items():
