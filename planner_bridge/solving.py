@@ -135,6 +135,14 @@ def _search(planner: str, problem):
     return result.status.name, result.plan
 
 
+def _contradictory_goal(problem) -> bool:
+    """Whether the problem's goals together simplify to false (e.g. a fact and its negation)."""
+    if not problem.goals:
+        return False
+    env = problem.environment
+    return env.simplifier.simplify(env.expression_manager.And(problem.goals)).is_false()
+
+
 def solve(problem, planner: str, file: str, on_search: Callable[[], None] | None = None):
     """Plan for `problem` (the original, uncompiled one); return a validated SequentialPlan of its actions,
     or, from an engine that finds causal links (tailor-pocl), a validated CausalLinkPlan, and the chain of
@@ -143,6 +151,8 @@ def solve(problem, planner: str, file: str, on_search: Callable[[], None] | None
     from unified_planning.plans import ActionInstance, SequentialPlan
 
     planner = canonical(planner)
+    if _contradictory_goal(problem):  # some engines refuse a goal of `false` instead of finding no plan
+        raise NoPlanError("no plan exists (the goal is contradictory: it simplifies to false)", file)
     found_chain = compile_for(planner, problem, file)
     compiled, map_backs, chain = found_chain.problem, found_chain.map_backs, found_chain.chain
     if on_search is not None:
@@ -152,7 +162,8 @@ def solve(problem, planner: str, file: str, on_search: Callable[[], None] | None
     except (KeyboardInterrupt, MemoryError, PlannerError):
         raise
     except Exception as exc:
-        raise PlannerError(f"planner '{planner}' failed: {type(exc).__name__}: {exc}", file) from None
+        said = " ".join(str(exc).split())  # one line, whatever the engine's message looks like
+        raise PlannerError(f"planner '{planner}' failed: {type(exc).__name__}: {said}", file) from None
     if status == "TIMEOUT":
         raise PlannerTimeoutError(f"planner '{planner}' ran out of time", file)
     if status == "UNSOLVABLE_PROVEN":

@@ -119,6 +119,14 @@ def test_unsolvable_problem(capsys):
     )
 
 
+@pytest.mark.parametrize("planner", ["pyperplan", "pocl"])
+def test_a_contradictory_goal_has_no_plan_whichever_planner(capsys, planner):
+    """A fact and its negation in the goal: no plan (pyperplan's engine refused the `false` goal in two lines)."""
+    f = BAD / "contradictory_goal_problem.pddl"
+    assert_one_line_error(capsys, [DOMAIN, f, "--planner", planner], 6, str(f),
+                          "no plan exists (the goal is contradictory: it simplifies to false)")
+
+
 def test_planner_out_of_time(capsys):
     d, p = BAD / "hard_domain.pddl", BAD / "hard_problem.pddl"
     assert_one_line_error(
