@@ -144,3 +144,11 @@ class ArgumentValueError(TailorError, ValueError):
     """An API call got an argument of the right type but an impossible value (named); also a ValueError."""
 
     exit_code = 2
+
+
+def check_path_argument(value, name: str) -> None:
+    """An ArgumentTypeError unless `value` is a path (a str or an os.PathLike), naming the argument."""
+    import os
+
+    if not isinstance(value, (str, os.PathLike)):
+        raise ArgumentTypeError(f"{name} must be a path (str or os.PathLike), not {type(value).__name__}")

@@ -120,8 +120,10 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     from tailor.refinement.refine import refine as refine_sequence
 
     _check(domain, (str, Path), "domain")
-    _check(seed, int, "seed")
+    _check_seed(seed)
     _check(horizon, int, "horizon")
+    if models is not None:
+        _check(models, (str, Path), "models")
     if not isinstance(assertion, bool):
         raise ArgumentTypeError(f"assertion must be bool, not {type(assertion).__name__}")
     if filter is not None and not isinstance(filter, bool):
@@ -146,6 +148,8 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
         _check(problem, (str, Path), "problem")
         domain_file, problem_file = resolve_problem(domain, problem)
     abstract = _given_plan(plan, up_problem, domain_dir)
+    if isinstance(plan, AbstractPlan) and problem_file is not None:
+        _check_plan_problem(plan, problem_file)
     if abstract is None:
         if up_problem is not None:
             from tailor.planner_bridge.up_interop import plan_problem
@@ -206,7 +210,7 @@ def dispatch(refined, seed: int = 0) -> SequenceResult:
     """Execute a refined (fully bound) sequence in its simulator: durations, outcomes and the trajectory."""
     from tailor.refinement.dispatch import dispatch as dispatch_sequence
 
-    _check(seed, int, "seed")
+    _check_seed(seed)
     sequence = refined.sequence if isinstance(refined, (Refinement, RefinedSequence)) else refined
     if not isinstance(sequence, ActionSequence):
         raise ArgumentTypeError(f"refined must be a Refinement, RefinedSequence or ActionSequence, "
@@ -221,6 +225,14 @@ def _check(value, types, name: str) -> None:
     if isinstance(value, bool) or not isinstance(value, types):
         names = " or ".join(t.__name__ for t in (types if isinstance(types, tuple) else (types,)))
         raise ArgumentTypeError(f"{name} must be {names}, not {type(value).__name__}")
+
+
+def _check_seed(seed) -> None:
+    """A seed as the command line takes it: a whole number from 0 to 2**63 - 1 (numpy's generators take no
+    negative seed, and experience files store seeds as 64-bit integers)."""
+    _check(seed, int, "seed")
+    if not 0 <= seed <= 2**63 - 1:
+        raise ArgumentValueError(f"seed must be a whole number from 0 to 2**63 - 1, not {seed}")
 
 
 def _up_problem(value):
@@ -239,12 +251,29 @@ def _given_plan(given, up_problem, domain_dir: Path) -> AbstractPlan | None:
     """The caller's plan as ours: an AbstractPlan as it is, a UP plan linked against the problem."""
     if given is None or isinstance(given, AbstractPlan):
         return given
+    from unified_planning.plans import Plan
+
+    if not isinstance(given, Plan):
+        raise ArgumentTypeError(f"plan must be a tailor AbstractPlan, a unified-planning plan or None, "
+                                f"not {type(given).__name__}")
     if up_problem is None:
         raise ArgumentValueError("plan: a unified-planning plan needs the unified-planning Problem it solves "
                                  "(pass problem=Problem)")
     from tailor.planner_bridge.up_interop import link_plan
 
     return link_plan(up_problem, given, domain=domain_dir.name)
+
+
+def _check_plan_problem(plan: AbstractPlan, problem_file: Path) -> None:
+    """A given plan must be one of the problem refined (its belief file is the problem's)."""
+    from tailor.planner_bridge.reading import read_text
+    from tailor.planner_bridge.sexpr import SList, Symbol, read_sexpr
+
+    define = read_sexpr(read_text(Path(problem_file)), str(problem_file))
+    names = [item.items[1].text for item in define.items if isinstance(item, SList) and item.head == "problem"
+             and len(item.items) == 2 and isinstance(item.items[1], Symbol)]
+    if names and names[0].lower() != plan.problem.lower():
+        raise ArgumentValueError(f"plan is a plan of problem {plan.problem!r}, not of {names[0]!r} ({problem_file})")
 
 
 def _belief_table(belief: Mapping) -> dict:

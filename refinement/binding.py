@@ -19,7 +19,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from tailor.errors import BindingError, TailorError
+from tailor.errors import BindingError, TailorError, check_path_argument
 from tailor.sims import registry
 from tailor.errors import SimError
 from tailor.sims.protocol import GROUPS, ActionSpec, SimulatorEntry
@@ -156,6 +156,7 @@ def load_domain_binding(domain_dir: Path | str, domain_file: Path | str | None =
     `domain_file` (default: `domain_dir/domain.pddl` where it exists): no table names what the domain lacks."""
     from tailor.refinement.binding_domain import check_against_domain
 
+    check_path_argument(domain_dir, "domain_dir")
     binding = load_binding(Path(domain_dir) / BINDING_FILE)
     domain_file = Path(domain_dir) / DOMAIN_FILE if domain_file is None else Path(domain_file)
     if domain_file.is_file():

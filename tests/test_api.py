@@ -119,6 +119,14 @@ def test_a_belief_given_as_a_dict_is_the_file_and_is_checked():
     (lambda: tailor.plan("soccer"), ValueError, "problem"),
     (lambda: tailor.plan("soccer", "score", timeout=-1), ValueError, "timeout"),
     (lambda: tailor.dispatch("a plan"), TypeError, "refined"),
+    (lambda: tailor.refine("soccer", "score", seed=-1, optimizer="sample"), ValueError, "seed"),
+    (lambda: tailor.refine("soccer", "score", seed=2**63), ValueError, "seed"),
+    (lambda: tailor.refine("soccer", "score", models=5), TypeError, "models"),
+    (lambda: tailor.refine("soccer", "score", plan="a plan"), TypeError, "plan"),
+    (lambda: tailor.refine("soccer", "waypoints", plan=tailor.plan("soccer", "score")), ValueError,
+     "plan is a plan of problem 'score', not of 'waypoints'"),
+    (lambda: tailor.refinement.load_action_models(5), TypeError, "models_dir"),
+    (lambda: tailor.refinement.load_domain_binding(5), TypeError, "domain_dir"),
 ])
 def test_wrong_arguments_name_themselves_and_share_the_base(call, error, named):
     with pytest.raises(error, match=named) as caught:

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from tailor.refinement.models.decision_tree import DecisionTree, LeafBox
-from tailor.errors import ModelFileError
+from tailor.errors import ModelFileError, check_path_argument
 from tailor.refinement.models.features import compute_features, feature_spaces
 from tailor.refinement.models.model_tree import ModelTree
 from tailor.refinement.models.rules import Rule
@@ -211,6 +211,7 @@ class CollisionModel:
 
 def load_action_models(models_dir: Path, actions: tuple[str, ...] | None = None) -> dict[str, ActionModel]:
     """Every duration model `<action>.json` in `models_dir`, keyed by action (`actions` must all be present)."""
+    check_path_argument(models_dir, "models_dir")
     models_dir = Path(models_dir)
     if not models_dir.is_dir():
         raise ModelFileError("model directory not found", file=str(models_dir))
