@@ -76,7 +76,7 @@ def instantiate(plan: AbstractPlan, binding: Binding, belief: BeliefState,
                 value, low, high = composed[key]
                 params.append(Parameter(f"{obj}.{quantity}", name, value, low, high))
         actions.append(ExecutableAction(step.id, pddl, bound.executable, tuple(params)))
-    scene = _scene(plan, binding, belief, initial_state)
+    scene = _scene(plan, binding, belief, initial_state, object_types)
     return ActionSequence(plan.domain, plan.problem, tuple(actions), scene, binding.simulator)
 
 
@@ -147,9 +147,11 @@ def scene_name(template: str, obj: str) -> str:
     return template.replace(OBJECT_PLACEHOLDER, obj)
 
 
-def _scene(plan: AbstractPlan, binding: Binding, belief: BeliefState,
-           initial_state: Iterable[Sequence[str]]) -> Mapping[str, tuple[float, ...]]:
-    """The scene objects placed by initial facts (robot pose, object positions), read from the belief state."""
+def _scene(plan: AbstractPlan, binding: Binding, belief: BeliefState, initial_state: Iterable[Sequence[str]],
+           object_types: ObjectTypes | None = None) -> Mapping[str, tuple[float, ...]]:
+    """The scene objects placed by initial facts (robot pose, object positions), read from the belief state;
+    each value within its object's type range where the binding gives one (a table placed a million metres
+    away is a belief error, not a scene for the simulator)."""
     initial = [tuple(link.fact) for link in plan.links if link.producer == INITIAL]
     initial += [tuple(fact) for fact in initial_state]
     scene: dict[str, tuple[float, ...]] = {}
@@ -170,6 +172,15 @@ def _scene(plan: AbstractPlan, binding: Binding, belief: BeliefState,
         if placed_by.get(name, text) != text:
             raise BindingError(f"scene object '{name}' placed twice in the initial state: "
                                f"{placed_by[name]} and {text}", file=binding.file)
+        types = type_chain(objects[0], binding, object_types)
+        for quantity, value in zip(predicate.read, values):
+            default = binding.type_range(types, quantity)
+            if default is None:
+                continue
+            (low, high), where = default
+            if not (low - RANGE_TOLERANCE <= value <= high + RANGE_TOLERANCE):
+                raise EmptyRangeError(f"{objects[0]}.{quantity} = {value:g} read for {text} lies outside its range "
+                                      f"[{low:g}, {high:g}] from {where}", file=belief.file)
         scene.setdefault(name, values)
         placed_by.setdefault(name, text)
     return MappingProxyType(scene)

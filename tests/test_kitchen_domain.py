@@ -37,6 +37,21 @@ def test_every_table_and_cup_is_its_own_scene_object():
     assert set(sim.tables) == {"table1", "table2"} and set(sim.cups) == {"cup1", "cup2"}
 
 
+def test_a_table_placed_outside_its_type_range_is_a_belief_error(tmp_path):
+    """Scene values are read within the object's type range ([types.furniture]), as a cup's are."""
+    import pytest
+
+    from tailor.errors import EmptyRangeError
+
+    domain, path = resolve_problem("kitchen", "scenario1")
+    text = path.with_suffix(".toml").read_text().replace("[objects.table1]\nox = 2.5236", "[objects.table1]\nox = 1e9")
+    belief = tmp_path / "scenario1.toml"
+    belief.write_text(text)
+    with pytest.raises(EmptyRangeError, match=r"table1.ox = 1e\+09 read for \(table table1\) lies outside its "
+                                              r"range \[-1, 11\] from \[types.furniture\]"):
+        instantiate(plan_files(domain, path), load_domain_binding(domain.parent), load_belief(belief))
+
+
 def test_draw_scene_draws_furniture_and_the_ranges_of_each_spot():
     import matplotlib
 
