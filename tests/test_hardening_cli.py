@@ -283,6 +283,19 @@ def test_predictions_are_checked_against_the_durations_seen_in_training():
     with pytest.raises(ModelFileError, match="outside the plausible"):
         model.check_duration(-7.0, "step 1")
     assert ActionModel("a", "pose", (), Tree(), 1, {"mean_duration": 5.0}).plausible_range() == (-10.0, 20.0)
+    silent = ActionModel("a", "pose", (), Tree(), 1, {})  # a file whose report says nothing: a day either side
+    assert silent.plausible_range() == (-86400.0, 86400.0)
+    with pytest.raises(ModelFileError, match="outside the plausible"):
+        silent.check_duration(1e300, "step 1")
+
+
+@pytest.mark.parametrize("seen", [[5.0, 1.0], "abc", [1.0], [-1.0, 3.0], [1.0, float("inf")]])
+def test_a_malformed_duration_range_is_refused_at_load(seen):
+    from tailor.errors import ModelFileError
+    from tailor.refinement.models.action_models import _report
+
+    with pytest.raises(ModelFileError, match=r"^m.json: 'report.duration_range' must be \[shortest, longest\]"):
+        _report({"report": {"duration_range": seen}}, "m.json")
 
 
 # --- 8. --jobs capped at the CPU count -------------------------------------------------------------------

@@ -33,6 +33,7 @@ META_FILE = "meta.json"  # the meta action model (tailor.refinement.models.meta_
 # (a linear leaf extrapolating a little) is clipped to 0 s: no action takes negative time.
 RANGE_MARGIN = 1.0
 OLD_FILE_SPAN = 2.0
+NO_REPORT_BOUND = 86400.0  # s: plausible for a file that states neither (one day either side)
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,7 +78,8 @@ class ActionModel:
         return self.uncertainty
 
     def plausible_range(self) -> tuple[float, float] | None:
-        """The durations a prediction may take (see RANGE_MARGIN); None where the report says nothing."""
+        """The durations a prediction may take (see RANGE_MARGIN; within a day either side where the report
+        says nothing of them)."""
         seen = self.report.get("duration_range")
         mean = self.report.get("mean_duration")
         if (isinstance(seen, list) and len(seen) == 2 and all(_is_number(v) for v in seen)
@@ -85,8 +87,8 @@ class ActionModel:
             lo, hi = float(seen[0]), float(seen[1])
         elif _is_number(mean) and mean > 0:
             lo, hi = 0.0, OLD_FILE_SPAN * float(mean)
-        else:
-            return None
+        else:  # a file that says nothing of its durations: no action of any robot here takes days
+            return -NO_REPORT_BOUND, NO_REPORT_BOUND
         margin = RANGE_MARGIN * (hi - lo)
         return lo - margin, hi + margin
 
@@ -308,4 +310,9 @@ def _report(data: dict, source: str) -> dict:
     report = data.get("report", {})
     if not isinstance(report, dict):
         raise ModelFileError("'report' must be an object", file=source)
+    seen = report.get("duration_range")
+    if seen is not None and not (isinstance(seen, list) and len(seen) == 2 and all(_is_number(v) for v in seen)
+                                 and math.isfinite(seen[0]) and math.isfinite(seen[1]) and 0 <= seen[0] <= seen[1]):
+        raise ModelFileError(f"'report.duration_range' must be [shortest, longest] seconds seen in training, "
+                             f"got {seen!r}", file=source)
     return report
