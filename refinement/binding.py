@@ -28,6 +28,7 @@ SCHEMA = 2  # 2: the binding names its simulator
 BINDING_FILE = "actions.toml"
 DOMAIN_FILE = "domain.pddl"  # the PDDL domain beside it, which the binding is checked against
 DEFAULT_TYPE = "default"  # [types.default]: ranges for objects of a type the binding does not name
+MAX_BOUND = 1e9  # no bound of a range beyond this: features of larger values overflow (squares, products)
 NAMED_BOUNDS = {"pi": math.pi, "-pi": -math.pi}  # strings a range bound may be written as
 
 Range = tuple[float, float]
@@ -333,4 +334,6 @@ def _bound(where: str, value: Any, fail) -> float:
         raise fail(f"{where}: {value!r} is not a number (or \"pi\" / \"-pi\")")
     if not math.isfinite(value):
         raise fail(f"{where}: {value!r} is not a finite number")
+    if abs(value) > MAX_BOUND:
+        raise fail(f"{where}: {value!r} is beyond {MAX_BOUND:g} (a range a robot's parameter could take)")
     return float(value)

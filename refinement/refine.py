@@ -35,6 +35,7 @@ MARGIN_SHARE = 0.005
 # `tailor evaluate --risk-sweep` on a bundled domain (README, "Risk-aware refinement"); it applies where every
 # model stores its uncertainty (`resolve_risk`). The core `refine` defaults to 0: the dissertation's objective.
 DEFAULT_RISK = 1.0
+MAX_RISK = 1e6  # seconds of spread charged a million times over already rank by spread alone; beyond, overflow
 
 if TYPE_CHECKING:  # the models' module imports scikit-learn; refining needs only their methods
     from tailor.refinement.models.action_models import ActionModel
@@ -227,9 +228,9 @@ def check_neighbourhood(share: float) -> None:
 
 
 def check_risk(risk: float) -> None:
-    """A risk lambda must be a finite number >= 0 (0: plain expected duration)."""
-    if isinstance(risk, bool) or not isinstance(risk, (int, float)) or not 0.0 <= risk < float("inf"):
-        raise ArgumentValueError(f"the risk lambda must be a finite number >= 0, not {risk!r}")
+    """A risk lambda must be a number from 0 (plain expected duration) to MAX_RISK."""
+    if isinstance(risk, bool) or not isinstance(risk, (int, float)) or not 0.0 <= risk <= MAX_RISK:
+        raise ArgumentValueError(f"the risk lambda must be a number from 0 to {MAX_RISK:g}, not {risk!r}")
 
 
 def model_for(action: ExecutableAction, models: Mapping[str, ActionModel]) -> ActionModel:

@@ -176,6 +176,7 @@ BAD_BINDINGS = [
     ("[predicates.at]\nphi = [\"-tau\", \"pi\"]\n",
      r"\[predicates.at\] phi: '-tau' is not a number \(or \"pi\" / \"-pi\"\)"),
     ("[predicates.at]\nv = [0.0, nan]\n", r"\[predicates.at\] v: nan is not a finite number"),
+    ("[predicates.at]\nv = [0.0, 1e300]\n", r"\[predicates.at\] v: 1e\+300 is beyond 1e\+09"),
     ("[types.pos]\nz = [0.0, 1.0]\n", r"\[types.pos\]: unknown key 'z' \(expected one of x, y, phi, v\)"),
     ("[types.pos]\nread = [\"x\"]\n", r"\[types.pos\]: unknown key 'read'"),
     ("[types.pos]\nx = [true, 1.0]\n", r"\[types.pos\] x: True is not a number"),

@@ -189,7 +189,7 @@ def test_refine_with_risk_needs_models_with_uncertainty(score):
     assert refine(score, models, horizon=2).spread is None
     with pytest.raises(ModelFileError, match="no uncertainty"):
         refine(score, models, horizon=2, risk=0.5)
-    with pytest.raises(ArgumentValueError, match="finite number >= 0"):
+    with pytest.raises(ArgumentValueError, match="number from 0 to 1e"):
         refine(score, models, horizon=2, risk=-1.0)
 
 
@@ -248,7 +248,7 @@ def test_the_api_takes_risk_and_checks_it():
     with pytest.raises(ArgumentTypeError, match="risk must be a number or None"):
         tailor.refine("soccer", "score", risk="1")
     assert tailor.refine("soccer", "score").refined.risk == DEFAULT_RISK  # the bundled models store it
-    with pytest.raises(ArgumentValueError, match="risk lambda must be a finite number >= 0"):
+    with pytest.raises(ArgumentValueError, match="risk lambda must be a number from 0 to 1e"):
         tailor.refine("soccer", "score", risk=float("nan"))
 
 
@@ -270,3 +270,17 @@ def test_models_without_uncertainty_refine_plainly_by_default_and_refuse_an_expl
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and ".json: the action model of" in err[0] and "no uncertainty" in err[0]
     assert "--risk 0" in err[0]
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["refine", "soccer", "score", "--risk", "1e308"], "argument --risk: must be a number from 0 to 1e+06, not 1e308"),
+    (["evaluate", "soccer", "--risk-sweep", "0,,1"], "argument --risk-sweep: expected comma-separated risk lambdas"),
+])
+def test_a_risk_lambda_beyond_use_or_a_typo_in_the_sweep_is_a_usage_error(argv, message, capsys):
+    """A lambda so large the objective overflows (numpy's warnings on stderr) and an empty item in a sweep
+    are refused before any work, as --n-i 1,,2 is."""
+    from tailor.refinement.cli.main import main
+
+    with pytest.raises(SystemExit) as exit:
+        main(argv)
+    assert exit.value.code == 2 and message in capsys.readouterr().err

@@ -158,10 +158,12 @@ def neighbourhood_share(text: str) -> float:
 
 
 def risk_lambda(text: str) -> float:
-    """A finite number >= 0."""
+    """A number from 0 to refine.MAX_RISK."""
+    from tailor.refinement.refine import MAX_RISK
+
     value = number(text)
-    if not 0.0 <= value < float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, not {text}")
+    if not 0.0 <= value <= MAX_RISK:
+        raise argparse.ArgumentTypeError(f"must be a number from 0 to {MAX_RISK:g}, not {text}")
     return value
 
 

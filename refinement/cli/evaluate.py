@@ -69,11 +69,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _lambdas(text: str) -> tuple[float, ...]:
-    values = tuple(dict.fromkeys(risk_lambda(part.strip()) for part in text.split(",") if part.strip()))
-    if not values:
-        raise argparse.ArgumentTypeError("expected comma-separated risk lambdas, e.g. 0,0.5,1")
-    return values
-
+    parts = [part.strip() for part in text.split(",")]
+    if not any(parts) or not all(parts):  # (an empty item is a typing mistake, as in --n-i)
+        raise argparse.ArgumentTypeError(f"expected comma-separated risk lambdas, e.g. 0,0.5,1, not {text!r}")
+    return tuple(dict.fromkeys(risk_lambda(part) for part in parts))
 
 
 def positive_number(text: str) -> float:
