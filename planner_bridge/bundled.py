@@ -34,6 +34,8 @@ def resolve_domain_dir(domain_arg: str | Path) -> Path:
             raise InputFileError(f"a domain folder needs a {DOMAIN_FILE}", arg)
         return path
     if path.is_file():
+        if path.name != DOMAIN_FILE:  # another file beside a domain.pddl would silently stand for that one
+            raise InputFileError(f"not a domain folder's {DOMAIN_FILE} (give the folder, or its {DOMAIN_FILE})", arg)
         return path.parent
     if not _looks_like_path(arg) and arg in bundled_domains():
         return DOMAINS_DIR / arg

@@ -422,3 +422,22 @@ def test_plan_and_refine_take_a_domain_folder(tmp_path, capsys):
     (tmp_path / "empty").mkdir()
     assert main(["plan", str(tmp_path / "empty"), "letter-f"]) == 3
     assert capsys.readouterr().err.strip() == f"tailor plan: error: {tmp_path / 'empty'}: a domain folder needs a domain.pddl"
+
+
+@pytest.mark.parametrize("argv, status, line", [
+    (["plan", "soccer", "score", "--bogus"], 2,
+     "tailor plan: error: unrecognized arguments: --bogus (see `tailor plan --help`)"),
+    (["evaluate", "arm", "--plot", "e.png"], 2, "tailor evaluate: error: --plot draws the instances of --assertion"),
+    (["domains", "{tmp}/notes.txt"], 3, "tailor domains: error: {tmp}/notes.txt: not a domain folder's domain.pddl"),
+])
+def test_usage_mistakes_are_said_by_the_command_with_their_status(argv, status, line, tmp_path, capsys):
+    """An unknown option is the command's usage error; --plot without what it draws is a usage error (2); a
+    file that is not a domain.pddl is not taken for the folder holding it."""
+    (tmp_path / "notes.txt").write_text("not PDDL")
+    argv = [a.format(tmp=tmp_path) for a in argv]
+    try:
+        code = main(argv)
+    except SystemExit as exit:
+        code = exit.code
+    assert code == status
+    assert one_line(capsys.readouterr().err).startswith(line.format(tmp=tmp_path))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from tailor.errors import BindingError, TailorError
+from tailor.errors import ArgumentValueError, BindingError
 
 PLOT_INSTANCES = 3
 
@@ -63,7 +63,8 @@ def run_assertion(args: argparse.Namespace, domain_dir, binding, plan, models_di
         from tailor.refinement.outputs import check_output_file
 
         if not args.assertion:
-            raise TailorError("--plot draws the instances of --assertion (Fig. 6.6) or the meta model of --meta (Fig. 5.16): give one of them")
+            raise ArgumentValueError("--plot draws the instances of --assertion (Fig. 6.6) or the meta model of "
+                                     "--meta (Fig. 5.16): give one of them")
         check_output_file(args.plot, ".png")
     if plan.assertion is None:
         raise BindingError("[evaluation] names no assertion situations (add assertion = \"<situation generator>\")",

@@ -111,14 +111,16 @@ def build_parser() -> argparse.ArgumentParser:
         command = sub.add_parser(name, help=module.HELP, description=getattr(module, "DESCRIPTION", module.HELP))
         module.add_arguments(command)
         _verbosity_options(command, argparse.SUPPRESS)  # also after the command: tailor train DOMAIN -q
-        command.set_defaults(run=module.run)
+        command.set_defaults(run=module.run, parser=command)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     with cli_logging(verbosity_of(argv)) as log:  # before parsing: argument types may log (--jobs capped)
-        args = build_parser().parse_args(argv)
+        args, extras = build_parser().parse_known_args(argv)
+        if extras:  # said by the command's parser (`tailor plan: error: ...`), not the top one
+            args.parser.error(f"unrecognized arguments: {' '.join(extras)}")
         log.prog = f"tailor {args.command}"
         set_verbosity(args.verbose - args.quiet)  # as argparse read it (also --qui, --verb)
         args.progress = args.quiet == 0  # progress bars (on a terminal only) unless -q
