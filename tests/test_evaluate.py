@@ -114,3 +114,25 @@ def test_tiny_evaluation_end_to_end(capsys):
     assert report["oracle_episodes"] <= 1 and [h["horizon"] for h in report["horizons"]["horizons"]] == [1, 2, 3, 4]
     if report["oracle_episodes"]:
         assert report["oracle_ratio"] > 0.9  # the grid optimum is a real simulated time, near the refined one
+
+
+def test_a_small_evaluation_runs_as_many_horizon_situations_as_episodes(monkeypatch, capsys):
+    """Without --horizon-episodes the horizons run on 100 situations, or on --episodes where that is fewer (a
+    two-episode run of the arm took minutes on 100 letters)."""
+    from tailor.refinement import progress
+
+    asked = []
+
+    class Stop(Exception):
+        pass
+
+    def run_in_workers(function, items, jobs, desc, *args, **kwargs):
+        if desc.startswith("horizons"):
+            asked.append(len(items))
+            raise Stop
+        return []  # (the comparison's episodes are not what this is about)
+
+    monkeypatch.setattr(progress, "run_in_workers", run_in_workers)
+    with pytest.raises(Stop):
+        main(["-q", "evaluate", "soccer", "--episodes", "2", "--oracle-episodes", "0"])
+    assert asked == [2]
