@@ -45,7 +45,7 @@ def read_toml(path: Path, error: type[TailorError], what: str) -> dict[str, Any]
     except (OSError, UnicodeDecodeError) as exc:
         raise error(f"cannot read {what} file: {exc}", file=str(path)) from None
     try:
-        return tomllib.loads(text)
+        return tomllib.loads(text.removeprefix("\ufeff"))  # (a byte-order mark, as editors on Windows write)
     except tomllib.TOMLDecodeError as exc:
         where = _TOML_WHERE.match(str(exc))
         if where:
@@ -179,9 +179,11 @@ def parse_binding(data: Mapping[str, Any], file: str | None = None) -> Binding:
     if domain is not None and not isinstance(domain, str):
         raise fail("'domain' must be a string")
     simulator = data.get("simulator")
-    if not isinstance(simulator, str) or not simulator:
+    if simulator is None:
         raise fail("missing 'simulator': the name of the simulator whose actions the domain binds "
                    "(see `tailor domains`)")
+    if not isinstance(simulator, str) or not simulator:
+        raise fail(f"simulator = {simulator!r} must name a simulator (a string; see `tailor domains`)")
     try:
         entry = registry.get(simulator)
     except SimError as exc:
@@ -234,6 +236,9 @@ def _action(name: str, table: Mapping[str, Any], entry: SimulatorEntry, fail) ->
     where = f"[actions.{name}]"
     _check_keys(table, {"executable", "success_model", "subgoal", "success_margin", *GROUPS}, where, fail)
     executable = table.get("executable")
+    if executable is None:
+        raise fail(f"{where} missing 'executable': the action of simulator {entry.name!r} it runs "
+                   f"(known: {', '.join(entry.actions)})")
     if not isinstance(executable, str) or executable not in entry.actions:
         hint = _did_you_mean(executable, entry.actions) if isinstance(executable, str) else ""
         raise fail(f"{where} executable = {executable!r} is not an executable action of simulator "

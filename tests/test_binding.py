@@ -137,6 +137,8 @@ VALID_ACTION = '[actions.go]\nexecutable = "goToPose"\nobserved = 0\ninternal = 
 SOCCER_SIM = 'simulator = "soccer"\n'  # top-level key every binding needs; prepended to each BAD_BINDINGS text
 
 BAD_BINDINGS = [
+    ('[actions.go]\nobserved = 0\ninternal = 1\n', r"\[actions.go\] missing 'executable': the action of simulator "
+                                                    r"'soccer' it runs \(known: "),
     ('[actions.go]\nexecutable = "fly"\nobserved = 0\ninternal = 1\n',
      r"\[actions.go\] executable = 'fly' is not an executable action of simulator 'soccer' "
      r"\(known: goToPose, approachBall, dribbleBall, goToPosition\)"),
@@ -187,8 +189,8 @@ BAD_BINDINGS = [
 BAD_SIMULATORS = [
     (VALID_ACTION, r"missing 'simulator': the name of the simulator whose actions the domain binds "
                    r"\(see `tailor domains`\)$"),
-    ("simulator = 3\n", r"missing 'simulator'"),
-    ('simulator = ""\n', r"missing 'simulator'"),
+    ("simulator = 3\n", r"simulator = 3 must name a simulator \(a string; see `tailor domains`\)$"),
+    ('simulator = ""\n', r"simulator = '' must name a simulator"),
     ('simulator = "hovercraft"\n' + VALID_ACTION,
      r"simulator = 'hovercraft': no simulator 'hovercraft' is installed \(known: .*soccer.*\)$"),
 ]
@@ -223,3 +225,11 @@ def test_pi_strings_and_integers_are_accepted(tmp_path):
     path = tmp_path / "actions.toml"
     path.write_text(SOCCER_SIM + '[types.t]\nphi = [" -PI", "pi"]\nx = [-1, 2]\n')
     assert dict(load_binding(path).types["t"]) == {"phi": (-math.pi, math.pi), "x": (-1.0, 2.0)}
+
+
+def test_a_binding_with_a_byte_order_mark_reads_as_without(tmp_path):
+    """Editors on Windows start UTF-8 files with a byte-order mark; PDDL files with one are read, and so are
+    the TOML files beside them."""
+    path = tmp_path / "actions.toml"
+    path.write_text("\ufeff" + SOCCER_SIM + VALID_ACTION, encoding="utf-8")
+    assert load_binding(path).action("go").executable == "goToPose"
