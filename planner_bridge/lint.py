@@ -236,6 +236,9 @@ def check_problem(define: SList, sig: DomainSignature, file: str) -> None:
             for name, type_expr in _typed_names(section.items[1:]):
                 _check_type(type_expr, sig, file)
                 _check_object_name(name, sig, "object", file)
+                if name.text.lower() in {o.lower() for o in objects}:
+                    raise PDDLSemanticError(f"object '{name.text}' is declared twice (or as a constant of the "
+                                            "domain)", file, name.line, name.col)
                 objects.add(name.text)
     for section in sections:
         if section.head == ":init":

@@ -105,6 +105,12 @@ def test_an_object_named_like_a_predicate(capsys):
                           "unified-planning cannot read a problem whose names clash; rename one of them")
 
 
+def test_an_object_declared_twice(capsys):
+    f = BAD / "duplicate_object_problem.pddl"
+    assert_one_line_error(capsys, [DOMAIN, f], 5, f"{f}:4:13", "object 'hill' is declared twice (or as a constant "
+                          "of the domain)")
+
+
 def test_problem_naming_another_domain(capsys):
     f = BAD / "other_domain_problem.pddl"
     assert_one_line_error(
