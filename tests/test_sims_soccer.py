@@ -246,3 +246,19 @@ def test_episodes_log_named_state_columns():
     assert np.all(np.isnan(without_ball.columns_of(("ball_x", "ball_y"))))
     with pytest.raises(KeyError, match="no state column 'z'"):
         ep.column("z")
+
+
+@pytest.mark.parametrize("scene, call, message", [
+    ({"robot": (40.0, 1.0, 0.0, 0.0)}, None, r"the robot's ball point \(40, 1\) lies outside the walls"),
+    ({"robot": (0.0, 0.0, 0.0, 0.0), "ball": (0.0, -4.5)}, None, r"the ball \(0, -4.5\) lies outside the walls"),
+    ({"robot": (0.0, 0.0, 0.0, 0.0)}, ("goToPose", (9.0, 0.0, 0.0, 0.0)), "goToPose's goal .* outside the walls"),
+    ({"robot": (0.0, 0.0, 0.0, 0.0)}, ("goToPose", (2.0, 0.0, 0.0, 5.0)),
+     r"goal speed 5 m/s is beyond the robot's 1 m/s"),
+])
+def test_nothing_outside_the_world_is_simulated(scene, call, message):
+    """A scene or goal beyond the walls (|x| <= 5, |y| <= 4 m) or a goal speed beyond the robot's is a SimError,
+    not a run that times out."""
+    sim = SoccerSim(0)
+    with pytest.raises(SimError, match=message):
+        sim.reset(scene)
+        sim.run(ActionCall(*call))

@@ -180,6 +180,11 @@ class SoccerSim:
         v_max = self.dynamics.v_max
         if not all(math.isfinite(q) for q in (x, y, phi, v)) or abs(v) > v_max + 1e-9:
             raise SimError(f"invalid robot state {robot}: finite values and |v| <= {v_max} m/s required")
+        _inside_walls("the robot's ball point", x, y)
+        if ball is not None:
+            if not all(math.isfinite(float(q)) for q in ball):
+                raise SimError(f"invalid ball position {ball}: finite values required")
+            _inside_walls("the ball", float(ball[0]), float(ball[1]))
         self.phi, self.v, self.w = phi, v, 0.0
         self.v_cmd, self.w_cmd = v, 0.0
         self.robot.angle = phi
@@ -323,6 +328,9 @@ class SoccerSim:
             raise SimError(f"{call.action}: goal must be 4 finite numbers (xg, yg, phig, vg), got {call.goal}")
         act = ACTION_FUNCTIONS[call.action]
         xg, yg, phig, vg = (float(g) for g in call.goal)
+        _inside_walls(f"{call.action}'s goal", xg, yg)
+        if abs(vg) > self.dynamics.v_max + 1e-9:
+            raise SimError(f"{call.action}: goal speed {vg:g} m/s is beyond the robot's {self.dynamics.v_max:g} m/s")
         dribbling = call.action == "dribbleBall"
         if dribbling and not self.has_ball:
             raise SimError("dribbleBall needs a ball in the scene")
@@ -398,3 +406,11 @@ def simulate_sequence(robot: tuple[float, float, float, float], ball: tuple[floa
     sim = SoccerSim(seed, Noise() if noise is None else noise)
     sim.place(robot, ball)
     return sim.run_sequence(list(calls))
+
+
+def _inside_walls(what: str, x: float, y: float) -> None:
+    """A SimError unless (x, y) lies within the walls (WALL_RUNOFF beyond the lines): nothing placed or aimed
+    outside the world is simulated (it would only time out)."""
+    x_max, y_max = W.FIELD_HALF_LENGTH + W.WALL_RUNOFF, W.FIELD_HALF_WIDTH + W.WALL_RUNOFF
+    if not (abs(x) <= x_max and abs(y) <= y_max):
+        raise SimError(f"{what} ({x:g}, {y:g}) lies outside the walls (|x| <= {x_max:g}, |y| <= {y_max:g} m)")
