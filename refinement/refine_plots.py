@@ -105,11 +105,13 @@ def tidy_polar(ax, largest: float) -> None:
 
 
 def plot_costs(path: Path, parameter, values: np.ndarray, curves: list[tuple[str, np.ndarray]],
-               marks: list[tuple[str, float]]) -> None:
-    """Predicted duration over one free parameter, one panel per curve, written to `path`."""
+               marks: list[tuple[str, float]], note: str = "") -> None:
+    """Predicted duration over one free parameter, one panel per curve, written to `path`; `note` under them."""
     import matplotlib.pyplot as plt
 
     fig = costs_figure(parameter, values, curves, marks)
+    if note:
+        fig.supxlabel(note, fontsize=8)
     _save(fig, path)
     plt.close(fig)
 
@@ -139,6 +141,7 @@ def costs_figure(parameter, values: np.ndarray, curves: list[tuple[str, np.ndarr
         for label, value in marks:
             k = int(np.argmin(np.abs(values - value)))
             shown = f"{np.degrees(value):.0f}°" if polar else f"{value:.3g}"
+            shown = shown.removeprefix("-") if shown.lstrip("-") in ("0°", "0") else shown  # (not "-0°")
             marker, color = MARK_STYLES.get(label, ("o", "tab:red"))
             ax.plot([value], [predicted[k]], marker, color=color, ms=11 if marker == "*" else 8, mec="black",
                     mew=0.6, zorder=4, clip_on=False, linestyle="none",
@@ -195,5 +198,10 @@ def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
     curves.append(("sum over the horizon", total))
     polar = parameter.high - parameter.low >= FULL_CIRCLE
     costs = cost_plot_names(path)[0 if polar else 1]
-    plot_costs(costs, parameter, values, curves, [("greedy", greedy[parameter.id]), ("refined", chosen[parameter.id])])
+    others = len({p.id for a in window for p in a.free_parameters()} - {parameter.id})
+    note = (f"{parameter.id} varied, the {others} other free parameter{'s' if others != 1 else ''} of these actions at "
+            "their refined values: a mark is where a choice of it lies on this slice, not that choice's own "
+            "predicted total" if others else "")
+    plot_costs(costs, parameter, values, curves, [("greedy", greedy[parameter.id]), ("refined", chosen[parameter.id])],
+               note)
     return written + [costs]
