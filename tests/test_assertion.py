@@ -223,6 +223,11 @@ def test_summary_counts_avoided_collisions_needless_assertions_and_table_6_1():
     s = summarize_assertion(rows)
     assert s["episodes"] == 8 and s["success_without"] == 5 / 8 and s["success_with"] == 6 / 8
     assert s["collisions"] == 3 and s["collisions_avoided"] == pytest.approx(1 / 3)
+    assert s["collision_outcome"] == "collision"
+    other = [{**r, "plain_outcome": "off_table" if r["plain_outcome"] == "collision" else r["plain_outcome"],
+              "with_outcome": "off_table" if r["with_outcome"] == "collision" else r["with_outcome"]} for r in rows]
+    assert summarize_assertion(other)["collision_outcome"] == "any failure"  # a robot that does not collide
+    assert summarize_assertion(other)["collisions"] == 3
     assert s["needless_assertions"] == 2 / 8 and s["needless_cost"] == pytest.approx(0.15)
     assert s["asserted"] == 4 / 8 and s["new_failures"] == 0 and s["failed_legs_with"] == {"final": 2}
     assert s["table_before"] == {"predicted_fail_observed_fail": 2 / 8, "predicted_fail_observed_success": 2 / 8,

@@ -23,7 +23,8 @@ def _print_text(report: dict) -> None:
         f"{', '.join(f'{k} {v}' for k, v in s['failures_without'].items()) or 'none'})\n")
     out(f"  success with assertion        {_pct(s['success_with'])}   (failures: "
         f"{', '.join(f'{k} {v}' for k, v in s['failures_with'].items()) or 'none'})\n")
-    out(f"  collisions avoided            {_pct(s['collisions_avoided'])} of {s['collisions']} "
+    counted = "collisions" if s.get("collision_outcome", "collision") == "collision" else "failures"
+    out(f"  {counted + ' avoided':<30}{_pct(s['collisions_avoided'])} of {s['collisions']} "
         f"({_pct(s['collisions_avoided_and_succeeded'])} avoided and succeeded)\n")
     out(f"  subgoal asserted              {_pct(s['asserted'])} of the situations\n")
     out(f"  needless assertions           {_pct(s['needless_assertions'])} of the situations "

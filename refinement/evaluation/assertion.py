@@ -119,6 +119,7 @@ def summarize_assertion(rows: list[dict]) -> dict:
         "success_without": _share(plain_ok),
         "success_with": _share(with_ok),
         "collisions": int(collided.sum()),
+        "collision_outcome": kind or "any failure",  # what `collisions` counts (a simulator without collisions)
         "collisions_avoided": float(avoided.sum() / collided.sum()) if collided.any() else None,
         "collisions_avoided_and_succeeded": float((avoided & with_ok).sum() / collided.sum()) if collided.any() else None,
         "asserted": _share(inserted),
