@@ -40,7 +40,7 @@ def describe(domain_dir) -> dict:
             check()
             info["can"].append(capability)
         except TailorError as exc:
-            info["notes"].append(exc.message)
+            info["notes"].append(str(exc) if exc.file else f"{domain_dir / BINDING_FILE}: {exc.message}")
     if info["models"]:
         info["can"].insert(1, "refine")
     else:
