@@ -114,8 +114,9 @@ def instantiate_task(task: Task, plan: AbstractPlan, binding: Binding, belief: B
 def prepare(task: Task, planner: str = DEFAULT_PLANNER, timeout: float | None = None, assertion: bool = True
             ) -> Prepared:
     """Plan, instantiate and (unless `assertion` is False: the plain executable actions) assert subgoals."""
-    binding = load_binding(task)  # a bad binding fails before the planner runs
-    plan = plan_task(task, planner, timeout)
+    binding = load_binding(task)  # a bad binding fails before the planner runs,
+    load_belief(task.belief, None, binding.quantities)  # and so does a belief file bad in itself (its objects
+    plan = plan_task(task, planner, timeout)             # are checked against the plan's once there is one)
     instantiated = instantiate_task(task, plan, binding)
     success_models = success_models_for(task, binding, instantiated) if assertion else {}
     asserted = assert_task(instantiated, binding, success_models, plan) if assertion else None

@@ -69,6 +69,14 @@ def test_a_plot_whose_companion_cannot_be_written_fails_before_planning(companio
     assert (tmp_path / "picture.png").read_text() == "old"
 
 
+def test_a_belief_file_bad_in_itself_fails_before_planning(tmp_path, monkeypatch, capsys):
+    belief = tmp_path / "belief.toml"
+    belief.write_text('[objects.pos1]\nx = "far"\n')
+    monkeypatch.setattr("tailor.refinement.pipeline.plan_task", _no_work)
+    assert main(["refine", "soccer", "score", "--belief", str(belief)]) == 10
+    assert one_line(capsys.readouterr().err) == f"tailor refine: error: {belief}: [objects.pos1] x = 'far' is not a number"
+
+
 def test_a_plot_in_a_read_only_file_system_fails_before_planning(monkeypatch, capsys):
     if os.access("/sys", os.W_OK) and not os.path.ismount("/sys"):
         pytest.skip("no read-only file system to write into")
