@@ -72,7 +72,8 @@ def test_a_plot_whose_companion_cannot_be_written_fails_before_planning(companio
 def test_a_belief_file_bad_in_itself_fails_before_planning(tmp_path, monkeypatch, capsys):
     belief = tmp_path / "belief.toml"
     belief.write_text('[objects.pos1]\nx = "far"\n')
-    monkeypatch.setattr("tailor.refinement.pipeline.plan_task", _no_work)
+    # (plan_files, which plan_task calls: a module importing plan_task meanwhile must not keep the patch)
+    monkeypatch.setattr("tailor.refinement.pipeline.plan_files", _no_work)
     assert main(["refine", "soccer", "score", "--belief", str(belief)]) == 10
     assert one_line(capsys.readouterr().err) == f"tailor refine: error: {belief}: [objects.pos1] x = 'far' is not a number"
 
