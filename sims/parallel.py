@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import signal
+import threading
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
@@ -121,6 +123,29 @@ def active_backend() -> str:
     return "loky" if _session is None else _session.backend
 
 
+@contextlib.contextmanager
+def remembered_interrupts():
+    """Ctrl-C raises KeyboardInterrupt as always, and is also remembered (the context's value says whether one
+    came): one that lands in a callback whose exceptions Python drops (pymunk frees its shapes in a cffi
+    garbage-collection callback) is raised again by whoever checks. Only where Python's own handler is in
+    force, in the main thread; elsewhere nothing is changed and nothing remembered."""
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        yield lambda: False
+        return
+    seen: list[int] = []
+
+    def handler(signum, frame):
+        seen.append(signum)
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGINT, handler)
+    try:
+        yield lambda: bool(seen)
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 def ordered_results(function: Callable, calls: Sequence[tuple], jobs: int = 1) -> Iterator:
     """Yield `function(*args)` for each `args` in `calls`, in that order. On loky with jobs = 1, in this process;
     otherwise in the workers of the session's backend (loky: `jobs` processes; a cluster: all its workers).
@@ -128,8 +153,12 @@ def ordered_results(function: Callable, calls: Sequence[tuple], jobs: int = 1) -
     calls = list(calls)
     if _session is None or _session.backend == "loky":
         if jobs <= 1:
-            for args in calls:
-                yield function(*args)
+            with remembered_interrupts() as interrupted:
+                for args in calls:
+                    result = function(*args)
+                    if interrupted():  # a Ctrl-C that a callback swallowed during the call
+                        raise KeyboardInterrupt
+                    yield result
             return
         n_jobs = jobs
     else:
