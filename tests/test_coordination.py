@@ -223,3 +223,15 @@ def test_an_unwritable_plot_folder_fails_before_any_work(tmp_path, capsys):
     assert main(["coordinate", "soccer", "--plot", str(occupied)]) == 16
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "exists and is not a folder" in err[0]
+
+
+def test_a_picture_that_cannot_be_written_fails_before_any_work(tmp_path, capsys):
+    """Each of the pictures in the folder is checked up front (a folder in the way of the last one failed the
+    run after its work, with two pictures written and the report lost)."""
+    from tailor.refinement.evaluation.coordination_plots import FILES
+
+    (tmp_path / FILES[-1]).mkdir()
+    assert main(["coordinate", "soccer", "--plot", str(tmp_path)]) == 16
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"tailor coordinate: error: {tmp_path / FILES[-1]}: is a folder, not a file name"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [FILES[-1]]

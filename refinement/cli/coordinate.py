@@ -9,8 +9,10 @@ three strategies (Q6, Fig. 7.12); `--plot DIR` draws Figs. 7.9-7.12.
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 import time
+from pathlib import Path
 
 from tailor.refinement.cli.arguments import (MAX_EPISODES, add_models_argument, announce_models, seed, whole_number,
                                             worker_count)
@@ -78,8 +80,13 @@ def run(args: argparse.Namespace) -> int:
     domain_dir = resolve_domain_dir(args.domain)
     binding = load_domain_binding(domain_dir)
     scene = _scene(binding)
-    if args.plot is not None:
-        check_output_dir(args.plot)  # before minutes of work
+    if args.plot is not None:  # the folder and each picture in it, before minutes of work
+        from tailor.refinement.evaluation.coordination_plots import FILES
+        from tailor.refinement.outputs import check_output_file
+
+        check_output_dir(args.plot)
+        for name in FILES:
+            check_output_file(Path(args.plot) / name, ".png")
     kinds = scene.team(args.robots, args.heterogeneous)
     from tailor.refinement.model_store import resolve_models
 
@@ -109,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plot is not None:
         from tailor.refinement.evaluation.coordination_plots import draw_all
 
-        draw_all(report, scene.bounds, args.plot)
+        written = draw_all(report, scene.bounds, args.plot)
     if args.json:
         from tailor.refinement.outputs import json_text
 
@@ -118,7 +125,13 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write(json_text(versioned("coordinate", {**report, "models": str(source.path)})) + "\n")
     else:
         _print_text(report)
-    print(f"tailor coordinate: {time.perf_counter() - started:.0f} s", file=sys.stderr)
+    log = logging.getLogger(__name__)
+    if args.plot is not None:  # (stdout holds the JSON only: the files on stderr)
+        if args.json:
+            log.info("wrote %s", ", ".join(str(path) for path in written))
+        else:
+            sys.stdout.write("".join(f"Wrote {path}\n" for path in written))
+    log.info("took %.0f s", time.perf_counter() - started)
     return 0
 
 

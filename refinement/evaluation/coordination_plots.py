@@ -102,5 +102,5 @@ def draw_all(report: dict, bounds: tuple[float, float, float, float], folder) ->
         plot_failure_example(report, bounds, paths[1])
         plot_communication_fov(report, paths[2])
     except OSError as exc:
-        raise write_error(folder, exc) from None
+        raise write_error(exc.filename or folder, exc) from None
     return paths
