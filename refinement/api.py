@@ -120,6 +120,7 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     from tailor.refinement.refine import refine as refine_sequence
 
     _check(domain, (str, Path), "domain")
+    seed, horizon = _whole(seed), _whole(horizon)  # (numpy's integers are whole numbers too)
     _check_seed(seed)
     _check(horizon, int, "horizon")
     if models is not None:
@@ -210,6 +211,7 @@ def dispatch(refined, seed: int = 0) -> SequenceResult:
     """Execute a refined (fully bound) sequence in its simulator: durations, outcomes and the trajectory."""
     from tailor.refinement.dispatch import dispatch as dispatch_sequence
 
+    seed = _whole(seed)
     _check_seed(seed)
     sequence = refined.sequence if isinstance(refined, (Refinement, RefinedSequence)) else refined
     if not isinstance(sequence, ActionSequence):
@@ -225,6 +227,13 @@ def _check(value, types, name: str) -> None:
     if isinstance(value, bool) or not isinstance(value, types):
         names = " or ".join(t.__name__ for t in (types if isinstance(types, tuple) else (types,)))
         raise ArgumentTypeError(f"{name} must be {names}, not {type(value).__name__}")
+
+
+def _whole(value):
+    """A numpy integer (np.int64 out of an array) as the Python int it is; anything else as it is."""
+    import numbers
+
+    return int(value) if isinstance(value, numbers.Integral) and not isinstance(value, bool) else value
 
 
 def _check_seed(seed) -> None:
@@ -276,6 +285,13 @@ def _check_plan_problem(plan: AbstractPlan, problem_file: Path) -> None:
         raise ArgumentValueError(f"plan is a plan of problem {plan.problem!r}, not of {names[0]!r} ({problem_file})")
 
 
+def _real(value) -> bool:
+    """A real number that is not a bool: Python's, or numpy's (np.float32, np.int64) out of an array."""
+    import numbers
+
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and not isinstance(value, (int, float))
+
+
 def _belief_table(belief: Mapping) -> dict:
     """A belief given in Python as the TOML file's `objects` table (values checked by parse_belief)."""
     table = {}
@@ -283,7 +299,7 @@ def _belief_table(belief: Mapping) -> dict:
         if not isinstance(name, str) or not isinstance(values, Mapping):
             raise ArgumentTypeError("belief must map object names to {quantity: value} mappings, "
                                     f"got {name!r}: {type(values).__name__}")
-        table[name] = dict(values)
+        table[name] = {quantity: float(value) if _real(value) else value for quantity, value in values.items()}
         for quantity, value in values.items():
             if isinstance(value, (int, float)) and not isinstance(value, bool) and not math.isfinite(value):
                 raise BeliefError(f"[objects.{name}] {quantity} = {value!r} is not a finite number",

@@ -108,6 +108,22 @@ def test_a_belief_given_as_a_dict_is_the_file_and_is_checked():
         tailor.refine("soccer", "score", belief={**table, "nowhere": {"x": 0.0}})
 
 
+def test_numbers_out_of_numpy_are_numbers():
+    """A belief filled from arrays (np.float32, np.int64) and a horizon or seed taken from one are accepted, and
+    give what Python's numbers give."""
+    import tomllib
+
+    import numpy as np
+
+    table = tomllib.loads((SOCCER / "problems" / "score.toml").read_text())["objects"]
+    as_numpy = {name: {q: np.float64(v) if isinstance(v, float) else np.int64(v) for q, v in values.items()}
+                for name, values in table.items()}
+    plain = tailor.refine("soccer", "score", belief=table, horizon=2, seed=3)
+    numpy = tailor.refine("soccer", "score", belief=as_numpy, horizon=np.int64(2), seed=np.int64(3))
+    assert numpy.chosen == plain.chosen and numpy.predicted_total == plain.predicted_total
+    assert tailor.refine("soccer", "score", belief={**table, "pos1": {**table["pos1"], "x": np.float32(-2.0)}})
+
+
 @pytest.mark.parametrize("call, error, named", [
     (lambda: tailor.refine("soccer", "score", horizon="2"), TypeError, "horizon"),
     (lambda: tailor.refine("soccer", "score", horizon=0), ValueError, "horizon"),
