@@ -235,3 +235,11 @@ def test_a_picture_that_cannot_be_written_fails_before_any_work(tmp_path, capsys
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"tailor coordinate: error: {tmp_path / FILES[-1]}: is a folder, not a file name"]
     assert sorted(p.name for p in tmp_path.iterdir()) == [FILES[-1]]
+
+
+def test_domains_lists_coordinate_where_the_simulator_has_a_team_scene(capsys):
+    import json
+
+    assert main(["domains", "--json"]) == 0
+    can = {d["name"]: d["can"] for d in json.loads(capsys.readouterr().out)["domains"]}
+    assert "coordinate" in can["soccer"] and "coordinate" not in can["arm"] and "gather" in can["arm"]

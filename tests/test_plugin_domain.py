@@ -45,7 +45,7 @@ def test_the_entry_point_registers_the_simulator_and_the_domain_folder_is_listed
     listing = json.loads(run.stdout)
     assert "pointmass" in [s["name"] for s in listing["simulators"]]
     rail = next(d for d in listing["domains"] if d["path"] == str(trained))
-    assert rail["simulator"] == "pointmass" and rail["can"] == ["plan", "refine", "train", "evaluate"]
+    assert rail["simulator"] == "pointmass" and rail["can"] == ["plan", "refine", "train", "gather", "evaluate"]
 
 
 def test_refine_and_simulate_a_plan_of_the_outside_domain(trained):

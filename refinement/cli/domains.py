@@ -41,6 +41,12 @@ def describe(domain_dir) -> dict:
             info["can"].append(capability)
         except TailorError as exc:
             info["notes"].append(str(exc) if exc.file else f"{domain_dir / BINDING_FILE}: {exc.message}")
+    from tailor.sims import registry
+
+    if "train" in info["can"]:
+        info["can"].insert(info["can"].index("train") + 1, "gather")
+    if info["models"] and getattr(registry.get(binding.simulator), "team", None) is not None:
+        info["can"].append("coordinate")
     if info["models"]:
         info["can"].insert(1, "refine")
     else:
@@ -74,8 +80,9 @@ def run(args: argparse.Namespace) -> int:
     for name, why in registry.failed().items():
         out(f"  {name:<10} could not be loaded: {why}\n")
     out("\nDomains:\n")
+    width = max((len(" ".join(d["can"])) for d in domains), default=0)
     for d in domains:
-        out(f"  {d['name']:<10} {' '.join(d['can']):<30} simulator {d['simulator'] or '-'}; "
+        out(f"  {d['name']:<10} {' '.join(d['can']):<{width}}  simulator {d['simulator'] or '-'}; "
             f"problems {', '.join(d['problems'])}\n")
         for note in d["notes"]:
             out(f"             note: {note}\n")
