@@ -148,6 +148,11 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     if up_problem is None:
         _check(problem, (str, Path), "problem")
         domain_file, problem_file = resolve_problem(domain, problem)
+    if up_problem is None and plan is not None and not isinstance(plan, (AbstractPlan, str, int, float)):
+        from unified_planning.plans import Plan
+
+        if isinstance(plan, Plan):  # a plan of unified-planning for the files named: their Problem to link it
+            up_problem = _parsed_problem(domain_file, problem_file)
     abstract = _given_plan(plan, up_problem, domain_dir)
     if isinstance(plan, AbstractPlan) and problem_file is not None:
         _check_plan_problem(plan, problem_file)
@@ -271,6 +276,14 @@ def _given_plan(given, up_problem, domain_dir: Path) -> AbstractPlan | None:
     from tailor.planner_bridge.up_interop import link_plan
 
     return link_plan(up_problem, given, domain=domain_dir.name)
+
+
+def _parsed_problem(domain_file: Path, problem_file: Path):
+    """The unified-planning Problem of a PDDL pair, to link a unified-planning plan of it (its actions are
+    matched by name, so a plan found for a Problem parsed elsewhere from the same files links too)."""
+    from tailor.planner_bridge.reading import read_problem
+
+    return read_problem(Path(domain_file), Path(problem_file))[0]
 
 
 def _check_plan_problem(plan: AbstractPlan, problem_file: Path) -> None:

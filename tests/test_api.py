@@ -80,6 +80,8 @@ def test_a_plan_from_any_engine_is_linked_and_refined_like_ours(score_problem):
     ours = tailor.refine("soccer", "score")
     theirs = tailor.refine("soccer", score_problem, belief=belief, plan=found)
     assert theirs.chosen == ours.chosen and theirs.predicted_total == ours.predicted_total
+    named = tailor.refine("soccer", "score", plan=found)  # the problem by name, its belief file beside it
+    assert named.chosen == ours.chosen and named.plan.planner == "given"
 
 
 def test_refine_reports_what_was_free_and_what_it_was_set_to():
