@@ -243,3 +243,22 @@ def test_domains_lists_coordinate_where_the_simulator_has_a_team_scene(capsys):
     assert main(["domains", "--json"]) == 0
     can = {d["name"]: d["can"] for d in json.loads(capsys.readouterr().out)["domains"]}
     assert "coordinate" in can["soccer"] and "coordinate" not in can["arm"] and "gather" in can["arm"]
+
+
+def test_an_absurd_approach_model_is_refused_as_refine_refuses_it(tmp_path, capsys):
+    """Every leaf of approachBall predicting 1e6 s: exit 12 naming the file (the team's predictions ran on it,
+    an MAE of 1e6 s reported with exit 0)."""
+    import json
+    import shutil
+
+    from tailor.planner_bridge import resolve_domain_dir
+
+    shutil.copytree(resolve_domain_dir("soccer") / "models", tmp_path, dirs_exist_ok=True)
+    model = tmp_path / "approachBall.json"
+    data = json.loads(model.read_text())
+    for leaf in data["duration"]["leaves"]:
+        leaf["intercept"] = 1e6
+    model.write_text(json.dumps(data))
+    assert main(["coordinate", "soccer", "--episodes", "1", "--models", str(tmp_path)]) == 12
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err.startswith(f"tailor coordinate: error: {model}: a pioneer robot's approach: the model predicts 1e+06 s")

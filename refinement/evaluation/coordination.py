@@ -55,7 +55,13 @@ class Predictor:
         for kind in np.unique(kinds[known]):
             rows = known & (kinds == kind)
             params = self.scene.utility_parameters(str(kind), states[rows], target[rows])
-            out[rows] = np.maximum(0.0, self.models[self.scene.kinds[str(kind)]].predict_duration(params))
+            model = self.models[self.scene.kinds[str(kind)]]
+            predicted = model.predict_duration(params)
+            check = getattr(model, "check_duration", None)  # an absurd model file stops here, as in refine
+            if check is not None and len(predicted):
+                for extreme in (float(np.min(predicted)), float(np.max(predicted))):
+                    check(extreme, f"a {kind} robot's approach")
+            out[rows] = np.maximum(0.0, predicted)
         return out
 
 
