@@ -16,9 +16,9 @@ written as a shard of their own (a complete file, renamed into place), so the ne
 
 from __future__ import annotations
 
+import logging
 import os
 import re
-import sys
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -27,6 +27,7 @@ from tailor.sims.episode import Episode
 from tailor.sims import experience, registry
 from tailor.sims.experience import Origin, episode_seeds, load_episodes, read_origin, save_episodes
 
+log = logging.getLogger(__name__)
 SUFFIX = ".npz"
 NAME = re.compile(r"^(?P<scenario>[^.]+)\.seed(?P<seed>-?\d+)\.(?P<first>\d+)-(?P<stop>\d+)\.npz$")
 
@@ -148,10 +149,10 @@ def stored_gather(directory: str | os.PathLike, simulator: str, name: str, episo
         raise DataError(f"episodes {first}:{first + episodes} is not a range of episodes")
     pieces = cover(stream_shards(find_shards(directory, simulator), name, seed), first, first + episodes)
     stored = sum(p.stop - p.first for p in pieces if p.shard is not None)
-    if progress and stored:
+    if stored:  # notes, which the command line's -q silences
         files = len({p.shard.path for p in pieces if p.shard is not None})
-        print(f"experience: {stored} episodes of {name} (seed {seed}) read from {files} shard(s) in {directory}",
-              file=sys.stderr)
+        log.info("experience: %d episodes of %s (seed %d) read from %d shard(s) in %s", stored, name, seed, files,
+                 directory)
     out: list[Episode] = []
     for piece in pieces:
         if piece.shard is not None:
@@ -165,10 +166,9 @@ def stored_gather(directory: str | os.PathLike, simulator: str, name: str, episo
             if done:  # keep what is finished: a complete shard of its own; the next run resumes after it
                 kept = write_shard(directory, Origin(simulator, name, seed, piece.first, piece.first + len(done)),
                                    done)
-                print(f"experience: kept the {len(done)} finished episodes in {kept.path}", file=sys.stderr)
+                log.warning("experience: kept the %d finished episodes in %s", len(done), kept.path)
             raise
         shard = write_shard(directory, Origin(simulator, name, seed, piece.first, piece.stop), done)
-        if progress:
-            print(f"experience: wrote {shard.path}", file=sys.stderr)
+        log.info("experience: wrote %s", shard.path)
         out.extend(done)
     return out

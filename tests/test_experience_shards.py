@@ -162,7 +162,7 @@ def test_the_code_fingerprint_follows_the_simulators_package(tmp_path, monkeypat
     assert len(fingerprints[0]) == 16 and fingerprints[1] != fingerprints[0] == fingerprints[2]
 
 
-def test_ctrl_c_keeps_the_finished_episodes_as_a_complete_shard(tmp_path, serial, monkeypatch, capsys):
+def test_ctrl_c_keeps_the_finished_episodes_as_a_complete_shard(tmp_path, serial, monkeypatch, caplog):
     batches = []
     run_batch = experience._run_batch
 
@@ -177,7 +177,7 @@ def test_ctrl_c_keeps_the_finished_episodes_as_a_complete_shard(tmp_path, serial
     with pytest.raises(KeyboardInterrupt):
         stored_gather(tmp_path, SIM, SCENARIO, 14, seed=3, progress=False)
     assert sorted(p.name for p in tmp_path.iterdir()) == [f"{SCENARIO}.seed3.0-4.npz"]  # no temporary file left
-    assert "kept the 4 finished episodes" in capsys.readouterr().err
+    assert "kept the 4 finished episodes" in caplog.text  # (a warning: on stderr even with -q)
     monkeypatch.setattr(experience, "_run_batch", run_batch)
     same(stored_gather(tmp_path, SIM, SCENARIO, 14, seed=3, progress=False), serial)  # resumed after them
     assert sorted(p.name for p in tmp_path.iterdir()) == [f"{SCENARIO}.seed3.0-4.npz", f"{SCENARIO}.seed3.4-14.npz"]

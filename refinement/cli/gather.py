@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
         for name in scenarios:
             started = time.perf_counter()
             episodes = stored_gather(out, recipe.simulator, name, stop - first, args.seed, jobs=args.jobs,
-                                     progress=True, first=first)
+                                     progress=getattr(args, "progress", True), first=first)
             seconds = time.perf_counter() - started
             print(f"{name}: episodes {first}:{stop} of seed {args.seed}, {len(episodes)} episodes "
                   f"({sum(e.succeeded for e in episodes)} succeeded) in {seconds:.1f} s")
