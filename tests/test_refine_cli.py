@@ -108,3 +108,10 @@ def test_the_printed_free_values_reproduce_the_prediction(capsys):
         assert values["pos2.phi"] == approach["params"]["phig"] and values["pos2.v"] == approach["params"]["vg"]
         total = sum(predicted_durations(refined.instantiated.bind(values), models))
         assert total == pytest.approx(data[execution]["predicted_total"], abs=5e-5)  # durations: 4 decimals
+
+
+def test_the_improvement_is_a_dash_where_greedy_is_predicted_to_take_no_time():
+    """A binding whose models extrapolate greedy to 0 s crashed the text output half-way (ZeroDivisionError)."""
+    from tailor.refinement.cli.refine import _gain
+
+    assert _gain(0.0, 0.0) == "-" and _gain(9.0, 10.0) == "10.0%" and _gain(11.0, 10.0) == "-10.0%"
