@@ -43,21 +43,26 @@ class DomainSignature:
     predicates: dict[str, int] = field(default_factory=dict)
     functions: set[str] = field(default_factory=set)
     actions: set[str] = field(default_factory=set)
-    constant_symbols: list[Symbol] = field(default_factory=list)  # where each constant is declared
+
+    def reserved_names(self) -> dict[str, str]:
+        """Lower-cased names an object may not take, with what they name: unified-planning reads one namespace,
+        so an object named like a type, predicate, function or action is refused by its reader (with a hint at
+        an environment flag that does not help: its reader then takes the object for the predicate)."""
+        reserved: dict[str, str] = {}
+        for kind, names in (("action", self.actions), ("function", self.functions),
+                            ("predicate", self.predicates), ("type", self.types - set(BUILTIN_TYPES))):
+            reserved.update((name.lower(), kind) for name in names)
+        return reserved
 
 
-def _check_object_name(name: Symbol, sig: DomainSignature, what: str, file: str) -> None:
-    """unified-planning reads one namespace: an object named like a type, predicate, function or action is
-    refused by its reader (with a hint at an environment flag that does not help, since its reader then takes
-    the object for the predicate); say so here, at the name."""
-    lower = name.text.lower()
-    for kind, names in (("type", sig.types - set(BUILTIN_TYPES)), ("predicate", sig.predicates),
-                        ("function", sig.functions), ("action", sig.actions)):
-        if lower in {n.lower() for n in names}:
-            article = "an" if kind[0] in "aeiou" else "a"
-            raise PDDLSemanticError(f"{what} '{name.text}' has the name of {article} {kind}: unified-planning "
-                                    "cannot read a problem whose names clash; rename one of them",
-                                    file, name.line, name.col)
+def _check_object_name(name: Symbol, reserved: dict[str, str], what: str, file: str) -> None:
+    """A PDDLSemanticError at the name where an object or constant has a reserved name."""
+    kind = reserved.get(name.text.lower())
+    if kind is not None:
+        article = "an" if kind[0] in "aeiou" else "a"
+        raise PDDLSemanticError(f"{what} '{name.text}' has the name of {article} {kind}: unified-planning "
+                                "cannot read a problem whose names clash; rename one of them",
+                                file, name.line, name.col)
 
 
 def _sections(define: SList) -> list[SList]:
@@ -172,6 +177,7 @@ def _check_requirements(sections: list[SList], file: str) -> None:
 def check_domain(define: SList, file: str) -> DomainSignature:
     """Check a domain's declarations and action bodies; return what it declares for checking problems."""
     sig = DomainSignature(file)
+    constants: list[Symbol] = []  # where each constant is declared
     sections = _sections(define)
     _check_requirements(sections, file)
     for section in sections:
@@ -187,7 +193,7 @@ def check_domain(define: SList, file: str) -> DomainSignature:
             for name, type_expr in _typed_names(section.items[1:]):
                 _check_type(type_expr, sig, file)
                 sig.constants.add(name.text)
-                sig.constant_symbols.append(name)
+                constants.append(name)
         elif section.head == ":predicates":
             for predicate in section.items[1:]:
                 if isinstance(predicate, SList) and predicate.head:
@@ -200,8 +206,9 @@ def check_domain(define: SList, file: str) -> DomainSignature:
     sig.actions |= {section.items[1].text for section in sections
                     if section.head in (":action", ":durative-action") and len(section.items) > 1
                     and isinstance(section.items[1], Symbol)}
-    for name in sig.constant_symbols:
-        _check_object_name(name, sig, "constant", file)
+    reserved = sig.reserved_names()
+    for name in constants:  # (checked once every name they may clash with is known)
+        _check_object_name(name, reserved, "constant", file)
     for section in sections:
         if section.head in (":action", ":durative-action"):
             values = _keyword_values(section.items[2:])
@@ -224,6 +231,8 @@ def check_problem(define: SList, sig: DomainSignature, file: str) -> None:
     sections = _sections(define)
     _check_requirements(sections, file)
     objects = set(sig.constants)
+    declared = {name.lower() for name in objects}  # (names are case-insensitive)
+    reserved = sig.reserved_names()
     for section in sections:
         if section.head == ":domain" and len(section.items) == 2 and isinstance(section.items[1], Symbol):
             named = section.items[1]
@@ -235,11 +244,12 @@ def check_problem(define: SList, sig: DomainSignature, file: str) -> None:
         elif section.head == ":objects":
             for name, type_expr in _typed_names(section.items[1:]):
                 _check_type(type_expr, sig, file)
-                _check_object_name(name, sig, "object", file)
-                if name.text.lower() in {o.lower() for o in objects}:
+                _check_object_name(name, reserved, "object", file)
+                if name.text.lower() in declared:
                     raise PDDLSemanticError(f"object '{name.text}' is declared twice (or as a constant of the "
                                             "domain)", file, name.line, name.col)
                 objects.add(name.text)
+                declared.add(name.text.lower())
     for section in sections:
         if section.head == ":init":
             for fact in section.items[1:]:

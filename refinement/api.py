@@ -242,10 +242,12 @@ def _whole(value):
 
 
 def _check_seed(seed) -> None:
-    """A seed as the command line takes it: a whole number from 0 to 2**63 - 1 (numpy's generators take no
+    """A seed as the command line takes it: a whole number from 0 to MAX_SEED (numpy's generators take no
     negative seed, and experience files store seeds as 64-bit integers)."""
+    from tailor.sims.experience import MAX_SEED
+
     _check(seed, int, "seed")
-    if not 0 <= seed <= 2**63 - 1:
+    if not 0 <= seed <= MAX_SEED:
         raise ArgumentValueError(f"seed must be a whole number from 0 to 2**63 - 1, not {seed}")
 
 
@@ -313,7 +315,7 @@ def _belief_table(belief: Mapping) -> dict:
             raise ArgumentTypeError("belief must map object names to {quantity: value} mappings, "
                                     f"got {name!r}: {type(values).__name__}")
         table[name] = {quantity: float(value) if _real(value) else value for quantity, value in values.items()}
-        for quantity, value in values.items():
+        for quantity, value in table[name].items():
             if isinstance(value, (int, float)) and not isinstance(value, bool) and not math.isfinite(value):
                 raise BeliefError(f"[objects.{name}] {quantity} = {value!r} is not a finite number",
                                   file="<belief argument>")

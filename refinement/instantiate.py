@@ -132,13 +132,20 @@ def _compose(obj: str, quantity: str, facts: Sequence[_Fact], types: Sequence[st
         raise EmptyRangeError(f"{obj}.{quantity}: the ranges {', '.join(sources)} do not intersect",
                               file=binding.file)
     if value is not None:
-        if not (low - RANGE_TOLERANCE <= value <= high + RANGE_TOLERANCE):
-            raise EmptyRangeError(f"{obj}.{quantity} = {value:g} read for {read_by} lies outside its range "
-                                  f"[{low:g}, {high:g}] from {', '.join(sources)}", file=belief.file)
+        _check_read(obj, quantity, value, read_by, (low, high), ", ".join(sources), belief)
         value = min(max(value, low), high)
     elif low == high:  # a degenerate range determines the value
         value = low
     return value, low, high
+
+
+def _check_read(obj: str, quantity: str, value: float, read_by: str, bounds: tuple[float, float], where: str,
+                belief: BeliefState) -> None:
+    """An EmptyRangeError naming the belief file where a value read from it lies outside its range."""
+    low, high = bounds
+    if not (low - RANGE_TOLERANCE <= value <= high + RANGE_TOLERANCE):
+        raise EmptyRangeError(f"{obj}.{quantity} = {value:g} read for {read_by} lies outside its range "
+                              f"[{low:g}, {high:g}] from {where}", file=belief.file)
 
 
 def scene_name(template: str, obj: str) -> str:
@@ -177,10 +184,7 @@ def _scene(plan: AbstractPlan, binding: Binding, belief: BeliefState, initial_st
             default = binding.type_range(types, quantity)
             if default is None:
                 continue
-            (low, high), where = default
-            if not (low - RANGE_TOLERANCE <= value <= high + RANGE_TOLERANCE):
-                raise EmptyRangeError(f"{objects[0]}.{quantity} = {value:g} read for {text} lies outside its range "
-                                      f"[{low:g}, {high:g}] from {where}", file=belief.file)
+            _check_read(objects[0], quantity, value, text, *default, belief)
         scene.setdefault(name, values)
         placed_by.setdefault(name, text)
     return MappingProxyType(scene)

@@ -25,6 +25,7 @@ from tailor.sims.protocol import Scenario
 
 SCHEMA = 3  # version of the .npz episode file (2: named state columns; 3: the origin, optional)
 EPISODES_PER_TASK = 10  # episodes one worker runs per joblib task
+MAX_SEED = 2**63 - 1  # the largest seed (or episode index) an episode file stores: as a 64-bit integer
 
 
 def scenario(simulator: str, name: str) -> Scenario:

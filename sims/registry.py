@@ -96,9 +96,7 @@ def code_fingerprint(name: str) -> str:
     root = Path(source).parent if module.__package__ else None  # a module of a package: the package's folder
     files = sorted(root.rglob("*.py")) if root is not None else [Path(source)]
     digest = hashlib.sha256()
-    for path in files:
-        if "__pycache__" in path.parts:
-            continue
+    for path in files:  # (compiled files in __pycache__ are not *.py)
         digest.update(str(path.relative_to(root) if root is not None else path.name).encode())
         digest.update(b"\0" + path.read_bytes() + b"\0")
     return digest.hexdigest()[:16]

@@ -10,8 +10,9 @@ with other workers, merge into exactly the episodes of one serial gather. File n
 returned in episode order. Two shards of one stream that overlap are an error naming both files (which one
 is right cannot be told); a shard of another simulator, a file whose content does not match its name, of an
 unknown schema or not a shard at all is an error naming the file, and so is a shard the simulator's code of now
-did not gather (its code fingerprint differs: an edited controller would otherwise train stale models). On Ctrl-C the episodes finished so far are
-written as a shard of their own (a complete file, renamed into place), so the next run resumes after them.
+did not gather (its code fingerprint differs: an edited controller would otherwise train stale models). On
+Ctrl-C the episodes finished so far are written as a shard of their own (a complete file, renamed into place),
+so the next run resumes after them.
 """
 
 from __future__ import annotations
@@ -126,9 +127,10 @@ def load_piece(piece: Piece) -> list[Episode]:
     path = str(piece.shard.path)
     if len(episodes) != origin.episodes:
         raise DataError(f"holds {len(episodes)} episodes, its origin says {origin.episodes}", file=path)
-    scenario = registry.get(origin.simulator).scenarios.get(origin.scenario)
+    entry = registry.get(origin.simulator)
+    scenario = entry.scenarios.get(origin.scenario)
     if scenario is not None:  # every episode one of the scenario's action, with that action's parameters
-        spec = registry.get(origin.simulator).actions[scenario.action]
+        spec = entry.actions[scenario.action]
         for i, episode in enumerate(episodes):
             if episode.action != scenario.action or len(episode.params) != len(spec.parameters):
                 raise DataError(f"episode {origin.first + i} is {episode.action!r} with {len(episode.params)} "

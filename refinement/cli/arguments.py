@@ -6,6 +6,8 @@ import argparse
 import math
 from collections.abc import Callable
 
+from tailor.sims.experience import MAX_SEED
+
 MAX_SECONDS = 1e6  # about 11.6 days: longer limits (and inf) are refused; leave the option out for no limit
 # episodes or situations of one command: a million simulated runs take days on one machine; larger counts are
 # typing mistakes, and some commands list their seeds up front
@@ -167,6 +169,5 @@ def risk_lambda(text: str) -> float:
     return value
 
 
-MAX_SEED = 2**63 - 1  # experience files store seeds as 64-bit integers
 seed = whole_number(0, MAX_SEED)  # an argparse type: numpy's and the simulators' generators take no negative seed
 seed.__name__ = "seed"

@@ -41,11 +41,9 @@ def describe(domain_dir) -> dict:
             info["can"].append(capability)
         except TailorError as exc:
             info["notes"].append(str(exc) if exc.file else f"{domain_dir / BINDING_FILE}: {exc.message}")
-    from tailor.sims import registry
-
     if "train" in info["can"]:
         info["can"].insert(info["can"].index("train") + 1, "gather")
-    if info["models"] and getattr(registry.get(binding.simulator), "team", None) is not None:
+    if info["models"] and binding.entry.team is not None:
         info["can"].append("coordinate")
     if info["models"]:
         info["can"].insert(1, "refine")

@@ -24,6 +24,7 @@ from tailor.refinement.cli.arguments import (
 HELP = "measure refined vs greedy execution in the simulator over random situations"
 
 HORIZONS = (1, 2, 3, 4)
+HORIZON_EPISODES = 100  # situations of the horizons experiment (Table 5.3) without --horizon-episodes
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -33,7 +34,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--oracle-episodes", type=whole_number(0, MAX_EPISODES), default=100, metavar="N",
                         help="of these, how many are also searched in the simulator (default 100)")
     parser.add_argument("--horizon-episodes", type=whole_number(0, MAX_EPISODES), default=None, metavar="N",
-                        help="situations run with horizons 1-4 (Table 5.3; default 100, or --episodes if fewer)")
+                        help=f"situations run with horizons 1-4 (Table 5.3; default {HORIZON_EPISODES}, or --episodes "
+                             "if fewer)")
     parser.add_argument("--situations", metavar="NAME", default=None,
                         help="a situation generator of the domain's simulator to evaluate on (greedy vs refined and "
                              "the horizons) instead of the binding's [evaluation] ones, e.g. another scenario")
@@ -241,7 +243,8 @@ def _evaluate(args: argparse.Namespace) -> int:
     if args.risk_sweep:
         report["risk_sweep"] = summarize_risk_sweep(rows)
     report["situations"] = situation_rows(rows, {i: objects for _, i, objects in items})
-    horizon_episodes = min(100, args.episodes) if args.horizon_episodes is None else args.horizon_episodes
+    horizon_episodes = (min(HORIZON_EPISODES, args.episodes) if args.horizon_episodes is None
+                        else args.horizon_episodes)
     if plan.horizons and horizon_episodes:
         items = situations(plan.horizons, horizon_episodes)
         hrows = run_in_workers(horizon_episode, [(job, i, objects, HORIZONS) for job, i, objects in items],

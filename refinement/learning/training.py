@@ -8,6 +8,7 @@ is renamed over the target once all are complete: an interrupted run leaves the 
 
 from __future__ import annotations
 
+import errno
 import logging
 import os
 import signal
@@ -217,7 +218,7 @@ def write_outputs(out: Path, recipe: TrainingRecipe, models: dict, classifiers: 
     staged: list[tuple[Path, Path]] = []
     for target in files:  # a folder where a file goes would fail the renames: name it before writing anything
         if target.is_dir():
-            raise write_error(target, IsADirectoryError(21, "Is a directory"))
+            raise write_error(target, IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR)))
     target = Path(out)
     try:
         for target, write in files.items():

@@ -77,7 +77,7 @@ class ActionModel:
                                  "stored): retrain with `tailor train`, or refine with --risk 0", file=self.source)
         return self.uncertainty
 
-    def plausible_range(self) -> tuple[float, float] | None:
+    def plausible_range(self) -> tuple[float, float]:
         """The durations a prediction may take (see RANGE_MARGIN; within a day either side where the report
         says nothing of them)."""
         seen = self.report.get("duration_range")
@@ -99,7 +99,7 @@ class ActionModel:
         if not math.isfinite(value):
             raise ModelFileError(f"{where}: the model predicts a duration of {value} s: its coefficients are "
                                  "broken (retrain with `tailor train`)", file=self.source)
-        if bounds is not None and not bounds[0] <= value <= bounds[1]:
+        if not bounds[0] <= value <= bounds[1]:
             raise ModelFileError(f"{where}: the model predicts {value:.4g} s, outside the plausible "
                                  f"[{bounds[0]:.3g}, {bounds[1]:.3g}] s (the durations seen in training, with a "
                                  "margin): the file is inconsistent (retrain with `tailor train`)", file=self.source)

@@ -266,8 +266,8 @@ def lure_features(params: np.ndarray) -> np.ndarray:
                             np.abs(_wrapped(np.arctan2(goal[:, 1] - iy, goal[:, 0] - ix) - to_ip))])
 
 
-# the columns of POSE_PARAMETERS a planned path depends on: the poses (x, y, phi, xg, yg, phig), not the speeds
-PATH_COLUMNS = [0, 1, 2, 4, 5, 6]
+# the columns of POSE_PARAMETERS a planned path depends on: the poses, not the speeds
+PATH_COLUMNS = [POSE_PARAMETERS.index(name) for name in ("x", "y", "phi", "xg", "yg", "phig")]
 
 
 def _per_pose(path, params: np.ndarray) -> np.ndarray:
