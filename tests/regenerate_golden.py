@@ -44,7 +44,7 @@ def golden_path(domain: str, problem: str, suffix: str) -> Path:
 
 def tailor_plan_output(domain: str, problem: str, extra: list[str]) -> str:
     """What `tailor plan DOMAIN PROBLEM [extra]` prints on stdout (run in this process)."""
-    from tailor.refinement.cli.main import main
+    from tailor.cli.main import main
 
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
@@ -92,7 +92,7 @@ def tailor_refine_output(domain: str, problem: str) -> str:
     """What `tailor refine DOMAIN PROBLEM --simulate --json --seed 0` prints, timings removed."""
     import json
 
-    from tailor.refinement.cli.main import main
+    from tailor.cli.main import main
 
     out = io.StringIO()
     with contextlib.redirect_stdout(out):

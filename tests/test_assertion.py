@@ -163,7 +163,7 @@ def test_a_stub_classifier_decides_alone(soccer):
 
 
 def test_refine_json_carries_provenance(capsys):
-    from tailor.refinement.cli.main import main
+    from tailor.cli.main import main
 
     assert main(["refine", "soccer", "approach", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
@@ -238,7 +238,7 @@ def test_summary_counts_avoided_collisions_needless_assertions_and_table_6_1():
 
 
 def test_evaluate_assertion_json_has_the_issue_keys(capsys):
-    from tailor.refinement.cli.main import main
+    from tailor.cli.main import main
 
     assert main(["evaluate", "soccer", "--assertion", "--episodes", "3", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
@@ -286,7 +286,7 @@ def test_a_missing_or_broken_success_model_is_one_line(tmp_path, capsys):
     import shutil
     from pathlib import Path
 
-    from tailor.refinement.cli.main import main
+    from tailor.cli.main import main
 
     domain = tmp_path / "soccer"
     shutil.copytree(Path(__file__).parent.parent / "domains" / "soccer", domain,

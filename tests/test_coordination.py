@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tailor.refinement.cli.main import main
+from tailor.cli.main import main
 from tailor.refinement.evaluation.coordination import (
     NOBODY,
     Predictor,

@@ -10,7 +10,7 @@ import pytest
 
 from tailor.planner_bridge.bundled import DOMAINS_DIR
 from tailor.refinement.binding import load_domain_binding, parse_binding
-from tailor.refinement.cli.main import main
+from tailor.cli.main import main
 from tailor.errors import BindingError
 from tailor.refinement.evaluation.experiments import (
     EvaluationPlan,

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from tailor.errors import BackendError, DataError
-from tailor.refinement.cli.main import main
+from tailor.cli.main import main
 from tailor.sims import experience, registry
 from tailor.sims.experience import SCHEMA, Origin, episode_seeds, gather, load_episodes, read_origin, save_episodes
 from tailor.sims.parallel import backend_session
@@ -285,7 +285,7 @@ def test_ctrl_c_in_a_gather_with_workers_leaves_complete_shards_only(tmp_path):
     import sys
     import time
 
-    process = subprocess.Popen([sys.executable, "-m", "tailor.refinement.cli", "gather", "soccer", "--seeds", "0:20000",
+    process = subprocess.Popen([sys.executable, "-m", "tailor.cli", "gather", "soccer", "--seeds", "0:20000",
                                 "--scenario", SCENARIO, "--jobs", "2", "--out", str(tmp_path)],
                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 from tailor.planner_bridge.bundled import DOMAINS_DIR
-from tailor.refinement.cli.main import main
+from tailor.cli.main import main
 
 SOCCER = DOMAINS_DIR / "soccer"
 ONE_ERROR_LINE = re.compile(r"^tailor \w+: error: .+$")
@@ -188,7 +188,7 @@ def test_usage_faults_are_one_line_with_one_status(argv, status, capsys, monkeyp
 
 
 def test_usage_errors_exit_with_status_2():
-    run = subprocess.run([sys.executable, "-m", "tailor.refinement.cli", "train", "soccer", "--jobs", "0"], check=False,
+    run = subprocess.run([sys.executable, "-m", "tailor.cli", "train", "soccer", "--jobs", "0"], check=False,
                          capture_output=True, text=True)
     assert run.returncode == 2 and run.stderr.startswith("tailor train: error: argument --jobs")
     assert len(run.stderr.strip().splitlines()) == 1
@@ -309,8 +309,8 @@ def test_a_malformed_duration_range_is_refused_at_load(seen):
 
 # --- 8. --jobs capped at the CPU count -------------------------------------------------------------------
 def test_jobs_beyond_the_cpus_are_capped_with_a_note(capsys):
-    from tailor.refinement.cli.arguments import cpu_count, worker_count
-    from tailor.refinement.cli.logs import cli_logging
+    from tailor.cli.arguments import cpu_count, worker_count
+    from tailor.cli.logs import cli_logging
 
     with cli_logging(0):
         assert worker_count("1000") == cpu_count()
@@ -343,7 +343,7 @@ def _group_members(pgid: int) -> list[int]:
 ])
 def test_sigterm_to_a_long_command_leaves_no_worker(tmp_path, command):
     out = ["--out", str(tmp_path / "out")] if command[0] == "train" else []
-    process = subprocess.Popen([sys.executable, "-m", "tailor.refinement.cli", *command, *out],
+    process = subprocess.Popen([sys.executable, "-m", "tailor.cli", *command, *out],
                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:
         deadline = time.monotonic() + 60
@@ -413,7 +413,7 @@ def test_results_that_cannot_be_written_are_one_line(argv, closed):
     if not closed and not Path("/dev/full").exists():
         pytest.skip("no /dev/full here")
     with open("/dev/full", "w") if not closed else open(os.devnull, "w") as sink:
-        run = subprocess.run([sys.executable, "-m", "tailor.refinement.cli", "-q", *argv], check=False,
+        run = subprocess.run([sys.executable, "-m", "tailor.cli", "-q", *argv], check=False,
                              stdout=sink, stderr=subprocess.PIPE, text=True,
                              preexec_fn=(lambda: os.close(1)) if closed else None)
     assert run.returncode == 16, run.stderr

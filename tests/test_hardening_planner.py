@@ -18,7 +18,7 @@ from tailor.planner_bridge import PlannerError, plan_files
 from tailor.planner_bridge.bridge import MEMORY_LIMIT_GB
 from tailor.planner_bridge.sexpr import MAX_DEPTH
 from tailor.planner_bridge.worker import plan_in_worker
-from tailor.refinement.cli.main import main
+from tailor.cli.main import main
 
 FIXTURES = Path(__file__).parent / "fixtures" / "pddl"
 BAD = FIXTURES / "bad"
@@ -205,7 +205,7 @@ def alive(pid: int) -> bool:
 
 HARD_PAIR = (str(BAD / "hard_domain.pddl"), str(BAD / "hard_problem.pddl"))
 COMMANDS = {
-    "tailor plan": [sys.executable, "-m", "tailor.refinement.cli", "plan", *HARD_PAIR],
+    "tailor plan": [sys.executable, "-m", "tailor.cli", "plan", *HARD_PAIR],
     # without the command line's signal handling: the child must still go with its parent
     "plan_files": [sys.executable, "-c", "import sys; from tailor.planner_bridge import plan_files; plan_files(*sys.argv[1:])",
                    *HARD_PAIR],

@@ -15,7 +15,7 @@ hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from tailor.planner_bridge.bundled import DOMAINS_DIR
-from tailor.refinement.cli.main import main
+from tailor.cli.main import main
 
 README = Path(__file__).parent.parent / "README.md"
 FILES = {"belief": "problems/score.toml", "binding": "actions.toml", "model": "models/approachBall.json",

@@ -8,7 +8,7 @@ import json
 from tailor.planner_bridge import plan_files, resolve_problem
 from tailor.refinement import instantiate, load_domain_binding
 from tailor.refinement.belief import load_belief
-from tailor.refinement.cli.main import main
+from tailor.cli.main import main
 from tailor.sims import registry
 
 

@@ -13,7 +13,7 @@ import pytest
 import tailor
 from tailor.errors import BindingError, ModelFileError
 from tailor.planner_bridge.bundled import DOMAINS_DIR
-from tailor.refinement.cli.main import main
+from tailor.cli.main import main
 from tailor.refinement.evaluation import experiments
 from tailor.refinement.evaluation.meta_episodes import label_gain, outcome_table
 from tailor.refinement.evaluation.meta_experiment import fresh_report
@@ -246,7 +246,7 @@ def test_meta_options_belong_to_meta(capsys):
 
 def test_meta_model_must_sit_beside_the_models_it_judges(tmp_path):
     from tailor.errors import OutputFileError
-    from tailor.refinement.cli.evaluate_meta import _check_companions
+    from tailor.cli.evaluate_meta import _check_companions
 
     target = tmp_path / "models"
     target.mkdir()

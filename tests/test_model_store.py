@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from tailor.errors import ModelFileError
-from tailor.refinement.cli.main import main
+from tailor.cli.main import main
 from tailor.refinement.model_store import default_training_out, domain_key, resolve_models, user_root
 
 DOMAINS = Path(__file__).resolve().parents[1] / "domains"

@@ -99,7 +99,7 @@ def test_a_bad_share_in_the_binding_is_one_line(tmp_path):
 
 
 def test_the_refine_command_rejects_a_bad_share(capsys):
-    from tailor.refinement.cli.main import main
+    from tailor.cli.main import main
 
     with pytest.raises(SystemExit) as exit_:
         main(["refine", "soccer", "score", "--neighbourhood", "0.6"])
@@ -111,7 +111,7 @@ def test_the_refine_command_rejects_a_bad_share(capsys):
 def test_refine_minimizes_the_worst_case_around_the_soccer_subgoal(capsys):
     """The bundled soccer binding's neighbourhood (2% of each range): the window's cost is the worst predicted
     total within it, at least the total at the chosen values; without it the cost is that total."""
-    from tailor.refinement.cli.main import main
+    from tailor.cli.main import main
 
     runs = {}
     for share in (None, "0"):

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from tailor.planner_bridge import AbstractPlan, InputFileError, render_text, resolve_problem
-from tailor.refinement.cli.main import main
+from tailor.cli.main import main
 
 from regenerate_golden import ROOT, bundled_pairs, golden_path
 

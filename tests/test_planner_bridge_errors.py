@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from tailor import errors
-from tailor.refinement.cli.main import main
+from tailor.cli.main import main
 
 BAD = Path(__file__).parent / "fixtures" / "pddl" / "bad"
 DOMAIN, PROBLEM = BAD / "domain.pddl", BAD / "problem.pddl"

@@ -21,7 +21,7 @@ def tailor(*args: str, plugin: bool = True) -> subprocess.CompletedProcess:
     env.pop("PYTHONPATH", None)
     if plugin:
         env["PYTHONPATH"] = str(FIXTURE / "site")
-    return subprocess.run([sys.executable, "-m", "tailor.refinement.cli", *args], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "tailor.cli", *args], capture_output=True, text=True,
                           env=env, timeout=600)
 
 

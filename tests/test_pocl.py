@@ -170,7 +170,7 @@ def test_worker_timeout_applies_to_pocl():
 
 
 def test_cli_plan_with_the_pocl_alias_prints_the_golden_text():
-    command = [sys.executable, "-m", "tailor.refinement.cli", "plan", "soccer", "waypoints", "--planner", "pocl"]
+    command = [sys.executable, "-m", "tailor.cli", "plan", "soccer", "waypoints", "--planner", "pocl"]
     done = subprocess.run(command, capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout == pocl_golden_path("soccer", "waypoints").read_text(encoding="utf-8")
@@ -179,7 +179,7 @@ def test_cli_plan_with_the_pocl_alias_prints_the_golden_text():
 def test_cli_refine_with_pocl(capsys):
     import json
 
-    from tailor.refinement.cli.main import main
+    from tailor.cli.main import main
 
     assert main(["refine", "soccer", "score", "--planner", "pocl", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)

@@ -14,7 +14,7 @@ import pytest
 
 from regenerate_golden import refine_golden_path, refine_pairs, tailor_refine_output
 
-from tailor.refinement.cli.main import main
+from tailor.cli.main import main
 
 PAIRS = refine_pairs()
 
@@ -68,7 +68,7 @@ def test_refine_plot_writes_trajectories_and_polar_plot(tmp_path, capsys):
 
 
 def _tailor(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "tailor.refinement.cli", *args], capture_output=True, text=True)
+    return subprocess.run([sys.executable, "-m", "tailor.cli", *args], capture_output=True, text=True)
 
 
 def test_bad_belief_file_is_one_line_with_its_exit_status(tmp_path):
@@ -112,6 +112,6 @@ def test_the_printed_free_values_reproduce_the_prediction(capsys):
 
 def test_the_improvement_is_a_dash_where_greedy_is_predicted_to_take_no_time():
     """A binding whose models extrapolate greedy to 0 s crashed the text output half-way (ZeroDivisionError)."""
-    from tailor.refinement.cli.refine import _gain
+    from tailor.cli.refine import _gain
 
     assert _gain(0.0, 0.0) == "-" and _gain(9.0, 10.0) == "10.0%" and _gain(11.0, 10.0) == "-10.0%"

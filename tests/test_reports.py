@@ -18,8 +18,8 @@ import pytest
 
 from tailor.errors import OutputFileError
 from tailor.planner_bridge.bundled import DOMAINS_DIR
-from tailor.refinement.cli.logs import cli_logging, level, verbosity_of
-from tailor.refinement.cli.main import COMMANDS, build_parser, main
+from tailor.cli.logs import cli_logging, level, verbosity_of
+from tailor.cli.main import COMMANDS, build_parser, main
 from tailor.refinement.learning.html_report import html_report
 from tailor.refinement.learning.trust import trust_warnings
 from tailor.refinement.outputs import new_file_mode, write_atomically

@@ -222,7 +222,7 @@ def test_the_risk_sweep_summarizes_each_lambda_on_the_same_situations():
 
 
 def test_refine_cli_charges_the_uncertainty_with_risk(capsys):
-    from tailor.refinement.cli.main import main
+    from tailor.cli.main import main
 
     runs = {}
     for risk in ("0", "1.5"):
@@ -256,7 +256,7 @@ def test_models_without_uncertainty_refine_plainly_by_default_and_refuse_an_expl
     """A model folder trained before the uncertainty existed: the default risk is dropped with a warning,
     --risk > 0 is a one-line error naming the file."""
     from tailor.planner_bridge.bundled import DOMAINS_DIR
-    from tailor.refinement.cli.main import main
+    from tailor.cli.main import main
 
     for path in (DOMAINS_DIR / "kitchen" / "models").glob("*.json"):
         data = json.loads(path.read_text())
@@ -279,7 +279,7 @@ def test_models_without_uncertainty_refine_plainly_by_default_and_refuse_an_expl
 def test_a_risk_lambda_beyond_use_or_a_typo_in_the_sweep_is_a_usage_error(argv, message, capsys):
     """A lambda so large the objective overflows (numpy's warnings on stderr) and an empty item in a sweep
     are refused before any work, as --n-i 1,,2 is."""
-    from tailor.refinement.cli.main import main
+    from tailor.cli.main import main
 
     with pytest.raises(SystemExit) as exit:
         main(argv)

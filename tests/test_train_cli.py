@@ -13,7 +13,7 @@ import pytest
 
 import synthetic_episodes
 from tailor.refinement.models.action_models import load_action_models, load_collision_model
-from tailor.refinement.cli.main import main
+from tailor.cli.main import main
 from tailor.refinement.models.features import compute_features
 from synthetic_episodes import random_params
 from test_reports import assert_self_contained
@@ -154,7 +154,7 @@ def test_only_a_model_with_subgoal_experience_refines_with_the_domains_others(tm
     """--only dribbleBall: its subgoal experience refines `score` situations, which need goToPose (the
     approach): the domain's own model of it, or OUT's where OUT holds one; never the model being learned."""
     from tailor.planner_bridge import resolve_domain_dir
-    from tailor.refinement.cli.train import _companions, _only
+    from tailor.cli.train import _companions, _only
     from tailor.refinement.learning.recipe import load_recipe
 
     domain = resolve_domain_dir("soccer")

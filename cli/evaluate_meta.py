@@ -122,7 +122,7 @@ def run_meta(args: argparse.Namespace, domain_dir: Path, binding, plan, source) 
     from tailor.refinement.progress import run_in_workers
     from tailor.refinement.situations import draw_situations, job_models, situation_sequence
 
-    from tailor.refinement.cli.arguments import announce_models
+    from tailor.cli.arguments import announce_models
 
     target = _out_folder(args, domain_dir, source)
     check_output_dir(target)  # before any work: an output that cannot be written must not cost the evaluation

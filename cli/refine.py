@@ -12,7 +12,7 @@ import math
 import sys
 import time
 
-from tailor.refinement.cli.arguments import (
+from tailor.cli.arguments import (
     add_filter_arguments,
     add_models_argument,
     add_neighbourhood_argument,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from tailor.refinement.cli.arguments import (
+from tailor.cli.arguments import (
     add_backend_arguments,
     add_filter_arguments,
     add_models_argument,
@@ -190,13 +190,13 @@ def _evaluate(args: argparse.Namespace) -> int:
             raise UsageError("--meta and --assertion are two experiments: give one")
         if args.episodes < 20:
             raise UsageError(f"--meta needs at least 20 --episodes to learn from, not {args.episodes}")
-        from tailor.refinement.cli.evaluate_meta import run_meta
+        from tailor.cli.evaluate_meta import run_meta
 
         return run_meta(args, domain_dir, binding, plan, source)
     if args.fresh_episodes is not None or args.out is not None or args.worse_cost is not None:
         raise UsageError("--fresh-episodes, --worse-cost and --out belong to --meta")
     if args.assertion or args.plot:
-        from tailor.refinement.cli.evaluate_assertion import run_assertion
+        from tailor.cli.evaluate_assertion import run_assertion
 
         return run_assertion(args, domain_dir, binding, plan, source.path)
     if args.situations is not None:

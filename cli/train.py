@@ -8,7 +8,7 @@ import logging
 import sys
 from pathlib import Path
 
-from tailor.refinement.cli.arguments import (MAX_EPISODES, add_backend_arguments, backend_session, seed, whole_number,
+from tailor.cli.arguments import (MAX_EPISODES, add_backend_arguments, backend_session, seed, whole_number,
                                             worker_count)
 
 MIN_EPISODES = 8  # a quarter of the episodes is the test set

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from tailor.refinement.cli.arguments import positive_seconds
+from tailor.cli.arguments import positive_seconds
 
 HELP = "plan a PDDL domain/problem pair into a validated partial-order plan with causal links"
 

@@ -3,7 +3,7 @@
 Each command module defines `HELP`, `add_arguments(parser)` and `run(args) -> int`, and keeps heavy imports
 inside `run` so that `tailor plan` does not pay for the simulator or the learners.
 Every project error is printed as one line on stderr and ends the process with its own exit status; other
-diagnostics go through `logging` (tailor.refinement.cli.logs), results to stdout.
+diagnostics go through `logging` (tailor.cli.logs), results to stdout.
 """
 
 from __future__ import annotations
@@ -19,16 +19,16 @@ import threading
 
 from tailor import __version__
 from tailor.errors import OutputFileError, TailorError
-from tailor.refinement.cli.logs import cli_logging, set_verbosity, verbosity_of
+from tailor.cli.logs import cli_logging, set_verbosity, verbosity_of
 
 COMMANDS = {
-    "plan": "tailor.refinement.cli.plan",
-    "train": "tailor.refinement.cli.train",
-    "gather": "tailor.refinement.cli.gather",
-    "refine": "tailor.refinement.cli.refine",
-    "evaluate": "tailor.refinement.cli.evaluate",
-    "coordinate": "tailor.refinement.cli.coordinate",
-    "domains": "tailor.refinement.cli.domains",
+    "plan": "tailor.cli.plan",
+    "train": "tailor.cli.train",
+    "gather": "tailor.cli.gather",
+    "refine": "tailor.cli.refine",
+    "evaluate": "tailor.cli.evaluate",
+    "coordinate": "tailor.cli.coordinate",
+    "domains": "tailor.cli.domains",
 }
 
 EXIT_USAGE = 2

@@ -14,7 +14,7 @@ import sys
 import time
 from pathlib import Path
 
-from tailor.refinement.cli.arguments import (MAX_EPISODES, add_models_argument, announce_models, seed, whole_number,
+from tailor.cli.arguments import (MAX_EPISODES, add_models_argument, announce_models, seed, whole_number,
                                             worker_count)
 
 HELP = "measure implicit coordination of a robot team with learned action models (Ch. 7)"

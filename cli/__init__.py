@@ -1,5 +1,5 @@
 """The `tailor` command line (`main`), one module per subcommand."""
 
-from tailor.refinement.cli.main import main
+from tailor.cli.main import main
 
 __all__ = ["main"]
