@@ -73,8 +73,8 @@ def run(args: argparse.Namespace) -> int:
         summarize_dynamic,
         summarize_static,
     )
-    from tailor.refinement.outputs import check_output_dir
-    from tailor.refinement.progress import run_in_workers
+    from tailor.outputs import check_output_dir
+    from tailor.sims.parallel import run_in_workers
 
     started = time.perf_counter()
     domain_dir = resolve_domain_dir(args.domain)
@@ -82,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
     scene = _scene(binding)
     if args.plot is not None:  # the folder and each picture in it, before minutes of work
         from tailor.refinement.evaluation.coordination_plots import FILES
-        from tailor.refinement.outputs import check_output_file
+        from tailor.outputs import check_output_file
 
         check_output_dir(args.plot)
         for name in FILES:
@@ -118,9 +118,9 @@ def run(args: argparse.Namespace) -> int:
 
         written = draw_all(report, scene.bounds, args.plot)
     if args.json:
-        from tailor.refinement.outputs import json_text
+        from tailor.outputs import json_text
 
-        from tailor.refinement.outputs import versioned
+        from tailor.outputs import versioned
 
         sys.stdout.write(json_text(versioned("coordinate", {**report, "models": str(source.path)})) + "\n")
     else:

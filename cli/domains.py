@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     domains = [describe(DOMAINS_DIR / name) for name in bundled_domains()]
     domains += [describe(Path(resolve_domain_dir(p))) for p in args.paths]
     if args.json:
-        from tailor.refinement.outputs import versioned
+        from tailor.outputs import versioned
 
         sys.stdout.write(json.dumps(versioned("domains", {"simulators": sims, "failed_simulators": registry.failed(),
                                                           "domains": domains}), indent=1) + "\n")

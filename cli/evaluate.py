@@ -176,7 +176,7 @@ def _evaluate(args: argparse.Namespace) -> int:
         summarize_risk_sweep,
     )
     from tailor.refinement.model_store import resolve_models
-    from tailor.refinement.progress import run_in_workers
+    from tailor.sims.parallel import run_in_workers
     from tailor.refinement.situations import draw_situations, job_models, situation_sequence
 
     domain_dir = resolve_domain_dir(args.domain)
@@ -253,7 +253,7 @@ def _evaluate(args: argparse.Namespace) -> int:
         report["horizons"] = summarize_horizons(hrows, HORIZONS)
         report["horizons"]["situations"] = horizon_rows(hrows, {i: objects for _, i, objects in items}, HORIZONS)
     if args.json:
-        from tailor.refinement.outputs import json_text, versioned
+        from tailor.outputs import json_text, versioned
 
         sys.stdout.write(json_text(versioned("evaluate", report)) + "\n")
     else:

@@ -49,7 +49,7 @@ def _print_text(report: dict) -> None:
 
 
 def run_assertion(args: argparse.Namespace, domain_dir, binding, plan, models_dir) -> int:
-    from tailor.refinement.evaluation.assertion import (
+    from tailor.refinement.evaluation.assertion_experiment import (
         AssertionSetup,
         assertion_episode,
         assertion_seed,
@@ -57,11 +57,11 @@ def run_assertion(args: argparse.Namespace, domain_dir, binding, plan, models_di
         summarize_assertion,
     )
     from tailor.refinement.models.action_models import load_success_models
-    from tailor.refinement.progress import run_in_workers
+    from tailor.sims.parallel import run_in_workers
     from tailor.refinement.situations import draw_situations, job_models, situation_sequence
 
     if args.plot:
-        from tailor.refinement.outputs import check_output_file
+        from tailor.outputs import check_output_file
 
         if not args.assertion:
             raise ArgumentValueError("--plot draws the instances of --assertion (Fig. 6.6) or the meta model of "
@@ -96,7 +96,7 @@ def run_assertion(args: argparse.Namespace, domain_dir, binding, plan, models_di
         report["plot"] = str(args.plot)
         report["plot_situations"] = [r["index"] for r in chosen]
     if args.json:
-        from tailor.refinement.outputs import json_text, versioned
+        from tailor.outputs import json_text, versioned
 
         sys.stdout.write(json_text(versioned("evaluate_assertion", report)) + "\n")
     else:

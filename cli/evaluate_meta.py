@@ -118,8 +118,8 @@ def run_meta(args: argparse.Namespace, domain_dir: Path, binding, plan, source) 
     from tailor.refinement.learning.meta_learning import CV_FOLDS, learn_meta_model
     from tailor.refinement.models.action_models import write_json_atomic
     from tailor.refinement.models.meta_model import meta_model_path
-    from tailor.refinement.outputs import check_output_dir, check_output_file, write_atomically
-    from tailor.refinement.progress import run_in_workers
+    from tailor.outputs import check_output_dir, check_output_file, write_atomically
+    from tailor.sims.parallel import run_in_workers
     from tailor.refinement.situations import draw_situations, job_models, situation_sequence
 
     from tailor.cli.arguments import announce_models
@@ -187,7 +187,7 @@ def run_meta(args: argparse.Namespace, domain_dir: Path, binding, plan, source) 
               "episodes": {"training": _rows_json(train_rows), "fresh": _rows_json(fresh_rows)}}
     del report["training"]["training_confusion"]
     if args.json:
-        from tailor.refinement.outputs import json_text, versioned
+        from tailor.outputs import json_text, versioned
 
         sys.stdout.write(json_text(versioned("evaluate_meta", report)) + "\n")
         logging.getLogger(__name__).info("wrote %s", ", ".join(files))

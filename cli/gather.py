@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
     from tailor.errors import DataError
     from tailor.planner_bridge import resolve_domain_dir
     from tailor.refinement.learning.recipe import load_recipe
-    from tailor.refinement.outputs import check_output_dir
+    from tailor.outputs import check_output_dir
     from tailor.sims.shards import stored_gather
 
     recipe = load_recipe(resolve_domain_dir(args.domain))

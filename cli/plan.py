@@ -42,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
     domain, problem = resolve_problem(args.domain, args.problem)
     plan = plan_files(domain, problem, planner=args.planner, timeout=args.timeout)
     if args.json:
-        from tailor.refinement.outputs import versioned
+        from tailor.outputs import versioned
 
         sys.stdout.write(format_json(versioned("plan", plan.to_json())))
     else:

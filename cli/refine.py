@@ -95,7 +95,7 @@ def _execution_json(outcome, success_models=None) -> dict:
 def result_json(prepared, method: str, seed: int, outcomes: dict, decision=None) -> dict:
     """Schema tailor.refine/1: the plan, the free parameters with their ranges and chosen values, and the
     refined and greedy executions in the same structure."""
-    from tailor.refinement.outputs import versioned
+    from tailor.outputs import versioned
 
     refined = outcomes["refined"].refined
     chosen = {p.id: p.value for a in refined.sequence.actions for p in a.params}
@@ -219,7 +219,7 @@ def _nothing_to_refine(prepared, args: argparse.Namespace, simulate: bool) -> in
                      "optimization": []}
         if simulate:
             execution.update(simulated_total=0.0, succeeded=True)
-        from tailor.refinement.outputs import versioned
+        from tailor.outputs import versioned
 
         plan = prepared.plan
         data = {"domain": plan.domain, "problem": plan.problem, "planner": plan.planner, "optimizer": args.optimizer,
@@ -259,10 +259,10 @@ def _meta_model(args: argparse.Namespace, task, source):
 def run(args: argparse.Namespace) -> int:
     from tailor.refinement.pipeline import (GREEDY_HORIZON, dispatched, prepare, refine_and_dispatch, refine_prepared,
                                              resolve_task)
-    from tailor.refinement.progress import showing_progress
+    from tailor.progress import showing_progress
 
     if args.plot:  # before planning and refining: a plot that cannot be written must not cost their time
-        from tailor.refinement.outputs import check_output_file
+        from tailor.outputs import check_output_file
         from tailor.refinement.refine_plots import cost_plot_names
 
         check_output_file(args.plot, ".png")
@@ -315,7 +315,7 @@ def run(args: argparse.Namespace) -> int:
             executions = {"zero": _zero_outcome(prepared, args.seed), **outcomes}
         written = draw_refinement(args.plot, prepared, executions, prepared.binding.entry.views)
     if args.json:
-        from tailor.refinement.outputs import json_text
+        from tailor.outputs import json_text
 
         sys.stdout.write(json_text(result_json(prepared, args.optimizer, args.seed, outcomes, decision)) + "\n")
         if args.plot:  # stdout holds the JSON only

@@ -100,11 +100,11 @@ def run(args: argparse.Namespace) -> int:
     from tailor.planner_bridge import resolve_domain_dir
     from tailor.refinement.binding import BINDING_FILE
     from tailor.errors import BindingError
-    from tailor.refinement.learning.protocol import N_I_CANDIDATES
+    from tailor.refinement.learning.duration_protocol import N_I_CANDIDATES
     from tailor.refinement.learning.recipe import load_recipe
     from tailor.refinement.learning.report import summary_lines
     from tailor.refinement.learning.training import REPORT_FILES, train_domain
-    from tailor.refinement.outputs import check_output_dir, json_text
+    from tailor.outputs import check_output_dir, json_text
     from tailor.sims.shards import stored_gather
 
     recipe = load_recipe(resolve_domain_dir(args.domain))

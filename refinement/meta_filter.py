@@ -26,12 +26,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from tailor.refinement.action_sequence import ActionSequence
+from tailor.refinement.models.meta_model import REFINEMENT_FEATURES
 from tailor.refinement.refine import RefinedSequence
 
 BETTER = "better"  # the class where refinement is applied
-# what the action models predict refinement gains over greedy for the whole sequence: 1 - t_refined / t_greedy,
-# and t_greedy - t_refined in seconds
-REFINEMENT_FEATURES = ("refinement.predicted_gain", "refinement.predicted_seconds")
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,7 @@ import numpy as np
 from tailor.refinement.action_sequence import ActionSequence, ExecutableAction
 from tailor.errors import ArgumentValueError, ModelFileError
 from tailor.refinement.optimizers import FreeParameter, Objective, OptimizationResult, Term, optimize
-from tailor.refinement.progress import progress_bar
+from tailor.progress import progress_bar
 
 # of each free range, kept from every split of the models: 0.031 rad of a full heading range, 4 cm of 8 m (a
 # mobile base's noise: 1 deg, 1 cm)

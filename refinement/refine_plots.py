@@ -14,7 +14,7 @@ LAYER_STYLES = (("-", "tab:blue"), ("--", "tab:orange"), (":", "tab:green"))
 
 def _save(fig, path: Path) -> None:
     """Write the figure atomically, with the permissions of a new file: a reader never sees half a PNG."""
-    from tailor.refinement.outputs import write_atomically
+    from tailor.outputs import write_atomically
 
     write_atomically(path, lambda tmp: fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png"))
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import signal
+import sys
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -178,3 +179,22 @@ def ordered_results(function: Callable, calls: Sequence[tuple], jobs: int = 1) -
         wave = WAVE_PER_WORKER * max(1, effective_n_jobs(n_jobs))
         for start in range(0, len(calls), wave):
             yield from parallel(delayed(function)(*args) for args in calls[start:start + wave])
+
+
+def run_in_workers(function, items, jobs: int, desc: str, progress: bool = True, unit: str = "ep") -> list:
+    """function(*item) for every item, in order, in `jobs` workers of the backend session in force (loky by
+    default, tailor.sims.parallel); one bar for the whole run, on a terminal. Ctrl-C stops the workers."""
+    from tqdm import tqdm
+
+    items = list(items)
+    results = []
+    with tqdm(total=len(items), desc=desc, unit=unit, file=sys.stderr,
+              disable=None if items and progress else True) as bar:
+        ordered = ordered_results(function, items, jobs)
+        try:
+            for result in ordered:
+                results.append(result)
+                bar.update()
+        finally:
+            ordered.close()
+    return results

@@ -211,7 +211,7 @@ def _row(inserted, predicted, plain, with_, plain_t=10.0, with_t=10.0, leg=None)
 
 
 def test_summary_counts_avoided_collisions_needless_assertions_and_table_6_1():
-    from tailor.refinement.evaluation.assertion import summarize_assertion
+    from tailor.refinement.evaluation.assertion_experiment import summarize_assertion
 
     rows = [_row(True, False, "collision", "success"),  # avoided
             _row(True, False, "collision", "collision", leg="final"),  # not avoided

@@ -119,7 +119,7 @@ def test_tiny_evaluation_end_to_end(capsys):
 def test_a_small_evaluation_runs_as_many_horizon_situations_as_episodes(monkeypatch, capsys):
     """Without --horizon-episodes the horizons run on 100 situations, or on --episodes where that is fewer (a
     two-episode run of the arm took minutes on 100 letters)."""
-    from tailor.refinement import progress
+    from tailor.sims import parallel as progress
 
     asked = []
 

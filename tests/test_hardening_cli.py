@@ -274,7 +274,7 @@ def test_absurd_predictions_are_rejected_naming_the_model(soccer, capsys, leaf):
 
 
 def test_json_output_is_strict_json():
-    from tailor.refinement.outputs import json_text
+    from tailor.outputs import json_text
 
     assert json.loads(json_text({"a": float("inf"), "b": [float("nan"), 1.5]})) == {"a": None, "b": [None, 1.5]}
 
@@ -388,7 +388,7 @@ def test_ctrl_c_during_the_renames_completes_them(tmp_path, monkeypatch):
 
 
 def test_ctrl_c_after_the_models_are_written_reports_done(tmp_path, monkeypatch, capsys):
-    from tailor.refinement import outputs
+    from tailor import outputs
 
     def trained(recipe, episodes, seed, out, **kwargs):  # stands in for a training run that wrote its models
         (out / "models").mkdir(parents=True)

@@ -12,7 +12,7 @@ from sklearn.linear_model import LinearRegression
 from tailor.refinement.learning.classifiers import FAIL, SUCCESS, confusion, labels, train_collision_model
 from tailor.errors import DataError
 from tailor.refinement.models.features import compute_features, feature_names, first_examples, intermediate_examples
-from tailor.refinement.learning.protocol import held_out_mae, split_episodes, train_duration_model
+from tailor.refinement.learning.duration_protocol import held_out_mae, split_episodes, train_duration_model
 from synthetic_episodes import gather
 
 OBSERVED = ("x", "y", "phi", "v")  # the observed parameters of the soccer actions (read from the log)

@@ -6,8 +6,8 @@ from __future__ import annotations
 import os
 
 import synthetic_episodes
-from tailor.refinement.learning import protocol
-from tailor.refinement.learning.protocol import train_duration_model
+from tailor.refinement.learning import duration_protocol as protocol
+from tailor.refinement.learning.duration_protocol import train_duration_model
 from tailor.sims.parallel import ordered_results
 
 OBSERVED = ("x", "y", "phi", "v")

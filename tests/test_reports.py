@@ -22,7 +22,7 @@ from tailor.cli.logs import cli_logging, level, verbosity_of
 from tailor.cli.main import COMMANDS, build_parser, main
 from tailor.refinement.learning.html_report import html_report
 from tailor.refinement.learning.trust import trust_warnings
-from tailor.refinement.outputs import new_file_mode, write_atomically
+from tailor.outputs import new_file_mode, write_atomically
 
 PNG = b"\x89PNG\r\n\x1a\n"
 

@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from tailor.refinement.learning.plots import _save  # noqa: E402  (atomic: a temp file renamed into place)
-from tailor.refinement.outputs import write_error  # noqa: E402
+from tailor.outputs import write_error  # noqa: E402
 
 FILES = ("q4_noise.png", "q5_failure_example.png", "q6_communication_fov.png")
 

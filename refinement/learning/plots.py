@@ -40,7 +40,7 @@ REGION_CAPTION = "Where the success classifier of {action} predicts failure, ove
 def plot_mae_vs_n_i(reports: Mapping[str, dict], path: Target) -> None:
     """Validation MAE of models trained on half the episodes, against examples per episode (Fig. 4.5), at the
     default leaf size; hollow where that tree would be too large to store, a star at the chosen n_i and leaf."""
-    from tailor.refinement.learning.protocol import MAX_LEAVES
+    from tailor.refinement.learning.duration_protocol import MAX_LEAVES
 
     fig, ax = plt.subplots(figsize=(8.4, 4.0))
     for index, (action, report) in enumerate(reports.items()):

@@ -21,7 +21,7 @@ from tqdm import tqdm
 
 from tailor.errors import DataError
 from tailor.refinement.learning.classifiers import train_collision_model
-from tailor.refinement.learning.protocol import (
+from tailor.refinement.learning.duration_protocol import (
     EPISODE_FRACTIONS,
     MIN_SAMPLES_LEAF,
     N_I_CANDIDATES,
@@ -33,7 +33,7 @@ from tailor.refinement.learning.report import format_report, rules_sections
 from tailor.refinement.learning.trust import trust_warnings
 from tailor.refinement.models.action_models import COLLISION_SUFFIX
 from tailor.refinement.models.uncertainty import FOLDS
-from tailor.refinement.outputs import check_output_dir, json_text, staged_file, write_error
+from tailor.outputs import check_output_dir, json_text, staged_file, write_error
 from tailor.sims.episode import Episode
 
 FRESH_SEED_OFFSET = 7_919_000  # the fresh test episodes of a classifier use seed + this: no shared episode

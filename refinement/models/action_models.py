@@ -279,7 +279,7 @@ def _reject_constant(name: str):
 def write_json_atomic(path: Path, data: dict) -> None:
     """Write JSON to a temp file beside `path`, then rename it over `path`: never a half-written file; the
     file gets the permissions of any new file (0666 less the umask)."""
-    from tailor.refinement.outputs import write_atomically
+    from tailor.outputs import write_atomically
 
     write_atomically(path, lambda tmp: tmp.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8"))
 

@@ -16,11 +16,13 @@ from pathlib import Path
 import numpy as np
 
 from tailor.errors import ModelFileError, TailorError
-from tailor.refinement.meta_filter import REFINEMENT_FEATURES
 from tailor.refinement.models.action_models import META_FILE, read_json
 from tailor.refinement.models.decision_tree import LabelTree
 
-# /2 judges the window's features and refinement's predicted gain (meta_filter.REFINEMENT_FEATURES), /1 (still
+# what the action models predict refinement gains over greedy for the whole sequence: 1 - t_refined / t_greedy,
+# and t_greedy - t_refined in seconds
+REFINEMENT_FEATURES = ("refinement.predicted_gain", "refinement.predicted_seconds")
+# /2 judges the window's features and refinement's predicted gain (REFINEMENT_FEATURES), /1 (still
 # read) the window's features alone
 META_MODEL_SCHEMA = "tailor.meta_model/2"
 WINDOW_ONLY_SCHEMA = "tailor.meta_model/1"

@@ -7,7 +7,7 @@ model marks invalid gets fitness 0, the lowest; `sel_roulette` is selRoulette wi
 mated pairwise with `tools.cxTwoPoint` on 65% of them
 (`tools.cxBlend` with a single gene, which has no inner cut point) and mutated with `tools.mutGaussian`,
 clipped to the ranges. The loop stops when the best cost has not improved for 50 generations, or after 500
-(a progress bar over the generations where the caller shows progress: tailor.refinement.progress).
+(a progress bar over the generations where the caller shows progress: tailor.progress).
 
 DEAP's operators draw from the `random` module: for the run, their modules' `random` (and this module's `rng`)
 is a private `random.Random(seed)`, so refinement is seeded by its argument only, even where other threads
@@ -33,7 +33,7 @@ import deap.tools.selection  # noqa: F401
 from deap import base, tools
 
 from tailor.refinement.optimizers.objective import Objective, OptimizationResult
-from tailor.refinement.progress import progress_bar
+from tailor.progress import progress_bar
 
 POPULATION_PER_PARAMETER = 25
 ELITE_FRACTION = 0.02

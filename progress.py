@@ -55,24 +55,3 @@ def progress_bar(**kwargs):
     from tqdm import tqdm
 
     return tqdm(file=sys.stderr, disable=None, **kwargs)
-
-
-def run_in_workers(function, items, jobs: int, desc: str, progress: bool = True, unit: str = "ep") -> list:
-    """function(*item) for every item, in order, in `jobs` workers of the backend session in force (loky by
-    default, tailor.sims.parallel); one bar for the whole run, on a terminal. Ctrl-C stops the workers."""
-    from tqdm import tqdm
-
-    from tailor.sims.parallel import ordered_results
-
-    items = list(items)
-    results = []
-    with tqdm(total=len(items), desc=desc, unit=unit, file=sys.stderr,
-              disable=None if items and progress else True) as bar:
-        ordered = ordered_results(function, items, jobs)
-        try:
-            for result in ordered:
-                results.append(result)
-                bar.update()
-        finally:
-            ordered.close()
-    return results
