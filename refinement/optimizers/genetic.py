@@ -9,9 +9,11 @@ mated pairwise with `tools.cxTwoPoint` on 65% of them
 clipped to the ranges. The loop stops when the best cost has not improved for 50 generations, or after 500
 (a progress bar over the generations where the caller shows progress: tailor.progress).
 
-DEAP's operators draw from the `random` module: for the run, their modules' `random` (and this module's `rng`)
-is a private `random.Random(seed)`, so refinement is seeded by its argument only, even where other threads
-draw from the global generator meanwhile (a Dask worker's event loop does), and the caller's state is
+DEAP's operators draw from their modules' `random`: that name is bound, once, to a stand-in that draws from the
+generator of the run in progress in the calling thread or task (a `random.Random(seed)` owned by the call, held
+in a context variable), and from the global generator outside a run. So refinement is seeded by its argument
+only, runs in several threads at once reproduce the serial results draw for draw, other threads drawing from
+the global generator meanwhile (a Dask worker's event loop does) change nothing, and the caller's state is
 untouched. The fitness and individual types are plain classes defined once here, not written into
 `deap.creator`. A generation is evaluated with one vectorized call of the objective.
 """
@@ -23,6 +25,7 @@ import sys
 import time
 from bisect import bisect_right
 from contextlib import contextmanager
+from contextvars import ContextVar
 from itertools import accumulate
 from operator import attrgetter
 
@@ -68,26 +71,35 @@ def fitness(cost: np.ndarray, valid: np.ndarray) -> np.ndarray:
 
 
 DEAP_MODULES = ("deap.tools.crossover", "deap.tools.mutation", "deap.tools.selection")  # they `import random`
-rng = random  # what this module draws from; a private generator during a run (seeded_random)
+_RUN: ContextVar[random.Random | None] = ContextVar("tailor_genetic_random", default=None)
+
+
+def rng():
+    """The generator of the GA run in progress in this thread or task; the `random` module outside a run."""
+    return _RUN.get() or random
+
+
+class _RunRandom:
+    """Stands in for the `random` module inside DEAP's operator modules: its functions are the run's (rng())."""
+
+    def __getattr__(self, name: str):
+        return getattr(rng(), name)
+
+
+for _name in DEAP_MODULES:
+    sys.modules[_name].random = _RunRandom()
 
 
 @contextmanager
 def seeded_random(seed: int):
-    """Make DEAP's operators and this module draw from a private generator seeded with `seed` (the stream of
-    `random.seed(seed)`, draw for draw); the global generator is neither used nor disturbed."""
-    global rng
-    private = random.Random(seed)
-    modules = [sys.modules[name] for name in DEAP_MODULES]
-    saved = [module.random for module in modules], rng
-    for module in modules:
-        module.random = private
-    rng = private
+    """Within this block, in this thread or task, DEAP's operators and this module draw from a private generator
+    seeded with `seed` (the stream of `random.seed(seed)`, draw for draw); no other thread's draws, and not the
+    global generator, are touched."""
+    token = _RUN.set(random.Random(seed))
     try:
         yield
     finally:
-        for module, previous in zip(modules, saved[0]):
-            module.random = previous
-        rng = saved[1]
+        _RUN.reset(token)
 
 
 def sel_roulette(individuals: list, k: int) -> list:
@@ -98,7 +110,7 @@ def sel_roulette(individuals: list, k: int) -> list:
     total = sum(ind.fitness.values[0] for ind in individuals)
     chosen = []
     for _ in range(k):
-        i = bisect_right(cumulative, rng.random() * total)
+        i = bisect_right(cumulative, rng().random() * total)
         if i < len(ranked):  # DEAP appends nothing when rounding puts the spin past the last slot
             chosen.append(ranked[i])
     return chosen
@@ -108,7 +120,7 @@ def toolbox(low: np.ndarray, high: np.ndarray) -> base.Toolbox:
     """DEAP's operators configured for this problem's ranges."""
     n_free = len(low)
     box = base.Toolbox()
-    box.register("individual", lambda: Individual(rng.uniform(lo, hi) for lo, hi in zip(low, high)))
+    box.register("individual", lambda: Individual(rng().uniform(lo, hi) for lo, hi in zip(low, high)))
     box.register("clone", Individual)
     box.register("select", sel_roulette)
     if n_free > 1:
@@ -125,7 +137,7 @@ def _next_generation(box: base.Toolbox, population: list, order: np.ndarray, n_e
     elite = [box.clone(population[i]) for i in order[:n_elite]]
     offspring = [box.clone(ind) for ind in box.select(population, len(population) - n_elite)]
     for a, b in zip(offspring[0::2], offspring[1::2]):
-        if rng.random() < CROSSOVER_PROB:
+        if rng().random() < CROSSOVER_PROB:
             box.mate(a, b)
     bounds = list(zip(low.tolist(), high.tolist()))
     for ind in offspring:
