@@ -3,7 +3,8 @@
 Facts are numbered; a literal is `2 * fact` (the fact holds) or `2 * fact + 1` (it does not), so `literal ^ 1`
 is its negation. Only actions reachable in the relaxed problem (deletes ignored) are grounded; preconditions
 on static facts (no action changes them) are kept apart: the initial state supports them and nothing can
-threaten them.
+threaten them. The world is closed: the initial state supports the negation of every fact it lacks, a static
+one included, so `(not (closed ?p))` holds forever of every port the initial state does not close.
 """
 
 from __future__ import annotations
@@ -120,8 +121,9 @@ class _Schema:
             (self.adds if effect.value.bool_constant_value() else self.deletes).append(_template(effect.fluent))
 
 
-def _holds(kind: str, template, binding: dict, reached, static_false) -> bool:
-    """Whether a precondition can hold in the relaxed problem under the (complete for it) binding."""
+def _holds(kind: str, template, binding: dict, reached, static_true) -> bool:
+    """Whether a precondition can hold in the relaxed problem under the (complete for it) binding: a positive
+    one when its fact is reached, a negative one unless its fact is static and true initially (then forever)."""
     if kind == "false":
         return False
     if kind in ("=", "!="):
@@ -129,10 +131,10 @@ def _holds(kind: str, template, binding: dict, reached, static_false) -> bool:
         return (left == right) == (kind == "=")
     if kind == "+":
         return _bind(template, binding) in reached
-    return _bind(template, binding) not in static_false
+    return _bind(template, binding) not in static_true
 
 
-def _bindings(schema: _Schema, reached: set, by_name: dict, static_false):
+def _bindings(schema: _Schema, reached: set, by_name: dict, static_true):
     """Every binding of the schema's parameters that satisfies its relaxed preconditions, in a fixed order."""
     checks = list(schema.conditions)
     positives = [t for k, t in checks if k == "+"]
@@ -154,7 +156,7 @@ def _bindings(schema: _Schema, reached: set, by_name: dict, static_false):
             for value in schema.domains[free[0]]:
                 yield from extend({**binding, free[0]: value}, index)
             return
-        if all(_holds(k, t, binding, reached, static_false) for k, t in checks if params_of(k, t) <= binding.keys()):
+        if all(_holds(k, t, binding, reached, static_true) for k, t in checks if params_of(k, t) <= binding.keys()):
             yield tuple(binding[p] for p in schema.parameters)
 
     yield from extend({}, 0)
@@ -182,13 +184,14 @@ def ground(problem) -> GroundTask:
     ]
     initial_set = set(initial_facts)
 
-    class _StaticFalse:
-        """The facts no action changes and the initial state lacks: false forever."""
+    class _StaticTrue:
+        """The facts no action changes that hold initially: true forever, so their negations never hold.
+        (A static fact the initial state lacks is false forever: its negation always holds.)"""
 
         def __contains__(self, fact) -> bool:
-            return fact[0] not in changing and fact not in initial_set
+            return fact[0] not in changing and fact in initial_set
 
-    static_false = _StaticFalse()
+    static_true = _StaticTrue()
     reached, by_name = set(initial_facts), {}
     for fact in initial_facts:
         by_name.setdefault(fact[0], []).append(fact)
@@ -197,7 +200,7 @@ def ground(problem) -> GroundTask:
     while changed:  # relaxed reachability: apply every applicable action's adds until nothing new is reached
         changed = False
         for number, schema in enumerate(schemas):
-            for args in list(_bindings(schema, reached, by_name, static_false)):
+            for args in list(_bindings(schema, reached, by_name, static_true)):
                 if (number, args) in grounded:
                     continue
                 grounded[(number, args)] = None

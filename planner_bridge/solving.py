@@ -32,6 +32,11 @@ COMPILATIONS = (
     "GROUNDING",
 )
 MAX_CHAIN = 4
+# Engines whose search ends without a plan only when it has exhausted every reachable state, so that ending
+# is a proof, though they report UNSOLVABLE_INCOMPLETELY: up-pyperplan 1.1 compares its search function with
+# search names and so never says UNSOLVABLE_PROVEN (tailor runs it with its default, complete weighted A*;
+# pyperplan-opt runs A*). Any other engine's UNSOLVABLE_INCOMPLETELY is an engine that gave up, not a proof.
+EXHAUSTIVE = frozenset({"pyperplan", "pyperplan-opt"})
 
 
 @dataclass(frozen=True)
@@ -168,8 +173,11 @@ def solve(problem, planner: str, file: str, on_search: Callable[[], None] | None
         raise PlannerTimeoutError(f"planner '{planner}' ran out of time", file)
     if status == "UNSOLVABLE_PROVEN":
         raise NoPlanError(f"no plan exists (planner '{planner}' proved the goal unreachable)", file)
-    if status == "UNSOLVABLE_INCOMPLETELY":
+    if status == "UNSOLVABLE_INCOMPLETELY" and planner in EXHAUSTIVE:
         raise NoPlanError(f"no plan exists (planner '{planner}' ended its search without one)", file)
+    if status == "UNSOLVABLE_INCOMPLETELY":  # a search limit or an incomplete search: "no plan" is not proved
+        raise PlannerError(f"planner '{planner}' gave up without a plan (it did not prove the goal unreachable)",
+                           file)
     if status == "UNSUPPORTED_PROBLEM":
         raise PlannerUnavailableError(f"planner '{planner}' does not support this problem", file)
     if found is None:

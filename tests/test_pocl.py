@@ -13,7 +13,14 @@ import pytest
 from regenerate_golden import bundled_pairs, pocl_golden_path
 from test_planner_bridge import check_plan, files, read
 
-from tailor.planner_bridge import NoPlanError, PlannerTimeoutError, plan_files, plan_here, render_text
+from tailor.planner_bridge import (
+    NoPlanError,
+    PlannerError,
+    PlannerTimeoutError,
+    plan_files,
+    plan_here,
+    render_text,
+)
 from tailor.planner_bridge.benchmark import closure, compare, orderings, render, width
 from tailor.planner_bridge.pocl import GOAL, INIT, Planner, flaws_of, linearization
 from tailor.planner_bridge.pocl_engine import ALTERNATIVES, scored
@@ -161,6 +168,96 @@ def test_unsolvable_problem_is_no_plan():
     bad = ROOT / "tests" / "fixtures" / "pddl" / "bad"
     with pytest.raises(NoPlanError, match="tailor-pocl"):
         plan_here(bad / "domain.pddl", bad / "unsolvable_problem.pddl", planner="pocl")
+
+
+# --- issue 34: negative preconditions on static predicates, and engines that give up -----------------------
+
+
+FERRY_PLAN = (
+    ";; domain ferry2, problem ferry2-1, planner tailor-pocl\n"
+    "Initial 0 : (boat-at a) (box-at x a) (free) (box-at y b)\n"
+    "Step 1 : (pick x a)\n"
+    "    0 -> (boat-at a)\n"
+    "    0 -> (box-at x a)\n"
+    "    0 -> (free)\n"
+    "Step 2 : (sail a b)\n"
+    "    0 -> (boat-at a)\n"
+    "Step 3 : (drop x b)\n"
+    "    1 -> (holding x)\n"
+    "    2 -> (boat-at b)\n"
+    "Step 4 : (pick y b)\n"
+    "    0 -> (box-at y b)\n"
+    "    2 -> (boat-at b)\n"
+    "    3 -> (free)\n"
+    "Step 5 : (sail b a)\n"
+    "    2 -> (boat-at b)\n"
+    "Step 6 : (drop y a)\n"
+    "    4 -> (holding y)\n"
+    "    5 -> (boat-at a)\n"
+    "Goal :\n"
+    "    3 -> (box-at x b)\n"
+    "    6 -> (box-at y a)\n"
+    "Orderings : 1<2 2<3 3<4 4<5 5<6\n"
+)
+
+
+def test_a_negative_precondition_on_a_static_predicate_is_supported_initially():
+    # (not (closed ?b)) of sail: no action changes `closed`, and the closed world makes it true initially of
+    # every port but c. The grounder had the negation inverted: it kept only the sails *to* c, and POCL said
+    # "no plan". (No sail leaves c: the boat never gets there.)
+    task = ground(read("ferry2", "p01"))
+    sails = {action.args: action for action in task.actions if action.name == "sail"}
+    assert sorted(sails) == [("a", "b"), ("b", "a")]
+    closed_b = 2 * task.facts.index(("closed", "b")) + 1  # the literal (not (closed b))
+    assert closed_b in sails[("a", "b")].static and closed_b not in sails[("a", "b")].preconditions
+    assert task.initially(closed_b)
+
+
+def test_ferry_with_a_closed_port_plans_as_pyperplan_does():
+    plan = plan_here(*files("ferry2", "p01"), planner="pocl")
+    assert render_text(plan) == FERRY_PLAN
+    check_plan(read("ferry2", "p01"), plan)  # valid, and links and orderings checked independently
+    optimal = plan_here(*files("ferry2", "p01"), planner="pyperplan-opt")  # A* with LM-cut
+    assert len(plan.steps) == len(optimal.steps) == 6
+
+
+def test_cli_plans_the_ferry_with_pocl(capsys):
+    from tailor.cli.main import main
+
+    assert main(["plan", *map(str, files("ferry2", "p01")), "--planner", "pocl"]) == 0
+    assert capsys.readouterr().out == FERRY_PLAN
+
+
+def test_the_engine_gives_up_at_its_node_limit():
+    from unified_planning.shortcuts import OneshotPlanner
+
+    from tailor.planner_bridge.pocl_engine import register
+
+    register()
+    with OneshotPlanner(name="tailor-pocl", params={"node_limit": 5}) as engine:
+        result = engine.solve(read("ferry2", "p01"))
+    assert result.status.name == "UNSOLVABLE_INCOMPLETELY" and result.plan is None
+
+
+@pytest.mark.parametrize("planner", ["pocl", "tailor-pocl"])
+def test_an_engine_that_gives_up_is_not_said_to_have_proved_no_plan(monkeypatch, planner):
+    from tailor.planner_bridge import solving
+
+    monkeypatch.setattr(solving, "_search", lambda name, problem: ("UNSOLVABLE_INCOMPLETELY", None))
+    with pytest.raises(PlannerError) as info:
+        plan_here(*files("ferry2", "p01"), planner=planner)
+    assert not isinstance(info.value, NoPlanError) and info.value.exit_code == 1
+    assert info.value.message == ("planner 'tailor-pocl' gave up without a plan (it did not prove the goal "
+                                  "unreachable)")
+
+
+def test_pyperplan_ending_its_search_is_a_proof(monkeypatch):
+    # up-pyperplan reports UNSOLVABLE_INCOMPLETELY even when its complete search has exhausted the states
+    from tailor.planner_bridge import solving
+
+    monkeypatch.setattr(solving, "_search", lambda name, problem: ("UNSOLVABLE_INCOMPLETELY", None))
+    with pytest.raises(NoPlanError, match="ended its search without one"):
+        plan_here(*files("ferry2", "p01"), planner="pyperplan")
 
 
 def test_worker_timeout_applies_to_pocl():
