@@ -17,7 +17,6 @@ from pathlib import Path
 from tailor.cli.arguments import (MAX_EPISODES, add_models_argument, announce_models, seed, whole_number,
                                             worker_count)
 
-HELP = "measure implicit coordination of a robot team with learned action models (Ch. 7)"
 DEFAULT_EPISODES = 200
 MAX_ROBOTS = 8
 MAX_REPEATS = 31

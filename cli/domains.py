@@ -6,7 +6,6 @@ import argparse
 import json
 import sys
 
-HELP = "list installed simulators and bundled domains, and what each can do (plan, train, refine, evaluate)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -18,7 +17,6 @@ def describe(domain_dir) -> dict:
     """What the domain in `domain_dir` provides: problems, binding, simulator, models, recipe, evaluation."""
     from tailor.errors import TailorError
     from tailor.refinement.binding import BINDING_FILE, load_domain_binding
-    from tailor.refinement.evaluation.experiments import evaluation_plan
     from tailor.refinement.learning.recipe import recipe_from_binding
 
     problems = sorted(p.stem for p in (domain_dir / "problems").glob("*.pddl"))
@@ -35,7 +33,7 @@ def describe(domain_dir) -> dict:
     info["simulator"] = binding.simulator
     info["models"] = sorted(p.name for p in (domain_dir / "models").glob("*.json"))
     for capability, check in (("train", lambda: recipe_from_binding(binding, domain_dir)),
-                              ("evaluate", lambda: evaluation_plan(binding))):
+                              ("evaluate", binding.require_evaluation)):
         try:
             check()
             info["can"].append(capability)

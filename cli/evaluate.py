@@ -21,7 +21,6 @@ from tailor.cli.arguments import (
     worker_count,
 )
 
-HELP = "measure refined vs greedy execution in the simulator over random situations"
 
 HORIZONS = (1, 2, 3, 4)
 HORIZON_EPISODES = 100  # situations of the horizons experiment (Table 5.3) without --horizon-episodes
@@ -166,7 +165,6 @@ def _evaluate(args: argparse.Namespace) -> int:
     from tailor.refinement.binding import load_domain_binding
     from tailor.refinement.evaluation.experiments import (
         comparison_episode,
-        evaluation_plan,
         horizon_episode,
         horizon_rows,
         situation_rows,
@@ -182,7 +180,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     domain_dir = resolve_domain_dir(args.domain)
     binding = load_domain_binding(domain_dir)
     source = resolve_models(domain_dir, args.models)
-    plan = evaluation_plan(binding)
+    plan = binding.require_evaluation()
     from tailor.errors import UsageError
 
     if args.meta:
@@ -214,7 +212,7 @@ def _evaluate(args: argparse.Namespace) -> int:
         return draw_situations(domain_dir, binding, generator, seeds, args.seed, planned, source.path)
 
     items = situations(plan.comparison, args.episodes)
-    use_filter = plan.filter if args.filter is None else args.filter
+    use_filter = binding.refinement.filter if args.filter is None else args.filter
     if use_filter:  # a missing or bad meta model fails before any work
         from tailor.refinement.models.meta_model import load_meta_model
 
@@ -231,8 +229,8 @@ def _evaluate(args: argparse.Namespace) -> int:
         risk = resolve_risk(args.risk, models)
         if any(args.risk_sweep):
             resolve_risk(max(args.risk_sweep), models)
-    neighbourhood = plan.neighbourhood if args.neighbourhood is None else args.neighbourhood
-    rows = run_in_workers(comparison_episode, [(job, i, objects, i < args.oracle_episodes, plan.zero_baseline,
+    neighbourhood = binding.refinement.neighbourhood if args.neighbourhood is None else args.neighbourhood
+    rows = run_in_workers(comparison_episode, [(job, i, objects, i < args.oracle_episodes, binding.refinement.zero_baseline,
                                                 use_filter, risk, args.risk_sweep, neighbourhood)
                                                for job, i, objects in items], args.jobs, "greedy vs refined",
                           getattr(args, "progress", True))

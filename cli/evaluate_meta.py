@@ -144,7 +144,7 @@ def run_meta(args: argparse.Namespace, domain_dir: Path, binding, plan, source) 
 
         job, _, objects = train_items[0]
         risk = resolve_risk(args.risk, job_models(job, situation_sequence(job, objects)).values())
-    neighbourhood = plan.neighbourhood if args.neighbourhood is None else args.neighbourhood
+    neighbourhood = binding.refinement.neighbourhood if args.neighbourhood is None else args.neighbourhood
     announce_models("evaluate", source)
     progress = getattr(args, "progress", True)
     train_rows = run_in_workers(meta_episode, [(j, i, o, META_HORIZON, risk, neighbourhood)

@@ -15,7 +15,6 @@ from pathlib import Path
 from tailor.cli.arguments import (MAX_EPISODES, MAX_SEED, add_backend_arguments, backend_session, seed,
                                              worker_count)
 
-HELP = "simulate episodes A..B-1 of the domain's experience scenarios and keep them as shards for `tailor train`"
 
 
 def seed_range(text: str) -> tuple[int, int]:

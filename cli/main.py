@@ -1,7 +1,7 @@
 """The `tailor` command line: one subcommand per stage, looked up in a registry.
 
-Each command module defines `HELP`, `add_arguments(parser)` and `run(args) -> int`, and keeps heavy imports
-inside `run` so that `tailor plan` does not pay for the simulator or the learners.
+Each command module defines `add_arguments(parser)` and `run(args) -> int`; only the module of the command
+given is imported, so that `tailor plan` does not pay for the optimizers, the simulators or the learners.
 Every project error is printed as one line on stderr and ends the process with its own exit status; other
 diagnostics go through `logging` (tailor.cli.logs), results to stdout.
 """
@@ -21,14 +21,21 @@ from tailor import __version__
 from tailor.errors import OutputFileError, TailorError
 from tailor.cli.logs import cli_logging, set_verbosity, verbosity_of
 
-COMMANDS = {
-    "plan": "tailor.cli.plan",
-    "train": "tailor.cli.train",
-    "gather": "tailor.cli.gather",
-    "refine": "tailor.cli.refine",
-    "evaluate": "tailor.cli.evaluate",
-    "coordinate": "tailor.cli.coordinate",
-    "domains": "tailor.cli.domains",
+COMMANDS = {  # name: (module, one line of help); a module defines add_arguments(parser) and run(args) -> int
+    "plan": ("tailor.cli.plan",
+              "plan a PDDL domain/problem pair into a validated partial-order plan with causal links"),
+    "train": ("tailor.cli.train",
+              "gather experience in the simulator and learn the action models (durations, success classifiers)"),
+    "gather": ("tailor.cli.gather",
+              "simulate episodes A..B-1 of the domain's experience scenarios and keep them as shards for `tailor train`"),
+    "refine": ("tailor.cli.refine",
+              "refine the free parameters of a plan for the fastest predicted execution, optionally simulate it"),
+    "evaluate": ("tailor.cli.evaluate",
+              "measure refined vs greedy execution in the simulator over random situations"),
+    "coordinate": ("tailor.cli.coordinate",
+              "measure implicit coordination of a robot team with learned action models (Ch. 7)"),
+    "domains": ("tailor.cli.domains",
+              "list installed simulators and bundled domains, and what each can do (plan, train, refine, evaluate)"),
 }
 
 EXIT_USAGE = 2
@@ -95,30 +102,35 @@ def _verbosity_options(parser: argparse.ArgumentParser, default) -> None:
                         help="more on stderr: stages and timings (debug lines)")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every command's one line of help; of `command` in full (its module imported): a command
+    pays for no other command's imports (`tailor plan` loads neither the optimizers nor the simulators)."""
     parser = Parser(prog="tailor", description=DESCRIPTION, epilog=f"{_examples()}\n\n{READ_MORE}",
                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"tailor {__version__}")
     _verbosity_options(parser, 0)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", title="commands")
-    for name, module_name in COMMANDS.items():
-        try:
-            module = importlib.import_module(module_name)
-        except ModuleNotFoundError as exc:  # a command not built yet must not break the others
-            if exc.name != module_name:
-                raise
+    for name, (module_name, summary) in COMMANDS.items():
+        if name != command:
+            sub.add_parser(name, help=summary)
             continue
-        command = sub.add_parser(name, help=module.HELP, description=getattr(module, "DESCRIPTION", module.HELP))
-        module.add_arguments(command)
-        _verbosity_options(command, argparse.SUPPRESS)  # also after the command: tailor train DOMAIN -q
-        command.set_defaults(run=module.run, parser=command)
+        module = importlib.import_module(module_name)
+        parsed = sub.add_parser(name, help=summary, description=getattr(module, "DESCRIPTION", summary))
+        module.add_arguments(parsed)
+        _verbosity_options(parsed, argparse.SUPPRESS)  # also after the command: tailor train DOMAIN -q
+        parsed.set_defaults(run=module.run, parser=parsed)
     return parser
+
+
+def command_of(argv: list[str]) -> str | None:
+    """The command `argv` names: its first word that is not an option (tailor's own options take no value)."""
+    return next((word for word in argv if not word.startswith("-")), None)
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     with cli_logging(verbosity_of(argv)) as log:  # before parsing: argument types may log (--jobs capped)
-        args, extras = build_parser().parse_known_args(argv)
+        args, extras = build_parser(command_of(argv)).parse_known_args(argv)
         if extras:  # said by the command's parser (`tailor plan: error: ...`), not the top one
             args.parser.error(f"unrecognized arguments: {' '.join(extras)}")
         log.prog = f"tailor {args.command}"

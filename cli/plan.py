@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
 from tailor.cli.arguments import positive_seconds
-
-HELP = "plan a PDDL domain/problem pair into a validated partial-order plan with causal links"
+from tailor.outputs import versioned
+from tailor.planner_bridge import plan_files, render_text, resolve_problem
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -35,15 +36,9 @@ def format_json(data: dict) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    import sys
-
-    from tailor.planner_bridge import plan_files, render_text, resolve_problem
-
     domain, problem = resolve_problem(args.domain, args.problem)
     plan = plan_files(domain, problem, planner=args.planner, timeout=args.timeout)
     if args.json:
-        from tailor.outputs import versioned
-
         sys.stdout.write(format_json(versioned("plan", plan.to_json())))
     else:
         sys.stdout.write(render_text(plan))

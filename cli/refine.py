@@ -12,6 +12,14 @@ import math
 import sys
 import time
 
+from tailor.outputs import check_output_file, json_text, versioned
+from tailor.planner_bridge import render_text
+from tailor.progress import showing_progress
+from tailor.refinement import pipeline
+from tailor.refinement.models.meta_model import load_meta_model
+from tailor.refinement.optimizers import OPTIMIZERS
+from tailor.refinement.refine import predicted_success
+from tailor.refinement.refine_plots import cost_plot_names, draw_refinement
 from tailor.cli.arguments import (
     add_filter_arguments,
     add_models_argument,
@@ -23,12 +31,9 @@ from tailor.cli.arguments import (
     whole_number,
 )
 
-HELP = "refine the free parameters of a plan for the fastest predicted execution, optionally simulate it"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from tailor.refinement.optimizers import OPTIMIZERS
-
     parser.add_argument("domain", metavar="DOMAIN", help="domain.pddl file, the folder holding it, or the name of a bundled domain (see `tailor domains`)")
     parser.add_argument("problem", metavar="PROBLEM", help="problem .pddl file, or the name of one of its problems")
     parser.add_argument("--optimizer", choices=sorted(OPTIMIZERS), default="analytic",
@@ -59,8 +64,6 @@ def _fmt_param(p) -> str:
 
 
 def _execution_json(outcome, success_models=None) -> dict:
-    from tailor.refinement.refine import predicted_success
-
     refined, simulated = outcome.refined, outcome.simulated
     success = predicted_success(refined.sequence, success_models) if success_models else None
     actions = []
@@ -92,30 +95,26 @@ def _execution_json(outcome, success_models=None) -> dict:
     return data
 
 
-def result_json(prepared, method: str, seed: int, outcomes: dict, decision=None) -> dict:
+def result_json(result, method: str, seed: int) -> dict:
     """Schema tailor.refine/1: the plan, the free parameters with their ranges and chosen values, and the
     refined and greedy executions in the same structure."""
-    from tailor.outputs import versioned
-
-    refined = outcomes["refined"].refined
-    chosen = {p.id: p.value for a in refined.sequence.actions for p in a.params}
-    greedy = outcomes["greedy"].refined
-    greedy_values = {p.id: p.value for a in greedy.sequence.actions for p in a.params}
+    chosen = {p.id: p.value for a in result.refined.refined.sequence.actions for p in a.params}
+    greedy_values = {p.id: p.value for a in result.greedy.refined.sequence.actions for p in a.params}
     data = {
-        "domain": prepared.plan.domain, "problem": prepared.plan.problem, "planner": prepared.plan.planner,
-        "optimizer": method, "horizon": refined.horizon, "seed": seed, "models": str(prepared.task.models_dir),
-        "plan": prepared.plan.to_json(),
+        "domain": result.plan.domain, "problem": result.plan.problem, "planner": result.plan.planner,
+        "optimizer": method, "horizon": result.refined.refined.horizon, "seed": seed, "models": str(result.models_dir),
+        "plan": result.plan.to_json(),
         # full precision: the printed values reproduce the prediction (an optimum may lie on a split of a tree)
         "free_parameters": [{"id": p.id, "low": p.low, "high": p.high, "value": chosen[p.id],
                              "greedy": greedy_values[p.id]}
-                            for p in prepared.sequence.free_parameters()],
+                            for p in result.sequence.free_parameters()],
     }
-    if prepared.assertions:
-        data["assertions"] = [a.to_json() for a in prepared.assertions]
-    if decision is not None:  # the meta filter (Sec. 5.5.4): refined, or greedy kept
-        data["filter"] = decision.to_json()
-    data["refined"] = _execution_json(outcomes["refined"], prepared.success_models)
-    data["greedy"] = _execution_json(outcomes["greedy"], prepared.success_models)
+    if result.assertions:
+        data["assertions"] = [a.to_json() for a in result.assertions]
+    if result.decision is not None:  # the meta filter (Sec. 5.5.4): refined, or greedy kept
+        data["filter"] = result.decision.to_json()
+    data["refined"] = _execution_json(result.refined, result.success_models)
+    data["greedy"] = _execution_json(result.greedy, result.success_models)
     return versioned("refine", data)
 
 
@@ -124,25 +123,25 @@ def _gain(refined: float, greedy: float) -> str:
     return f"{100 * (1 - refined / greedy):.1f}%" if greedy > 0 else "-"
 
 
-def _print_text(prepared, method: str, outcomes: dict, decision=None) -> None:
-    from tailor.planner_bridge import render_text
-
+def _print_text(result, method: str) -> None:
+    """The plan, the instantiated sequence, the free parameters chosen and the durations, as a table."""
     out = sys.stdout.write
-    plan = prepared.plan
+    plan, decision = result.plan, result.decision
+    outcomes = {"greedy": result.greedy, "refined": result.refined}
     out(f"Plan ({plan.planner}) for {plan.domain}/{plan.problem}:\n{render_text(plan)}\n")
-    asserted = " and subgoals asserted" if prepared.assertions else ""
+    asserted = " and subgoals asserted" if result.assertions else ""
     out(f"Instantiated action sequence{asserted} (free parameters as [low, high]):\n")
-    for a in prepared.sequence.actions:
+    for a in result.sequence.actions:
         out(f"  {a.step} {a.action:<13} {a.pddl}\n      {' '.join(_fmt_param(p) for p in a.params)}\n")
         if a.guard:
             out(f"      guarded by success model {a.guard} (Alg. 6: invalid where it predicts failure)\n")
         if a.origin:
             out(f"      inserted: {a.origin}\n")
-    for check in prepared.assertions:
+    for check in result.assertions:
         out(f"Subgoal assertion, step {check.step} {check.pddl}: {check.reason()}\n")
     if decision is not None:
         out(f"Meta filter (Sec. 5.5.4): {decision.reason}\n")
-    free = prepared.sequence.free_parameters()
+    free = result.sequence.free_parameters()
     risk, around = outcomes["refined"].refined.risk, outcomes["refined"].refined.neighbourhood
     names = [("greedy", "greedy (h=1)"),
              ("refined", f"refined (h={outcomes['refined'].refined.horizon}, {method}"
@@ -154,15 +153,16 @@ def _print_text(prepared, method: str, outcomes: dict, decision=None) -> None:
         out("\nFree parameters chosen:\n")
         out(f"  {'parameter':<16}" + "".join(f"{label:>{width}}" for _, label in names) + "\n")
         for p in free:
+            angle = result.binding.entry.quantity(p.id).angle  # declared by the simulator, not guessed from a name
             cells = []
             for key, _ in names:
                 value = next(q.value for a in outcomes[key].refined.sequence.actions for q in a.params if q.id == p.id)
-                cells.append(f"{value:.3f} ({math.degrees(value):.0f}°)" if p.name.startswith("phi") else f"{value:.3f}")
+                cells.append(f"{value:.3f} ({math.degrees(value):.0f}°)" if angle else f"{value:.3f}")
             out(f"  {p.id:<16}" + "".join(f"{c:>{width}}" for c in cells) + "\n")
     simulate = all(outcomes[k].simulated is not None for k, _ in names)
     out("\nDurations (s), predicted" + (" / simulated" if simulate else "") + ":\n")
     out(f"  {'action':<24}" + "".join(f"{label:>{width}}" for _, label in names) + "\n")
-    for k, action in enumerate(prepared.sequence.actions):
+    for k, action in enumerate(result.sequence.actions):
         cells = []
         for key, _ in names:
             o = outcomes[key]
@@ -193,135 +193,61 @@ def _print_text(prepared, method: str, outcomes: dict, decision=None) -> None:
         out(f"Optimizer: {w.method}, {1000 * w.seconds:.1f} ms, {w.evaluations} evaluations{note}\n")
 
 
-def _zero_outcome(prepared, seed: int):
-    """Every free parameter zero (clipped into its range), dispatched: the baseline of Fig. 5.14."""
-    from tailor.refinement.dispatch import dispatch
-    from tailor.refinement.evaluation.experiments import zero_assignment
-    from tailor.refinement.pipeline import Outcome
-    from tailor.refinement.refine import RefinedSequence, predicted_durations
-
-    sequence = prepared.sequence.bind(zero_assignment(prepared.sequence))
-    predicted = predicted_durations(sequence, prepared.models)
-    return Outcome(RefinedSequence(sequence, predicted, (), 0), dispatch(sequence, seed=seed))
-
-
 NOTHING_TO_REFINE = "the goal holds in the initial state: the plan is empty, nothing to refine or simulate"
 
 
-def _nothing_to_refine(prepared, args: argparse.Namespace, simulate: bool) -> int:
+def _nothing_to_refine(result, args: argparse.Namespace) -> int:
     """An empty plan is a success in every mode: it is printed, with zero durations (and, asked to simulate,
     a trivially successful execution); no plot is drawn, since there is no trajectory."""
+    plan = result.plan
     if args.plot:
         logging.getLogger(__name__).warning("%s not written: %s", args.plot, NOTHING_TO_REFINE)
-    if args.json:
-        execution = {"horizon": args.horizon, "risk": args.risk or 0.0, "neighbourhood": args.neighbourhood or 0.0,
-                     "actions": [], "predicted_total": 0.0,
-                     "optimization": []}
-        if simulate:
-            execution.update(simulated_total=0.0, succeeded=True)
-        from tailor.outputs import versioned
-
-        plan = prepared.plan
-        data = {"domain": plan.domain, "problem": plan.problem, "planner": plan.planner, "optimizer": args.optimizer,
-                "horizon": args.horizon, "seed": args.seed, "models": str(prepared.task.models_dir),
-                "plan": plan.to_json(), "free_parameters": [],
-                "refined": execution, "greedy": {**execution, "horizon": 1, "risk": 0.0, "neighbourhood": 0.0},
-                "note": NOTHING_TO_REFINE}
-        sys.stdout.write(json.dumps(versioned("refine", data), indent=1, allow_nan=False) + "\n")
-    else:
-        from tailor.planner_bridge import render_text
-
-        plan = prepared.plan
+    if not args.json:
         sys.stdout.write(f"Plan ({plan.planner}) for {plan.domain}/{plan.problem}:\n{render_text(plan)}\n"
                          f"Nothing to refine: {NOTHING_TO_REFINE}.\n")
+        return 0
+    execution = {"horizon": args.horizon, "risk": args.risk or 0.0, "neighbourhood": args.neighbourhood or 0.0,
+                 "actions": [], "predicted_total": 0.0, "optimization": []}
+    if args.simulate or args.plot:
+        execution.update(simulated_total=0.0, succeeded=True)
+    data = {"domain": plan.domain, "problem": plan.problem, "planner": plan.planner, "optimizer": args.optimizer,
+            "horizon": args.horizon, "seed": args.seed, "models": str(result.models_dir), "plan": plan.to_json(),
+            "free_parameters": [], "refined": execution,
+            "greedy": {**execution, "horizon": 1, "risk": 0.0, "neighbourhood": 0.0}, "note": NOTHING_TO_REFINE}
+    sys.stdout.write(json.dumps(versioned("refine", data), indent=1, allow_nan=False) + "\n")
     return 0
 
 
-def _meta_model(args: argparse.Namespace, task, source):
-    """The meta action model when the filter is on (--filter, else the binding's [evaluation] filter)."""
-    use = args.filter
-    if use is None:
-        from tailor.refinement.evaluation.experiments import binding_filter
-        from tailor.refinement.pipeline import load_binding
-
-        use = binding_filter(load_binding(task))
-    if not use:
-        return None
-    from tailor.refinement.models.meta_model import load_meta_model
-
-    meta = load_meta_model(source.path)
-    if meta.horizon != args.horizon and args.horizon > 1:
-        logging.getLogger(__name__).warning("the meta model judges refinement with h=%d, not the h=%d asked for",
-                                            meta.horizon, args.horizon)
-    return meta
-
-
 def run(args: argparse.Namespace) -> int:
-    from tailor.refinement.pipeline import (GREEDY_HORIZON, dispatched, prepare, refine_and_dispatch, refine_prepared,
-                                             resolve_task)
-    from tailor.progress import showing_progress
-
+    """Read the task once, run the driver, format its result (text or JSON) and draw it (--plot)."""
     if args.plot:  # before planning and refining: a plot that cannot be written must not cost their time
-        from tailor.outputs import check_output_file
-        from tailor.refinement.refine_plots import cost_plot_names
-
-        check_output_file(args.plot, ".png")
-        for companion in cost_plot_names(args.plot):  # (which one is drawn is known once the plan is instantiated)
-            check_output_file(companion, ".png")
-    from dataclasses import replace
-
-    from tailor.refinement.model_store import resolve_models
-
-    log = logging.getLogger(__name__)
+        for path in (args.plot, *cost_plot_names(args.plot)):  # (which is drawn is known once instantiated)
+            check_output_file(path, ".png")
+    inputs = pipeline.read_task(pipeline.resolve_task(args.domain, args.problem, args.belief), args.models)
+    use_filter = inputs.binding.refinement.filter if args.filter is None else args.filter
+    meta = load_meta_model(inputs.models.path) if use_filter else None  # a bad one fails before planning
+    options = pipeline.Options(horizon=args.horizon, optimizer=args.optimizer, seed=args.seed, risk=args.risk,
+                               neighbourhood=args.neighbourhood, filter=args.filter, zero=None if args.plot else False,
+                               simulate=args.simulate or bool(args.plot), planner=args.planner, timeout=args.timeout)
     started = time.perf_counter()
-    task = resolve_task(args.domain, args.problem, args.belief)
-    source = resolve_models(task.domain_dir, args.models)
-    task = replace(task, models=source.path)
-    meta = _meta_model(args, task, source)  # a missing or bad meta model fails before planning
-    prepared = prepare(task, args.planner, args.timeout)
-    log.debug("planned, instantiated and loaded the models in %.2f s", time.perf_counter() - started)
-    simulate = args.simulate or bool(args.plot)
-    if not prepared.sequence.actions:
-        return _nothing_to_refine(prepared, args, simulate)
-    if simulate:  # the scene is checked before refining: a scene object the simulator lacks fails at once
-        from tailor.refinement.dispatch import check_scene
-
-        check_scene(prepared.sequence, prepared.binding.file)
-    from tailor.refinement.refine import resolve_risk
-
-    from tailor.refinement.evaluation.experiments import binding_neighbourhood
-
-    risk = resolve_risk(args.risk, prepared.models.values())
-    neighbourhood = binding_neighbourhood(prepared.binding) if args.neighbourhood is None else args.neighbourhood
-    method, seed = args.optimizer, args.seed
-    decision = None
     with showing_progress(getattr(args, "progress", True)):  # the genetic algorithm takes seconds per window
-        outcomes = {"greedy": refine_and_dispatch(prepared, GREEDY_HORIZON, method, seed, simulate)}
-        refined = refine_prepared(prepared, args.horizon, method, seed, risk, neighbourhood)
-        if meta is not None and args.horizon > GREEDY_HORIZON:  # refine, or keep greedy (Sec. 5.5.4)
-            from tailor.refinement.meta_filter import decide
-
-            decision = decide(meta, outcomes["greedy"].refined, prepared.models, refined)
-        outcomes["refined"] = (dispatched(refined, seed, simulate) if decision is None or decision.refine
-                               else outcomes["greedy"])
-    log.debug("refined greedy and with h=%d%s in %.2f s", args.horizon,
-              " and simulated both" if simulate else "", time.perf_counter() - started)
-    announce_models("refine", source)  # once the models have made their predictions: an error stays one line
+        result = pipeline.run(inputs, options, meta=meta)
+    logging.getLogger(__name__).debug("planned and refined greedy and with h=%d in %.2f s", args.horizon,
+                                      time.perf_counter() - started)
+    if result.empty:
+        return _nothing_to_refine(result, args)
+    announce_models("refine", inputs.models)  # once the models have made their predictions: an error stays one line
+    written = ()
     if args.plot:
-        from tailor.refinement.refine_plots import draw_refinement
-
-        executions = dict(outcomes)
-        if prepared.binding.evaluation.get("zero_baseline") and prepared.sequence.free_parameters():
-            executions = {"zero": _zero_outcome(prepared, args.seed), **outcomes}
-        written = draw_refinement(args.plot, prepared, executions, prepared.binding.entry.views)
+        executions = {"greedy": result.greedy, "refined": result.refined}
+        if result.zero is not None:
+            executions = {"zero": result.zero, **executions}
+        written = draw_refinement(args.plot, result, executions, inputs.binding.entry.views)
     if args.json:
-        from tailor.outputs import json_text
-
-        sys.stdout.write(json_text(result_json(prepared, args.optimizer, args.seed, outcomes, decision)) + "\n")
-        if args.plot:  # stdout holds the JSON only
+        sys.stdout.write(json_text(result_json(result, args.optimizer, args.seed)) + "\n")
+        if written:  # stdout holds the JSON only
             logging.getLogger(__name__).info("wrote %s", ", ".join(str(path) for path in written))
     else:
-        _print_text(prepared, args.optimizer, outcomes, decision)
-        if args.plot:
-            sys.stdout.write("".join(f"Wrote {path}\n" for path in written))
+        _print_text(result, args.optimizer)
+        sys.stdout.write("".join(f"Wrote {path}\n" for path in written))
     return 0

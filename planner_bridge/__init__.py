@@ -1,7 +1,12 @@
-"""PDDL in, a validated partial-order plan with causal links out (Sec. 5.2 of the dissertation)."""
+"""PDDL in, a validated partial-order plan with causal links out (Sec. 5.2 of the dissertation).
 
-from tailor.planner_bridge.abstract_plan import GOAL, INITIAL, AbstractPlan, CausalLink, Step
-from tailor.planner_bridge.bridge import DEFAULT_PLANNER, plan_files, plan_here
+    task = read_pddl(domain, problem)      # each file read once and checked (PDDLTask: texts, signature, names)
+    plan = plan_pddl(task)                 # planned in a child process (plan_files(domain, problem): both steps)
+    problem = parse_task(task)             # the unified-planning Problem, in this process, from the same texts
+"""
+
+from tailor.planner_bridge.abstract_plan import GOAL, INITIAL, AbstractPlan, CausalLink, Step, render_text
+from tailor.planner_bridge.bridge import plan_files, plan_pddl
 from tailor.planner_bridge.bundled import bundled_domains, bundled_problems, resolve_domain_dir, resolve_problem
 from tailor.errors import (
     InputFileError,
@@ -12,7 +17,8 @@ from tailor.errors import (
     PlannerTimeoutError,
     PlannerUnavailableError,
 )
-from tailor.planner_bridge.text import render_text
+from tailor.planner_bridge.in_process import DEFAULT_PLANNER, plan_here, plan_pddl_here
+from tailor.planner_bridge.reading import PDDLTask, parse_task, read_pddl
 
 __all__ = [
     "GOAL",
@@ -21,8 +27,13 @@ __all__ = [
     "AbstractPlan",
     "CausalLink",
     "Step",
+    "PDDLTask",
+    "read_pddl",
+    "parse_task",
+    "plan_pddl",
     "plan_files",
     "plan_here",
+    "plan_pddl_here",
     "render_text",
     "resolve_problem",
     "resolve_domain_dir",

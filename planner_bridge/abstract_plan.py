@@ -1,6 +1,7 @@
 """The abstract plan: steps, causal links and orderings of a partial-order plan (Sec. 5.2, Fig. 5.6).
 
 Step ids are 1..n in a valid sequential order; producer 0 is the initial state; consumer "goal" is the goal.
+The plan's two forms: JSON (to_json, from_json) and text that reads like VHPOP's output (render_text).
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from typing import Union
 
 INITIAL = 0
 GOAL = "goal"
+LINK_INDENT = "    "
 
 Consumer = Union[int, str]  # a step id, or GOAL
 
@@ -60,9 +62,7 @@ class AbstractPlan:
         return tuple(link for link in self.links if link.consumer == consumer)
 
     def to_text(self) -> str:
-        """The VHPOP-like text rendering of Fig. 5.6 (see planner_bridge.text)."""
-        from tailor.planner_bridge.text import render_text
-
+        """The VHPOP-like text rendering of Fig. 5.6 (see render_text)."""
         return render_text(self)
 
     def to_json(self, facts: bool = False) -> dict:
@@ -98,3 +98,28 @@ class AbstractPlan:
             initial=tuple(tuple(fact) for fact in data.get("initial", ())),
             compilations=tuple(data.get("compilations", ())),
         )
+
+
+def _atom(words: tuple[str, ...]) -> str:
+    return "(" + " ".join(words) + ")"
+
+
+def render_text(plan: AbstractPlan) -> str:
+    """The plan as text that reads like VHPOP's output (Fig. 5.6): each step with the causal links that support
+    it, then the goal's links, then the ordering constraints of the partial order. The initial line lists the
+    initial facts the plan uses (those linked from step 0)."""
+    used: list[tuple[str, ...]] = []
+    for link in plan.links:
+        if link.producer == INITIAL and link.fact not in used:
+            used.append(link.fact)
+    lines = [f";; domain {plan.domain}, problem {plan.problem}, planner {plan.planner}"]
+    if plan.compilations:
+        lines[0] += ", compiled by " + " then ".join(plan.compilations)
+    lines.append(f"Initial {INITIAL} : " + " ".join(_atom(f) for f in used))
+    for step in plan.steps:
+        lines.append(f"Step {step.id} : {_atom((step.action, *step.args))}")
+        lines += [f"{LINK_INDENT}{link.producer} -> {_atom(link.fact)}" for link in plan.links_to(step.id)]
+    lines.append("Goal :")
+    lines += [f"{LINK_INDENT}{link.producer} -> {_atom(link.fact)}" for link in plan.links_to(GOAL)]
+    lines.append("Orderings : " + (" ".join(f"{a}<{b}" for a, b in plan.orderings) or "none"))
+    return "\n".join(lines) + "\n"

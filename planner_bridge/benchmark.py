@@ -1,7 +1,13 @@
 """Compare two planners on PDDL problems, side by side: time, plan length, ordering constraints and width.
 
-    python -m tailor.planner_bridge.benchmark                      # bundled, test and parallel problems
-    python -m tailor.planner_bridge.benchmark --planners pocl pyperplan DOMAIN.pddl:PROBLEM.pddl ...
+    python -m tailor.planner_bridge.benchmark                      # the bundled problems
+    python -m tailor.planner_bridge.benchmark --planners pocl pyperplan DOMAIN.pddl:PROBLEM.pddl FOLDER ...
+
+A FOLDER stands for the problems p<N>.pddl of the domain.pddl in it, or of each domain folder in it (one
+without a domain.pddl of its own takes that of the folder of the same name given before it); the bundled
+problems come first unless DOMAIN:PROBLEM pairs are given. The classic test domains and the problems with
+parallel structure are `tests/fixtures/pddl/<name>` and `tests/benchmarks/pocl`
+(tests/benchmarks/test_pocl_vs_pyperplan.py runs the table on them).
 
 Each plan is made in this process by plan_here (parse, compile, search, validate, causal links); for a
 planner that finds no causal links (pyperplan) the sequence is deordered (planner_bridge.causal). Both plans
@@ -27,27 +33,44 @@ from pathlib import Path
 
 from tailor.errors import PlannerError, PlannerTimeoutError
 from tailor.planner_bridge.abstract_plan import AbstractPlan, Step
+from tailor.planner_bridge.bundled import DOMAIN_FILE, DOMAINS_DIR, PROBLEMS_DIR
+from tailor.planner_bridge.causal import transitive_reduction
+from tailor.planner_bridge.in_process import plan_here
+from tailor.planner_bridge.pocl import Planner, linearization
+from tailor.planner_bridge.pocl_ground import UnsupportedCondition, ground
+from tailor.planner_bridge.pocl_order import least_commitment, sequence_plan
+from tailor.planner_bridge.reading import read_problem
+from tailor.planner_bridge.solving import canonical
 
-ROOT = Path(__file__).resolve().parent.parent
-FIXTURES = ROOT / "tests" / "fixtures" / "pddl"
-PARALLEL = ROOT / "tests" / "benchmarks" / "pocl"
-CLASSIC = ("gripper", "blocks", "logistics", "briefcase")
+PROBLEM_FILES = "p[0-9]*.pddl"  # a folder's problems
 LIMIT_S = 30
 # Branch-and-bound nodes for the post-pass of the second planner's sequences: more than the engine's own
 # (pocl_order.NODE_LIMIT), so that the column proves what it shows (gripper/p01's 15 steps take about 98 000).
 POST_PASS_NODES = 200_000
 
 
-def default_problems() -> list[tuple[Path, Path]]:
-    """Every bundled problem, the problems of the classic test domains, then the problems with parallel
-    structure of tests/benchmarks/pocl (the last two when the tests are at hand)."""
-    pairs = [(p.parent.parent / "domain.pddl", p) for p in sorted(ROOT.glob("domains/*/problems/*.pddl"))]
-    for name in CLASSIC:
-        pairs += [(FIXTURES / name / "domain.pddl", p) for p in sorted((FIXTURES / name).glob("p*.pddl"))]
-    for folder in sorted(p for p in PARALLEL.glob("*") if p.is_dir()):
-        own = folder / "domain.pddl"
-        domain = own if own.exists() else FIXTURES / folder.name / "domain.pddl"
-        pairs += [(domain, p) for p in sorted(folder.glob("p*.pddl"))]
+def default_problems(*folders: Path) -> list[tuple[Path, Path]]:
+    """Every bundled problem, then the problems of the folders (see folders_problems)."""
+    bundled = [(p.parent.parent / DOMAIN_FILE, p) for p in sorted(DOMAINS_DIR.glob(f"*/{PROBLEMS_DIR}/*.pddl"))]
+    return bundled + folders_problems(*folders)
+
+
+def folders_problems(*folders: Path) -> list[tuple[Path, Path]]:
+    """The problems of each folder in turn (see folder_problems), each taking domains from the folders before it."""
+    return [pair for k, folder in enumerate(folders) for pair in folder_problems(folder, folders[:k])]
+
+
+def folder_problems(folder: Path, domains: tuple[Path, ...] = ()) -> list[tuple[Path, Path]]:
+    """(domain, problem) for the problems p<N>.pddl of a domain folder, or of each domain folder in `folder`; a
+    folder without a domain.pddl of its own takes that of the folder of the same name among `domains`."""
+    folder = Path(folder)
+    subfolders = [folder] if (folder / DOMAIN_FILE).is_file() else sorted(p for p in folder.iterdir() if p.is_dir())
+    pairs = []
+    for sub in subfolders:
+        own = sub / DOMAIN_FILE
+        borrowed = [Path(d) / DOMAIN_FILE for d in domains if Path(d).name == sub.name]
+        domain = own if own.is_file() else next((d for d in borrowed if d.is_file()), own)
+        pairs += [(domain, p) for p in sorted(sub.glob(PROBLEM_FILES))]
     return pairs
 
 
@@ -69,8 +92,6 @@ def closure(plan: AbstractPlan) -> set[tuple[int, int]]:
 
 def orderings(plan: AbstractPlan) -> int:
     """How many orderings the transitive reduction of the plan's closure has (whatever the planner returned)."""
-    from tailor.planner_bridge.causal import transitive_reduction
-
     return len(transitive_reduction(closure(plan)))
 
 
@@ -105,8 +126,6 @@ def measure(domain: Path, problem: Path, planner: str, repeat: int = 1) -> dict:
 
 
 def _run(domain: Path, problem: Path, planner: str) -> dict:
-    from tailor.planner_bridge.bridge import plan_here
-
     previous = signal.signal(signal.SIGALRM, _alarm)
     signal.alarm(LIMIT_S)
     start = time.perf_counter()
@@ -127,9 +146,6 @@ def counts(plan: AbstractPlan) -> dict:
 
 def _task(domain: Path, problem: Path):
     """The POCL planner's ground task of the problem; None when it is not typed STRIPS."""
-    from tailor.planner_bridge.pocl_ground import UnsupportedCondition, ground
-    from tailor.planner_bridge.reading import read_problem
-
     try:
         return ground(read_problem(domain, problem)[0])
     except UnsupportedCondition:
@@ -138,8 +154,6 @@ def _task(domain: Path, problem: Path):
 
 def _as_abstract(task, partial) -> AbstractPlan:
     """A POCL PartialPlan as an AbstractPlan with steps and orderings only (enough to count them)."""
-    from tailor.planner_bridge.pocl import linearization
-
     order = linearization(partial)
     ids = {step: k for k, step in enumerate(order, start=1)}
     actions = [task.actions[partial.steps[step]] for step in order]
@@ -151,8 +165,6 @@ def _as_abstract(task, partial) -> AbstractPlan:
 def first_plan(domain: Path, problem: Path) -> dict | None:
     """Counts of the POCL search's first plan, what the engine returns with least commitment off (the
     search for alternatives and the post-pass start from it); None when the problem is not typed STRIPS."""
-    from tailor.planner_bridge.pocl import Planner
-
     task = _task(domain, problem)
     if task is None:
         return None
@@ -165,8 +177,6 @@ def first_plan(domain: Path, problem: Path) -> dict | None:
 def post_passed(domain: Path, problem: Path, plan: AbstractPlan) -> dict | None:
     """Counts of `plan`'s sequence after the POCL planner's least-commitment post-pass; None when the problem
     is not typed STRIPS (the POCL grounder refuses it) or a step is not one of its ground actions."""
-    from tailor.planner_bridge.pocl_order import least_commitment, sequence_plan
-
     task = _task(domain, problem)
     if task is None:
         return None
@@ -183,8 +193,6 @@ def compare(pairs: list[tuple[Path, Path]], planners: tuple[str, str] = ("pocl",
             progress=None) -> list[dict]:
     """One row per problem: {"name", "first" and "second": the planners' counts, "search": the POCL search's
     first plan when the first planner is pocl (see first_plan), "post": see post_passed}."""
-    from tailor.planner_bridge.solving import canonical
-
     for planner in planners:  # warm-up: imports and engine registration are not the planner's time
         measure(*pairs[0], planner)
     rows = []
@@ -268,11 +276,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--planners", nargs=2, default=["pocl", "pyperplan"], metavar="NAME",
                         help="the two planners compared (default: pocl pyperplan)")
     parser.add_argument("--repeat", type=int, default=3, metavar="N", help="runs per problem and planner")
-    parser.add_argument("problems", nargs="*", metavar="DOMAIN:PROBLEM", help="pairs of PDDL files (default: all)")
+    parser.add_argument("problems", nargs="*", metavar="DOMAIN:PROBLEM|FOLDER",
+                        help="pairs of PDDL files, or folders of problems (default: the bundled problems)")
     args = parser.parse_args(argv)
     if args.repeat < 1:
         parser.error("--repeat must be at least 1")
-    pairs = [tuple(Path(p) for p in arg.split(":", 1)) for arg in args.problems] or default_problems()
+    folders = tuple(Path(arg) for arg in args.problems if Path(arg).is_dir())
+    given = [tuple(Path(p) for p in arg.split(":", 1)) for arg in args.problems if not Path(arg).is_dir()]
+    pairs = (folders_problems(*folders) if given else default_problems(*folders)) + given
     try:
         sys.stdout.write(table(pairs, tuple(args.planners), args.repeat))
     except KeyboardInterrupt:

@@ -17,7 +17,7 @@ CONNECTIVES = {"and", "or", "not", "imply"}
 QUANTIFIERS = {"forall", "exists"}
 NUMERIC = {"=", "<", ">", "<=", ">=", "increase", "decrease", "assign", "scale-up", "scale-down"}
 SKIPPED = {"preference"}  # PDDL3 preferences: left to the reader
-BUILTIN_TYPES = {"object", "number"}
+BUILTIN_TYPES = frozenset({"object", "number"})
 # Requirements unified-planning's PDDL reader accepts (its grammar lists them; any other stops it with an
 # unhelpful "Expected ')'"), and those of PDDL 1.2-3.1 that it does not.
 SUPPORTED_REQUIREMENTS = {
@@ -32,17 +32,22 @@ UNSUPPORTED_REQUIREMENTS = {":derived-predicates", ":object-fluents", ":domain-a
                             ":foreach-expansions", ":dag-expansions", ":subgoals-through-axioms", ":multi-agent"}
 
 
-@dataclass
+@dataclass(frozen=True)
 class DomainSignature:
-    """What a domain declares: its name, types, constants, predicates (with arity) and function names."""
+    """What a domain declares: its name, types, constants, predicates (name -> arity), function and action names.
+    Built once by check_domain and not changed afterwards (the mapping of predicates is not to be written to)."""
 
     file: str
     name: str = ""
-    types: set[str] = field(default_factory=lambda: set(BUILTIN_TYPES))
-    constants: set[str] = field(default_factory=set)
+    types: frozenset[str] = BUILTIN_TYPES
+    constants: frozenset[str] = frozenset()
     predicates: dict[str, int] = field(default_factory=dict)
-    functions: set[str] = field(default_factory=set)
-    actions: set[str] = field(default_factory=set)
+    functions: frozenset[str] = frozenset()
+    actions: frozenset[str] = frozenset()
+
+    def __hash__(self) -> int:  # (the predicates' dict would make the generated hash fail)
+        return hash((self.file, self.name, self.types, self.constants, frozenset(self.predicates.items()),
+                     self.functions, self.actions))
 
     def reserved_names(self) -> dict[str, str]:
         """Lower-cased names an object may not take, with what they name: unified-planning reads one namespace,
@@ -50,9 +55,19 @@ class DomainSignature:
         an environment flag that does not help: its reader then takes the object for the predicate)."""
         reserved: dict[str, str] = {}
         for kind, names in (("action", self.actions), ("function", self.functions),
-                            ("predicate", self.predicates), ("type", self.types - set(BUILTIN_TYPES))):
+                            ("predicate", self.predicates), ("type", self.types - BUILTIN_TYPES)):
             reserved.update((name.lower(), kind) for name in names)
         return reserved
+
+    def to_json(self) -> dict:
+        return {"file": self.file, "name": self.name, "types": sorted(self.types), "constants": sorted(self.constants),
+                "predicates": dict(self.predicates), "functions": sorted(self.functions),
+                "actions": sorted(self.actions)}
+
+    @classmethod
+    def from_json(cls, data: dict) -> "DomainSignature":
+        return cls(data["file"], data["name"], frozenset(data["types"]), frozenset(data["constants"]),
+                   dict(data["predicates"]), frozenset(data["functions"]), frozenset(data["actions"]))
 
 
 def _check_object_name(name: Symbol, reserved: dict[str, str], what: str, file: str) -> None:
@@ -87,12 +102,12 @@ def _typed_names(items: tuple[Expr, ...]) -> list[tuple[Symbol, Expr | None]]:
     return result
 
 
-def _check_type(type_expr: Expr | None, sig: DomainSignature, file: str) -> None:
+def _check_type(type_expr: Expr | None, types: frozenset[str] | set[str], file: str) -> None:
     if type_expr is None:
         return
     names = [type_expr] if isinstance(type_expr, Symbol) else [s for s in type_expr.items[1:] if isinstance(s, Symbol)]
     for name in names:
-        if name.text not in sig.types:
+        if name.text not in types:
             raise PDDLSemanticError(f"undefined type '{name.text}'", file, name.line, name.col)
 
 
@@ -137,7 +152,7 @@ def _check_formula(expr: Expr, sig: DomainSignature, scope: set[str], objects: s
     elif head in QUANTIFIERS and len(items) == 3 and isinstance(items[1], SList):
         variables = _typed_names(items[1].items)
         for _, type_expr in variables:
-            _check_type(type_expr, sig, file)
+            _check_type(type_expr, sig.types, file)
         _check_formula(items[2], sig, scope | {v.text for v, _ in variables}, objects, file)
     elif head in ("at", "over") and len(items) == 3 and isinstance(items[1], Symbol) and (
         items[1].text in ("start", "end", "all")
@@ -176,65 +191,71 @@ def _check_requirements(sections: list[SList], file: str) -> None:
 
 def check_domain(define: SList, file: str) -> DomainSignature:
     """Check a domain's declarations and action bodies; return what it declares for checking problems."""
-    sig = DomainSignature(file)
-    constants: list[Symbol] = []  # where each constant is declared
+    name, types, constants = "", set(BUILTIN_TYPES), []  # constants: where each is declared
+    predicates: dict[str, int] = {}
+    functions: set[str] = set()
     sections = _sections(define)
     _check_requirements(sections, file)
     for section in sections:
         if section.head == "domain" and len(section.items) == 2 and isinstance(section.items[1], Symbol):
-            sig.name = section.items[1].text
+            name = section.items[1].text
         elif section.head == ":types":
-            for name, parent in _typed_names(section.items[1:]):
-                sig.types.add(name.text)
+            for type_name, parent in _typed_names(section.items[1:]):
+                types.add(type_name.text)
                 if isinstance(parent, Symbol):
-                    sig.types.add(parent.text)
+                    types.add(parent.text)
     for section in sections:
         if section.head == ":constants":
-            for name, type_expr in _typed_names(section.items[1:]):
-                _check_type(type_expr, sig, file)
-                sig.constants.add(name.text)
-                constants.append(name)
+            for constant, type_expr in _typed_names(section.items[1:]):
+                _check_type(type_expr, types, file)
+                constants.append(constant)
         elif section.head == ":predicates":
             for predicate in section.items[1:]:
                 if isinstance(predicate, SList) and predicate.head:
                     params = _typed_names(predicate.items[1:])
                     for _, type_expr in params:
-                        _check_type(type_expr, sig, file)
-                    sig.predicates[predicate.head] = len(params)
+                        _check_type(type_expr, types, file)
+                    predicates[predicate.head] = len(params)
         elif section.head == ":functions":
-            sig.functions |= {f.head for f in section.items[1:] if isinstance(f, SList) and f.head}
-    sig.actions |= {section.items[1].text for section in sections
-                    if section.head in (":action", ":durative-action") and len(section.items) > 1
-                    and isinstance(section.items[1], Symbol)}
+            functions |= {f.head for f in section.items[1:] if isinstance(f, SList) and f.head}
+    actions = {section.items[1].text for section in sections
+               if section.head in (":action", ":durative-action") and len(section.items) > 1
+               and isinstance(section.items[1], Symbol)}
+    sig = DomainSignature(file, name, frozenset(types), frozenset(c.text for c in constants), predicates,
+                          frozenset(functions), frozenset(actions))
     reserved = sig.reserved_names()
-    for name in constants:  # (checked once every name they may clash with is known)
-        _check_object_name(name, reserved, "constant", file)
+    for constant in constants:  # (checked once every name they may clash with is known)
+        _check_object_name(constant, reserved, "constant", file)
     for section in sections:
         if section.head in (":action", ":durative-action"):
             values = _keyword_values(section.items[2:])
             params = values.get(":parameters")
             typed = _typed_names(params.items) if isinstance(params, SList) else []
             for _, type_expr in typed:
-                _check_type(type_expr, sig, file)
-            scope = {name.text for name, _ in typed}
+                _check_type(type_expr, sig.types, file)
+            scope = {param.text for param, _ in typed}
             for key in (":precondition", ":condition", ":effect"):
                 if key in values:
                     _check_formula(values[key], sig, scope, sig.constants, file)
         elif section.head == ":derived" and len(section.items) == 3 and isinstance(section.items[1], SList):
-            scope = {name.text for name, _ in _typed_names(section.items[1].items[1:])}
+            scope = {param.text for param, _ in _typed_names(section.items[1].items[1:])}
             _check_formula(section.items[2], sig, scope, sig.constants, file)
     return sig
 
 
-def check_problem(define: SList, sig: DomainSignature, file: str) -> None:
-    """Check that a problem belongs to the domain and uses only what the domain and its objects declare."""
+def check_problem(define: SList, sig: DomainSignature, file: str) -> str:
+    """Check that a problem belongs to the domain and uses only what the domain and its objects declare; return
+    the problem's name (lower-cased, as unified-planning's reader names it; "" where it has none)."""
+    name = ""
     sections = _sections(define)
     _check_requirements(sections, file)
     objects = set(sig.constants)
-    declared = {name.lower() for name in objects}  # (names are case-insensitive)
+    declared = {known.lower() for known in objects}  # (names are case-insensitive)
     reserved = sig.reserved_names()
     for section in sections:
-        if section.head == ":domain" and len(section.items) == 2 and isinstance(section.items[1], Symbol):
+        if section.head == "problem" and len(section.items) == 2 and isinstance(section.items[1], Symbol):
+            name = section.items[1].text
+        elif section.head == ":domain" and len(section.items) == 2 and isinstance(section.items[1], Symbol):
             named = section.items[1]
             if sig.name and named.text != sig.name:
                 raise PDDLSemanticError(
@@ -242,14 +263,14 @@ def check_problem(define: SList, sig: DomainSignature, file: str) -> None:
                     file, named.line, named.col,
                 )
         elif section.head == ":objects":
-            for name, type_expr in _typed_names(section.items[1:]):
-                _check_type(type_expr, sig, file)
-                _check_object_name(name, reserved, "object", file)
-                if name.text.lower() in declared:
-                    raise PDDLSemanticError(f"object '{name.text}' is declared twice (or as a constant of the "
-                                            "domain)", file, name.line, name.col)
-                objects.add(name.text)
-                declared.add(name.text.lower())
+            for obj, type_expr in _typed_names(section.items[1:]):
+                _check_type(type_expr, sig.types, file)
+                _check_object_name(obj, reserved, "object", file)
+                if obj.text.lower() in declared:
+                    raise PDDLSemanticError(f"object '{obj.text}' is declared twice (or as a constant of the "
+                                            "domain)", file, obj.line, obj.col)
+                objects.add(obj.text)
+                declared.add(obj.text.lower())
     for section in sections:
         if section.head == ":init":
             for fact in section.items[1:]:
@@ -257,3 +278,4 @@ def check_problem(define: SList, sig: DomainSignature, file: str) -> None:
         elif section.head == ":goal":
             for goal in section.items[1:]:
                 _check_formula(goal, sig, set(), objects, file)
+    return name

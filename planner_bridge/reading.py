@@ -1,13 +1,15 @@
-"""Read a PDDL domain/problem pair into a unified-planning Problem, turning every failure into a one-line error
-that names the file, and the line and column where they are known."""
+"""Read a PDDL domain/problem pair once (read_pddl: the texts, checked by planner_bridge.lint) and parse it into a
+unified-planning Problem (parse_task), turning every failure into a one-line error that names the file, and the
+line and column where they are known."""
 
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
 from pathlib import Path
 
 from tailor.errors import InputFileError, PDDLSemanticError, PDDLSyntaxError, PlannerError
-from tailor.planner_bridge.lint import check_domain, check_problem
+from tailor.planner_bridge.lint import DomainSignature, check_domain, check_problem
 from tailor.planner_bridge.sexpr import read_sexpr
 
 # unified-planning's reader reports places as "line: 16, col 38" or "line: 15, col: 18"; pyparsing as "line:19, col:3".
@@ -47,31 +49,70 @@ def _reader_error(exc: Exception, file: str) -> PlannerError:
     )
 
 
-def check_files(domain: Path, problem: Path) -> tuple[str, str, str]:
-    """Read and check the pair without unified-planning (fast); return both texts and the domain's PDDL name."""
+@dataclass(frozen=True)
+class PDDLTask:
+    """A domain/problem pair as read once for a whole command: the files, their texts, what the domain declares
+    (checked: the problem uses only that) and both PDDL names (lower-cased, as unified-planning names them).
+    Everything after the read (the planner child, the binding's check, a given plan's check) takes it."""
+
+    domain: Path
+    problem: Path
+    domain_text: str
+    problem_text: str
+    signature: DomainSignature
+    domain_name: str
+    problem_name: str
+
+    def to_json(self) -> dict:
+        """The task as JSON (what the parent sends its planner child)."""
+        return {"domain": str(self.domain), "problem": str(self.problem), "domain_text": self.domain_text,
+                "problem_text": self.problem_text, "signature": self.signature.to_json(),
+                "domain_name": self.domain_name, "problem_name": self.problem_name}
+
+    @classmethod
+    def from_json(cls, data: dict) -> "PDDLTask":
+        return cls(Path(data["domain"]), Path(data["problem"]), data["domain_text"], data["problem_text"],
+                   DomainSignature.from_json(data["signature"]), data["domain_name"], data["problem_name"])
+
+
+def read_pddl(domain: str | Path, problem: str | Path) -> PDDLTask:
+    """Read each file once and check the pair without unified-planning (fast): bad files fail here, naming the
+    file, line and column, before any planner starts."""
+    domain, problem = Path(domain), Path(problem)
     domain_text, problem_text = read_text(domain), read_text(problem)
     signature = check_domain(read_sexpr(domain_text, str(domain)), str(domain))
-    check_problem(read_sexpr(problem_text, str(problem)), signature, str(problem))
-    return domain_text, problem_text, signature.name
+    problem_name = check_problem(read_sexpr(problem_text, str(problem)), signature, str(problem))
+    return PDDLTask(domain, problem, domain_text, problem_text, signature, signature.name, problem_name)
 
 
-def read_problem(domain: Path, problem: Path):
-    """Check and parse the pair; return the unified-planning Problem (its `name` is the PDDL problem name) and
-    the domain's PDDL name."""
-    domain_text, problem_text, domain_name = check_files(domain, problem)
+def check_files(domain: Path, problem: Path) -> tuple[str, str, str]:
+    """Read and check the pair (see read_pddl); return both texts and the domain's PDDL name."""
+    task = read_pddl(domain, problem)
+    return task.domain_text, task.problem_text, task.domain_name
+
+
+def parse_task(task: PDDLTask):
+    """The unified-planning Problem of a pair read by read_pddl (its `name` is the PDDL problem name). The pair
+    is parsed once; only when that fails is the domain parsed alone, to name the file the error is in."""
     from unified_planning.io import PDDLReader
 
-    # Parse the domain alone first, so that an error the reader finds is attributed to the right file.
     try:
-        PDDLReader().parse_problem_string(domain_text)
+        return PDDLReader().parse_problem_string(task.domain_text, task.problem_text)
     except MemoryError:
         raise
     except Exception as exc:  # the reader raises pyparsing errors, SyntaxError, KeyError, ...
-        raise _reader_error(exc, str(domain)) from None
+        failure = exc
     try:
-        parsed = PDDLReader().parse_problem_string(domain_text, problem_text)
+        PDDLReader().parse_problem_string(task.domain_text)
     except MemoryError:
         raise
     except Exception as exc:
-        raise _reader_error(exc, str(problem)) from None
-    return parsed, domain_name
+        raise _reader_error(exc, str(task.domain)) from None
+    raise _reader_error(failure, str(task.problem)) from None
+
+
+def read_problem(domain: str | Path, problem: str | Path):
+    """Read, check and parse the pair; return the unified-planning Problem (its `name` is the PDDL problem name)
+    and the domain's PDDL name."""
+    task = read_pddl(domain, problem)
+    return parse_task(task), task.domain_name

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 from tailor.errors import ArgumentTypeError, ArgumentValueError, PlannerError
 from tailor.planner_bridge.abstract_plan import GOAL, INITIAL, AbstractPlan
-from tailor.planner_bridge.bridge import DEFAULT_PLANNER, plan_parsed, problem_facts
+from tailor.planner_bridge.causal import partial_order
+from tailor.planner_bridge.in_process import DEFAULT_PLANNER, plan_parsed, problem_facts
+from tailor.planner_bridge.solving import validate
 
 GIVEN = "given"  # the planner name of an AbstractPlan made from a plan the caller brought
 
@@ -35,9 +37,6 @@ def link_plan(problem, plan, domain: str | None = None, planner: str = GIVEN) ->
     a SequentialPlan, or a PartialOrderPlan (read in one of its linearizations, then deordered). The plan is
     validated first; an invalid plan is a PlannerError."""
     from unified_planning.plans import PartialOrderPlan, PlanKind, SequentialPlan
-
-    from tailor.planner_bridge.causal import partial_order
-    from tailor.planner_bridge.solving import validate
 
     check_problem(problem)
     if isinstance(plan, PartialOrderPlan):

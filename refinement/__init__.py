@@ -9,18 +9,15 @@ The Python API, read top to bottom (the same stages `tailor refine` runs):
                      success_models=success_models)           # Sec. 5.4, within predicted success (Alg. 6)
     result = dispatch(refined.sequence, seed=0)                # simulated durations and outcomes
 
-`instantiate`, `refine` and `dispatch` share their names with their modules, so they are imported here (an
-import of the module would otherwise shadow a lazily looked-up function); the other names are imported
-lazily, so that `tailor plan` does not pay for the learners.
+The stages live in their modules (`tailor.refinement.instantiate.instantiate`, `...refine.refine`,
+`...dispatch.dispatch`; `tailor.refinement.pipeline` chains them). The other names are looked up here lazily:
+importing any module of this package loads nothing else, so `tailor plan` and `tailor domains` pay for neither
+the optimizers nor the learners.
 """
 
 from __future__ import annotations
 
 import importlib
-
-from tailor.refinement.dispatch import dispatch as dispatch
-from tailor.refinement.instantiate import instantiate as instantiate
-from tailor.refinement.refine import refine as refine
 
 _EXPORTS = {
     "load_domain_binding": "tailor.refinement.binding",
@@ -46,7 +43,7 @@ _EXPORTS = {
     "TailorError": "tailor.errors",
 }
 
-__all__ = sorted([*_EXPORTS, "dispatch", "instantiate", "refine"])
+__all__ = sorted(_EXPORTS)
 
 
 def __getattr__(name: str):

@@ -47,7 +47,7 @@ class Parameter:
 
 @dataclass(frozen=True)
 class ExecutableAction:
-    """Plan step `step` (`pddl`, e.g. "(reach f1 f2)") as executable `action` with its params.
+    """Plan step `step` (`pddl`, e.g. "(move p0 p1)") as executable `action` with its params.
 
     `guard` names a success classifier whose predicted-success region the parameters must lie in (Alg. 6: the
     duration term is invalid outside); `origin` says why subgoal assertion inserted or replaced the action

@@ -16,16 +16,27 @@ from __future__ import annotations
 
 import atexit
 import math
+import numbers
 import threading
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from tailor.errors import ArgumentTypeError, ArgumentValueError, BeliefError, TailorError
-from tailor.planner_bridge import DEFAULT_PLANNER, AbstractPlan
+from tailor.errors import ArgumentTypeError, ArgumentValueError, BeliefError
+from tailor.planner_bridge import (DEFAULT_PLANNER, AbstractPlan, PDDLTask, plan_pddl, read_pddl, resolve_domain_dir,
+                                   resolve_problem)
+from tailor.planner_bridge.reading import parse_task
+from tailor.planner_bridge.up_interop import link_plan, plan_problem
+from tailor.planner_bridge.worker import PlannerProcess
+from tailor.refinement import pipeline
 from tailor.refinement.action_sequence import ActionSequence
-from tailor.refinement.refine import RefinedSequence
+from tailor.refinement.binding import DOMAIN_FILE
+from tailor.refinement.dispatch import dispatch as dispatch_sequence
+from tailor.refinement.models.meta_model import load_meta_model
+from tailor.refinement.optimizers import OPTIMIZERS
+from tailor.refinement.refine import RefinedSequence, check_neighbourhood, check_risk
 from tailor.sims.episode import SequenceResult
+from tailor.sims.experience import MAX_SEED
 
 _PLANNER = None  # the session's planner child process (planner_bridge.worker.PlannerProcess)
 _PLANNER_LOCK = threading.Lock()  # one request at a time: the child answers them in turn
@@ -80,8 +91,6 @@ def plan(domain, problem=None, *, planner: str = DEFAULT_PLANNER, timeout: float
     _check(planner, str, "planner")
     up_problem = _up_problem(domain if problem is None else problem)
     if up_problem is not None:
-        from tailor.planner_bridge.up_interop import plan_problem
-
         return plan_problem(up_problem, planner)
     if problem is None:
         raise ArgumentValueError("problem is missing: give a PDDL problem (path or name) or a unified-planning "
@@ -101,28 +110,50 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     how its actions execute); `problem` a PDDL file, a problem name or a unified-planning Problem; `belief`
     the continuous values `{object: {quantity: value}}`, a belief file, or None for the problem's own file.
     `models` is a model folder (default: as the CLI, see model_store). `filter` (default: the binding's
-    `[evaluation] filter`): refine only where the meta action model `models/meta.json` predicts that refinement
+    `[refinement] filter`): refine only where the meta action model `models/meta.json` predicts that refinement
     makes execution faster, else keep the greedy (h = 1) parameterization (Sec. 5.5.4); `.filter` says which
     and why. `risk` is lambda of the risk-aware objective, expected duration + lambda * uncertainty (None:
     refine.DEFAULT_RISK where every model stores its uncertainty, else 0 with a warning; an explicit lambda > 0
     needs it, see models.uncertainty); `neighbourhood` the share of each free range around a choice whose
-    worst predicted time is minimized (None: the binding's `[evaluation] neighbourhood`, else 0); greedy (h = 1)
+    worst predicted time is minimized (None: the binding's `[refinement] neighbourhood`, else 0); greedy (h = 1)
     stays plain."""
-    from tailor.planner_bridge import resolve_domain_dir, resolve_problem
-    from tailor.refinement.belief import belief_path_for, load_belief, parse_belief
-    from tailor.refinement.binding import load_domain_binding
-    from tailor.refinement.instantiate import instantiate
-    from tailor.refinement.model_store import resolve_models
-    from tailor.refinement.models.action_models import load_action_models
-    from tailor.refinement.optimizers import OPTIMIZERS
-    from tailor.refinement.pipeline import assert_task, success_models_in
-    from tailor.refinement.refine import check_neighbourhood, check_risk, resolve_risk
-    from tailor.refinement.refine import refine as refine_sequence
+    seed, horizon = _refine_arguments(domain, problem, belief, seed, horizon, models, assertion, filter, risk,
+                                      neighbourhood, optimizer, timeout)
+    up_problem = _up_problem(problem)
+    domain_dir = resolve_domain_dir(domain)
+    if up_problem is None:
+        task = pipeline.resolve_task(domain, problem, belief if isinstance(belief, (str, Path)) else None)
+    else:
+        task = pipeline.Task(domain_dir / DOMAIN_FILE, None, Path(belief) if isinstance(belief, (str, Path)) else None)
+    inputs = pipeline.read_task(task, models, _belief_table(belief) if isinstance(belief, Mapping) else None,
+                                pddl=task.problem is not None)
+    if up_problem is None and _is_up_plan(plan):  # a plan of unified-planning for the files named: their Problem
+        up_problem = parse_task(inputs.pddl)  # (its actions are matched by name: a plan found elsewhere links too)
+    abstract = _given_plan(plan, up_problem, domain_dir)
+    if isinstance(plan, AbstractPlan) and inputs.pddl is not None and plan.problem.lower() != inputs.pddl.problem_name:
+        raise ArgumentValueError(f"plan is a plan of problem {plan.problem!r}, not of {inputs.pddl.problem_name!r} "
+                                 f"({task.problem})")
+    use_filter = inputs.binding.refinement.filter if filter is None else filter
+    meta = load_meta_model(inputs.models.path) if use_filter else None
+    if abstract is None:
+        abstract = (plan_problem(up_problem, planner) if up_problem is not None
+                    else _plan_files(task.domain, task.problem, planner, timeout, inputs.pddl))
+    options = pipeline.Options(horizon=horizon, optimizer=optimizer, seed=seed, risk=risk, neighbourhood=neighbourhood,
+                               filter=filter, assertion=assertion, greedy=False, planner=planner, timeout=timeout)
+    result = pipeline.run(inputs, options, plan=abstract, meta=meta)
+    return Refinement(result.plan, result.sequence, result.refined.refined, result.models_dir, result.assertions,
+                      result.decision)
 
+
+def _refine_arguments(domain, problem, belief, seed, horizon, models, assertion, filter, risk, neighbourhood,
+                      optimizer, timeout) -> tuple[int, int]:
+    """The checks of `refine`'s arguments (an ArgumentTypeError or ArgumentValueError naming the argument);
+    the seed and horizon as Python ints."""
     _check(domain, (str, Path), "domain")
     seed, horizon = _whole(seed), _whole(horizon)  # (numpy's integers are whole numbers too)
     _check_seed(seed)
     _check(horizon, int, "horizon")
+    _check_timeout(timeout)
     if models is not None:
         _check(models, (str, Path), "models")
     if not isinstance(assertion, bool):
@@ -141,81 +172,28 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
         check_neighbourhood(neighbourhood)
     if optimizer not in OPTIMIZERS:
         raise ArgumentValueError(f"optimizer must be one of {', '.join(sorted(OPTIMIZERS))}, not {optimizer!r}")
-    domain_dir = resolve_domain_dir(domain)
-    binding = load_domain_binding(domain_dir)
-    up_problem = _up_problem(problem)
-    problem_file = None
-    if up_problem is None:
+    if _up_problem(problem) is None:
         _check(problem, (str, Path), "problem")
-        domain_file, problem_file = resolve_problem(domain, problem)
-    if up_problem is None and plan is not None and not isinstance(plan, (AbstractPlan, str, int, float)):
-        from unified_planning.plans import Plan
-
-        if isinstance(plan, Plan):  # a plan of unified-planning for the files named: their Problem to link it
-            up_problem = _parsed_problem(domain_file, problem_file)
-    abstract = _given_plan(plan, up_problem, domain_dir)
-    if isinstance(plan, AbstractPlan) and problem_file is not None:
-        _check_plan_problem(plan, problem_file)
-    if abstract is None:
-        if up_problem is not None:
-            from tailor.planner_bridge.up_interop import plan_problem
-
-            abstract = plan_problem(up_problem, planner)
-        else:
-            abstract = _plan_files(domain_file, problem_file, planner, timeout)
-    objects = [name for name, _ in abstract.objects] or None
-    if belief is None:
-        if problem_file is None:
-            raise ArgumentValueError("belief is missing: a unified-planning Problem has no belief file beside it; "
-                                     "give the values as {object: {quantity: value}} or a belief file")
-        belief_state = load_belief(belief_path_for(problem_file), objects, binding.quantities)
-    elif isinstance(belief, Mapping):
-        belief_state = parse_belief(_belief_table(belief), "<belief argument>", objects, binding.quantities)
-    elif isinstance(belief, (str, Path)):
-        belief_state = load_belief(Path(belief), objects, binding.quantities)
-    else:
+    if belief is None and _up_problem(problem) is not None:
+        raise ArgumentValueError("belief is missing: a unified-planning Problem has no belief file beside it; "
+                                 "give the values as {object: {quantity: value}} or a belief file")
+    if belief is not None and not isinstance(belief, (Mapping, str, Path)):
         raise ArgumentTypeError(f"belief must be a mapping {{object: {{quantity: value}}}}, a path or None, "
                                 f"not {type(belief).__name__}")
-    sequence = instantiate(abstract, binding, belief_state)
-    source = resolve_models(domain_dir, models)
-    if filter is None:
-        from tailor.refinement.evaluation.experiments import binding_filter
+    return seed, horizon
 
-        filter = binding_filter(binding)
-    if neighbourhood is None:
-        from tailor.refinement.evaluation.experiments import binding_neighbourhood
 
-        neighbourhood = binding_neighbourhood(binding)
-    meta = None
-    if filter:
-        from tailor.refinement.models.meta_model import load_meta_model
+def _is_up_plan(plan) -> bool:
+    """Whether `plan` is a plan of unified-planning (without importing it for a plan of ours or None)."""
+    if plan is None or isinstance(plan, (AbstractPlan, str, int, float)):
+        return False
+    from unified_planning.plans import Plan
 
-        meta = load_meta_model(source.path)
-    success_models, assertions = {}, ()
-    if assertion:
-        success_models = success_models_in(source.path, binding, sequence)
-        asserted = assert_task(sequence, binding, success_models, abstract)
-        sequence, assertions = asserted.sequence, asserted.assertions
-    action_models = load_action_models(source.path, tuple(sorted({a.action for a in sequence.actions})))
-    risk = resolve_risk(risk, action_models.values())
-    refined = refine_sequence(sequence, action_models, horizon=horizon, method=optimizer, seed=seed,
-                              success_models=success_models, risk=risk, neighbourhood=neighbourhood)
-    decision = None
-    if meta is not None and horizon > 1 and sequence.actions:  # refine, or keep greedy (Sec. 5.5.4)
-        from tailor.refinement.meta_filter import decide
-
-        greedy = refine_sequence(sequence, action_models, horizon=1, method=optimizer, seed=seed,
-                                 success_models=success_models)
-        decision = decide(meta, greedy, action_models, refined)
-        if not decision.refine:
-            refined = greedy
-    return Refinement(abstract, sequence, refined, source.path, tuple(assertions), decision)
+    return isinstance(plan, Plan)
 
 
 def dispatch(refined, seed: int = 0) -> SequenceResult:
     """Execute a refined (fully bound) sequence in its simulator: durations, outcomes and the trajectory."""
-    from tailor.refinement.dispatch import dispatch as dispatch_sequence
-
     seed = _whole(seed)
     _check_seed(seed)
     sequence = refined.sequence if isinstance(refined, (Refinement, RefinedSequence)) else refined
@@ -236,16 +214,12 @@ def _check(value, types, name: str) -> None:
 
 def _whole(value):
     """A numpy integer (np.int64 out of an array) as the Python int it is; anything else as it is."""
-    import numbers
-
     return int(value) if isinstance(value, numbers.Integral) and not isinstance(value, bool) else value
 
 
 def _check_seed(seed) -> None:
     """A seed as the command line takes it: a whole number from 0 to MAX_SEED (numpy's generators take no
     negative seed, and experience files store seeds as 64-bit integers)."""
-    from tailor.sims.experience import MAX_SEED
-
     _check(seed, int, "seed")
     if not 0 <= seed <= MAX_SEED:
         raise ArgumentValueError(f"seed must be a whole number from 0 to 2**63 - 1, not {seed}")
@@ -275,35 +249,11 @@ def _given_plan(given, up_problem, domain_dir: Path) -> AbstractPlan | None:
     if up_problem is None:
         raise ArgumentValueError("plan: a unified-planning plan needs the unified-planning Problem it solves "
                                  "(pass problem=Problem)")
-    from tailor.planner_bridge.up_interop import link_plan
-
     return link_plan(up_problem, given, domain=domain_dir.name)
-
-
-def _parsed_problem(domain_file: Path, problem_file: Path):
-    """The unified-planning Problem of a PDDL pair, to link a unified-planning plan of it (its actions are
-    matched by name, so a plan found for a Problem parsed elsewhere from the same files links too)."""
-    from tailor.planner_bridge.reading import read_problem
-
-    return read_problem(Path(domain_file), Path(problem_file))[0]
-
-
-def _check_plan_problem(plan: AbstractPlan, problem_file: Path) -> None:
-    """A given plan must be one of the problem refined (its belief file is the problem's)."""
-    from tailor.planner_bridge.reading import read_text
-    from tailor.planner_bridge.sexpr import SList, Symbol, read_sexpr
-
-    define = read_sexpr(read_text(Path(problem_file)), str(problem_file))
-    names = [item.items[1].text for item in define.items if isinstance(item, SList) and item.head == "problem"
-             and len(item.items) == 2 and isinstance(item.items[1], Symbol)]
-    if names and names[0].lower() != plan.problem.lower():
-        raise ArgumentValueError(f"plan is a plan of problem {plan.problem!r}, not of {names[0]!r} ({problem_file})")
 
 
 def _real(value) -> bool:
     """A real number that is not a bool: Python's, or numpy's (np.float32, np.int64) out of an array."""
-    import numbers
-
     return isinstance(value, numbers.Real) and not isinstance(value, bool) and not isinstance(value, (int, float))
 
 
@@ -319,29 +269,30 @@ def _belief_table(belief: Mapping) -> dict:
             if isinstance(value, (int, float)) and not isinstance(value, bool) and not math.isfinite(value):
                 raise BeliefError(f"[objects.{name}] {quantity} = {value!r} is not a finite number",
                                   file="<belief argument>")
-    return {"objects": table}
+    return table
 
 
-def _plan_files(domain, problem, planner: str, timeout: float | None) -> AbstractPlan:
-    """Plan a PDDL pair in the session's planner process (started on first use, ended at exit)."""
-    global _PLANNER
-    from tailor.planner_bridge import plan_files, resolve_problem
-    from tailor.planner_bridge.worker import PlannerProcess
-
-    _check(domain, (str, Path), "domain")
-    _check(problem, (str, Path), "problem")
+def _check_timeout(timeout) -> None:
     if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, (int, float))):
         raise ArgumentTypeError(f"timeout must be a number of seconds or None, not {type(timeout).__name__}")
-    domain_file, problem_file = resolve_problem(domain, problem)
+    if timeout is not None and not (timeout > 0 and math.isfinite(timeout)):
+        raise ArgumentValueError(f"the timeout must be positive and finite (None for no limit), not {timeout}")
+
+
+def _plan_files(domain, problem, planner: str, timeout: float | None, pddl: PDDLTask | None = None) -> AbstractPlan:
+    """Plan a PDDL pair (`pddl` where it has been read already) in the session's planner process (started on
+    first use, ended at exit)."""
+    global _PLANNER
+    _check(domain, (str, Path), "domain")
+    _check(problem, (str, Path), "problem")
+    _check_timeout(timeout)
+    if pddl is None:
+        pddl = read_pddl(*resolve_problem(domain, problem))
     with _PLANNER_LOCK:
         if _PLANNER is None:
             _PLANNER = PlannerProcess()
             atexit.register(_PLANNER.close)
-        try:
-            return plan_files(domain_file, problem_file, planner, timeout, process=_PLANNER)
-        except ValueError as exc:  # plan_files' check of the timeout: the API's error names the argument
-            if isinstance(exc, TailorError):
-                raise
-            raise ArgumentValueError(str(exc)) from None
+        return plan_pddl(pddl, planner, timeout, process=_PLANNER)
+
 
 __all__ = ["Refinement", "plan", "refine", "dispatch"]

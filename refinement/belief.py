@@ -42,6 +42,16 @@ class BeliefState:
             raise BeliefError(f"object '{obj}' has no value for '{quantity}'{why}", file=self.file)
         return values[quantity]
 
+    def check_objects(self, objects: Collection[str]) -> "BeliefState":
+        """This belief, once the problem's `objects` are known (the plan carries them): a BeliefError naming the
+        file for a table of an object the problem does not have."""
+        known = {o.lower() for o in objects}
+        for name in self.objects:
+            if name not in known:
+                raise BeliefError(f"[objects.{name}]: '{name}' is not an object of the problem "
+                                  f"(objects: {', '.join(sorted(known))})", file=self.file)
+        return self
+
 
 def belief_path_for(problem_path: Path | str) -> Path:
     """The belief state file of a problem: beside it, same stem (`score.pddl` -> `score.toml`)."""

@@ -4,12 +4,15 @@ It names the simulator whose executable actions the domain uses (a name in the s
 which executable action each PDDL action maps to and which PDDL argument supplies each of its parameter
 groups, what each predicate implies about the continuous values of its arguments (values read from the
 belief state, ranges, scene objects), and the ranges of each PDDL type that apply where no predicate says
-anything. Its `[training]` and `[evaluation]` tables (read by the learning and evaluation packages) say what
-`tailor train` learns and which random situations `tailor evaluate` draws. Binding a domain needs no Python.
+anything. Its `[refinement]` table sets refinement's defaults (the meta filter, the neighbourhood, the zero
+baseline), its `[evaluation]` table which random situations `tailor evaluate` draws (both typed here, once, when
+the file is read), and its `[training]` table what `tailor train` learns (validated by learning.recipe against
+the feature spaces). Binding a domain needs no Python.
 """
 
 from __future__ import annotations
 
+import logging
 import math
 import re
 import tomllib
@@ -19,9 +22,9 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from tailor.errors import BindingError, TailorError, check_path_argument
+from tailor.errors import BindingError, SimError, TailorError, check_path_argument
+from tailor.refinement.binding_domain import check_against_domain, did_you_mean, read_vocabulary, vocabulary_of
 from tailor.sims import registry
-from tailor.errors import SimError
 from tailor.sims.protocol import GROUPS, ActionSpec, SimulatorEntry
 
 SCHEMA = 2  # 2: the binding names its simulator
@@ -105,6 +108,28 @@ class PredicateBinding:
 
 
 @dataclass(frozen=True)
+class RefinementDefaults:
+    """The `[refinement]` table: what refinement does unless a command or call says otherwise."""
+
+    filter: bool = False  # refine only where the meta action model (models/meta.json) predicts "better" (Sec. 5.5.4)
+    neighbourhood: float = 0.0  # share of each free range whose worst predicted time refinement minimizes
+    zero_baseline: bool = False  # also execute every free parameter at 0 (e.g. stop at every way-point)
+
+
+@dataclass(frozen=True)
+class EvaluationPlan:
+    """The `[evaluation]` table: the simulator's situation generators `tailor evaluate` draws from."""
+
+    comparison: str  # greedy vs refined (Tables 5.1, 5.4)
+    horizons: str | None = None  # the horizon experiment (Table 5.3)
+    assertion: str | None = None  # subgoal assertion (Table 6.1, `--assertion`)
+
+
+REFINEMENT_KEYS = ("filter", "neighbourhood", "zero_baseline")
+EVALUATION_KEYS = ("comparison", "horizons", "assertion")
+
+
+@dataclass(frozen=True)
 class Binding:
     """The action library binding of one domain."""
 
@@ -115,8 +140,9 @@ class Binding:
     predicates: Mapping[str, PredicateBinding]
     types: Mapping[str, Mapping[str, Range]]
     training: Mapping[str, Any] = field(default_factory=dict)  # raw [training] (tailor.refinement.learning.recipe)
-    evaluation: Mapping[str, Any] = field(default_factory=dict)  # raw [evaluation] (tailor.refinement.evaluation)
+    evaluation: EvaluationPlan | None = None  # None: the binding names no situations to evaluate on
     quantities: tuple[str, ...] = ()  # every quantity the simulator's actions take
+    refinement: RefinementDefaults = RefinementDefaults()
 
     @property
     def entry(self) -> SimulatorEntry:
@@ -131,6 +157,13 @@ class Binding:
             where = f"plan step {step}: " if step else ""
             raise BindingError(f"{where}PDDL action '{name}' is not bound (add an [actions.{name.lower()}] "
                                "table)", file=self.file) from None
+
+    def require_evaluation(self) -> EvaluationPlan:
+        """The `[evaluation]` table; a BindingError naming the file where the binding has none."""
+        if self.evaluation is None:
+            raise BindingError("[evaluation] missing: the domain's binding names no situations to evaluate on (add "
+                               "an [evaluation] table)", file=self.file)
+        return self.evaluation
 
     def predicate(self, name: str) -> PredicateBinding | None:
         """The binding of a predicate, or None: a predicate the binding does not name constrains nothing."""
@@ -152,16 +185,20 @@ def load_binding(path: Path | str) -> Binding:
     return parse_binding(data, file)
 
 
-def load_domain_binding(domain_dir: Path | str, domain_file: Path | str | None = None) -> Binding:
-    """The binding of the domain in `domain_dir` (its `actions.toml`), checked against the PDDL domain
+def load_domain_binding(domain_dir: Path | str, domain_file: Path | str | None = None, signature=None) -> Binding:
+    """The binding of the domain in `domain_dir` (its `actions.toml`), checked against the PDDL domain: its
+    `signature` where the caller has read the domain already (planner_bridge.read_pddl), else the file
     `domain_file` (default: `domain_dir/domain.pddl` where it exists): no table names what the domain lacks."""
-    from tailor.refinement.binding_domain import check_against_domain
-
     check_path_argument(domain_dir, "domain_dir")
     binding = load_binding(Path(domain_dir) / BINDING_FILE)
+    if signature is not None:
+        check_against_domain(binding, vocabulary_of(signature), DEFAULT_TYPE)
+        return binding
     domain_file = Path(domain_dir) / DOMAIN_FILE if domain_file is None else Path(domain_file)
     if domain_file.is_file():
-        check_against_domain(binding, domain_file, DEFAULT_TYPE)
+        vocabulary = read_vocabulary(domain_file)
+        if vocabulary is not None:  # where the read fails, the planner reports the fault with its place
+            check_against_domain(binding, vocabulary, DEFAULT_TYPE)
     return binding
 
 
@@ -171,8 +208,8 @@ def parse_binding(data: Mapping[str, Any], file: str | None = None) -> Binding:
     def fail(message: str) -> BindingError:
         return BindingError(message, file=file)
 
-    _check_keys(data, {"schema", "domain", "simulator", "actions", "predicates", "types", "training", "evaluation"},
-                "top level", fail)
+    _check_keys(data, {"schema", "domain", "simulator", "actions", "predicates", "types", "training", "evaluation",
+                       "refinement"}, "top level", fail)
     if data.get("schema", SCHEMA) != SCHEMA:
         raise fail(f"unsupported schema {data['schema']!r} (expected {SCHEMA}: a binding names its simulator)")
     domain = data.get("domain")
@@ -195,12 +232,55 @@ def parse_binding(data: Mapping[str, Any], file: str | None = None) -> Binding:
     types = {name: MappingProxyType(_ranges(f"[types.{name}]", table, set(), quantities, fail))
              for name, table in _tables(data, "types", fail)}
     extra = {}
-    for key in ("training", "evaluation"):
+    for key in ("training", "evaluation", "refinement"):
         if not isinstance(data.get(key, {}), dict):
             raise fail(f"'{key}' must be a table ([{key}])")
-        extra[key] = MappingProxyType(data.get(key, {}))
+        extra[key] = dict(data.get(key, {}))
+    refinement = _refinement(extra["refinement"], extra["evaluation"], file, fail)
+    evaluation = _evaluation(extra["evaluation"], entry, fail)
     return Binding(file, domain, simulator, MappingProxyType(actions), MappingProxyType(predicates),
-                   MappingProxyType(types), extra["training"], extra["evaluation"], quantities)
+                   MappingProxyType(types), MappingProxyType(extra["training"]), evaluation, quantities, refinement)
+
+
+def _refinement(table: dict, evaluation: dict, file: str | None, fail) -> RefinementDefaults:
+    """The [refinement] table; its keys are still read from [evaluation], where bindings before it had them
+    (with a warning: each key belongs in one place)."""
+    _check_keys(table, set(REFINEMENT_KEYS), "[refinement]", fail)
+    values = dict(table)
+    for key in REFINEMENT_KEYS:
+        if key in evaluation:
+            if key in table:
+                raise fail(f"[evaluation] {key} and [refinement] {key} both given: keep the one in [refinement]")
+            logging.getLogger(__name__).warning("%s: [evaluation] %s is a refinement default: move it to "
+                                                "[refinement]", file or "<binding>", key)
+            values[key] = evaluation[key]
+    for key in ("filter", "zero_baseline"):
+        if not isinstance(values.get(key, False), bool):
+            raise fail(f"[refinement] {key} must be true or false, not {values[key]!r}")
+    neighbourhood = values.get("neighbourhood", 0.0)
+    if isinstance(neighbourhood, bool) or not isinstance(neighbourhood, (int, float)) or not 0.0 <= neighbourhood < 0.5:
+        raise fail(f"[refinement] neighbourhood must be a share of each free range in [0, 0.5), not {neighbourhood!r}")
+    return RefinementDefaults(values.get("filter", False), float(neighbourhood), values.get("zero_baseline", False))
+
+
+def _evaluation(table: dict, entry: SimulatorEntry, fail) -> EvaluationPlan | None:
+    """The [evaluation] table, its situation generators checked against the simulator's; None where it is absent."""
+    table = {k: v for k, v in table.items() if k not in REFINEMENT_KEYS}  # (read by _refinement)
+    if not table:
+        return None
+    for key in table:
+        if key not in EVALUATION_KEYS:
+            raise fail(f"[evaluation] unknown key '{key}' (expected {', '.join(EVALUATION_KEYS)}; "
+                       f"{', '.join(REFINEMENT_KEYS)} belong in [refinement])")
+    known = entry.situations
+    for key in EVALUATION_KEYS:
+        value = table.get(key)
+        if value is None and key != "comparison":
+            continue
+        if not isinstance(value, str) or value not in known:
+            raise fail(f"[evaluation] {key} = {value!r} is not a situation generator of simulator {entry.name!r} "
+                       f"(known: {', '.join(known) or 'none'})")
+    return EvaluationPlan(table["comparison"], table.get("horizons"), table.get("assertion"))
 
 
 def _tables(data: Mapping[str, Any], key: str, fail) -> list[tuple[str, Mapping[str, Any]]]:
@@ -221,8 +301,6 @@ def _check_keys(table: Mapping[str, Any], allowed: set[str], where: str, fail) -
 
 
 def _did_you_mean(name: str, known) -> str:
-    from tailor.refinement.binding_domain import did_you_mean
-
     return did_you_mean(name, known)
 
 

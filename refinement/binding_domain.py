@@ -1,9 +1,10 @@
 """The binding checked against its PDDL domain: every action and predicate table, every type table and the
 `domain` name must be the domain's own, else a misspelt `[predicates.atbal]` would silently constrain nothing.
 
-The domain file is read lightly (planner_bridge's s-expression reader, no planner): its name and the names
-of its predicates, actions and types. Where that read fails the check is skipped and the planner, which
-parses the file for real, reports the fault with its line and column.
+The names come from the domain the planner bridge has read and checked (its signature), or, where the binding
+is loaded alone, from a light read of the domain file (planner_bridge's s-expression reader, no planner): its
+name and the names of its predicates, actions and types. Where that read fails the check is skipped and the
+planner, which parses the file for real, reports the fault with its line and column.
 """
 
 from __future__ import annotations
@@ -66,11 +67,14 @@ def read_vocabulary(domain_file: Path | str) -> DomainVocabulary | None:
     return DomainVocabulary(str(domain_file), name, frozenset(predicates), frozenset(actions), frozenset(types))
 
 
-def check_against_domain(binding, domain_file: Path | str, default_type: str) -> None:
+def vocabulary_of(signature) -> DomainVocabulary:
+    """The vocabulary of a domain the planner bridge has read and checked already (lint.DomainSignature)."""
+    return DomainVocabulary(signature.file, signature.name or None, frozenset(signature.predicates),
+                            frozenset(signature.actions), frozenset(signature.types) - {"number"})
+
+
+def check_against_domain(binding, vocabulary: DomainVocabulary, default_type: str) -> None:
     """A BindingError naming the binding file and the table for the first name the domain does not have."""
-    vocabulary = read_vocabulary(domain_file)
-    if vocabulary is None:
-        return
 
     def fail(message: str) -> BindingError:
         return BindingError(message, file=binding.file)

@@ -35,7 +35,7 @@ BETTER = "better"  # the class where refinement is applied
 @dataclass(frozen=True)
 class WindowFeatures:
     """The features the action models of the first window see: `signature` names each action and its feature
-    space, `names` each value ("<step>.<action>.<feature>", e.g. "1.reach.dist")."""
+    space, `names` each value ("<step>.<action>.<feature>", e.g. "1.move.dist")."""
 
     signature: tuple[tuple[str, str], ...]
     names: tuple[str, ...]
@@ -48,7 +48,7 @@ def window_features(sequence: ActionSequence, models: Mapping[str, object], size
     signature, names, values = [], [], []
     for k, action in enumerate(sequence.actions[:size]):
         model = models[action.action]
-        signature.append((action.action, model.feature_set))
+        signature.append((action.action, model.feature_space))
         names += [f"{k + 1}.{action.action}.{name}" for name in model.feature_names]
         values.append(np.asarray(model.features(action.values()[None, :]), dtype=float)[0])
     return WindowFeatures(tuple(signature), tuple(names),

@@ -1,28 +1,36 @@
-"""The pipeline read top to bottom (Algorithm 4): plan -> instantiate -> assert -> refine -> dispatch.
+"""The driver (Algorithm 4), one for every caller: read -> plan -> instantiate -> assert -> refine -> dispatch.
 
-One named function per stage; `prepare` strings the first ones together for a domain/problem pair on disk
-(the PDDL is parsed once, by the planner: the plan carries the objects, types and initial facts).
+`read_task` reads each input of a task once (the PDDL pair, the binding checked against the domain's
+signature, the belief file); `run` takes what it read and options, and returns one `Result`: the plan, the
+instantiated sequence, the assertions, the greedy and refined (and zero-baseline) executions with their
+predictions, the meta filter's decision and the optimizers' notes. The command line formats a Result, the API
+checks its arguments and calls `run`, and the evaluations call `refine_stage` on each random situation (their
+plan made once per problem, their belief drawn by the simulator), so the stages are chained in one place.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import logging
+from collections.abc import Mapping
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
-from tailor.planner_bridge import DEFAULT_PLANNER, AbstractPlan, plan_files, resolve_problem
+from tailor.errors import BeliefError, BindingError, ModelFileError
+from tailor.planner_bridge import DEFAULT_PLANNER, AbstractPlan, PDDLTask, plan_pddl, read_pddl, resolve_problem
 from tailor.refinement.action_sequence import ActionSequence
 from tailor.refinement.assertion import AssertedSequence, Assertion, assert_subgoals
-from tailor.refinement.belief import BeliefState, belief_path_for, load_belief
+from tailor.refinement.belief import BeliefState, belief_path_for, load_belief, parse_belief
 from tailor.refinement.binding import BINDING_FILE, Binding, load_domain_binding
-from tailor.refinement.dispatch import dispatch
-from tailor.errors import BindingError, ModelFileError
+from tailor.refinement.dispatch import check_scene, dispatch
 from tailor.refinement.instantiate import instantiate
-from tailor.refinement.model_store import MODELS as MODELS_DIR
+from tailor.refinement.meta_filter import MetaDecision, decide
+from tailor.refinement.model_store import ModelSource, resolve_models
 from tailor.refinement.models.action_models import ActionModel, load_action_models, load_success_models
-from tailor.refinement.refine import RefinedSequence, refine
+from tailor.refinement.refine import RefinedSequence, predicted_durations, refine, resolve_risk
 from tailor.sims.episode import SequenceResult
 
 GREEDY_HORIZON = 1
+BELIEF_ARGUMENT = "<belief argument>"  # where a belief given as values (the API's dict) is said to come from
 
 
 @dataclass(frozen=True)
@@ -30,8 +38,8 @@ class Task:
     """A domain/problem pair on disk with what refinement needs beside it."""
 
     domain: Path
-    problem: Path
-    belief: Path
+    problem: Path | None  # None: a unified-planning Problem given as an object (no file, no belief file beside it)
+    belief: Path | None
     models: Path | None = None  # the model folder (model_store.resolve_models); None: the domain's own
 
     @property
@@ -40,22 +48,94 @@ class Task:
 
     @property
     def models_dir(self) -> Path:
-        return self.models if self.models is not None else self.domain_dir / MODELS_DIR
+        return self.models if self.models is not None else self.domain_dir / "models"
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """A task's inputs, each read once: the PDDL pair (read and checked, not yet planned), the binding
+    (checked against the domain's signature), the belief (checked in itself; its objects once there is a plan)
+    and where the action models come from."""
+
+    task: Task
+    pddl: PDDLTask | None  # None where the caller brings the plan (and the problem object) itself
+    binding: Binding
+    belief: BeliefState
+    models: ModelSource
+
+
+@dataclass(frozen=True)
+class Options:
+    """How to refine. None: the binding's `[refinement]` default (filter, neighbourhood, zero), or for `risk`
+    refine.DEFAULT_RISK where every model stores its uncertainty."""
+
+    horizon: int = 2
+    optimizer: str = "analytic"
+    seed: int = 0
+    risk: float | None = None
+    neighbourhood: float | None = None
+    filter: bool | None = None
+    zero: bool | None = False  # also execute every free parameter at 0 (the baseline of Fig. 5.14)
+    assertion: bool = True  # subgoal assertion (Alg. 5) where the binding names success models
+    greedy: bool = True  # also refine greedily (h = 1), the baseline; always where the filter runs
+    simulate: bool = False  # dispatch each execution to the simulator
+    planner: str = DEFAULT_PLANNER
+    timeout: float | None = None
+
+
+@dataclass(frozen=True)
+class Execution:
+    """A refined sequence and, when dispatched, what the simulator measured."""
+
+    refined: RefinedSequence
+    simulated: SequenceResult | None = None
+
+
+@dataclass(frozen=True)
+class Refinements:
+    """What refinement made of one instantiated sequence: the refined execution (the greedy one where the meta
+    filter kept it), greedy (h = 1) and the zero baseline where asked for, and the filter's decision."""
+
+    refined: Execution
+    greedy: Execution | None = None
+    zero: Execution | None = None
+    decision: MetaDecision | None = None
+    optimized: RefinedSequence | None = None  # the refinement itself, also where the filter kept greedy
 
 
 @dataclass(frozen=True)
 class Prepared:
-    """Everything before refinement: the plan, its sequence (instantiated, subgoals asserted) and the models to
-    refine it with; `instantiated` is the sequence before assertion, `assertions` what Algorithm 5 decided."""
+    """Everything before refinement: the plan, its sequence instantiated and asserted, the models to refine it
+    with, and the options with every default resolved (risk, neighbourhood, filter, zero)."""
 
-    task: Task
     plan: AbstractPlan
-    sequence: ActionSequence
-    models: dict[str, ActionModel]
+    instantiated: ActionSequence  # Alg. 3: free parameters as ranges
+    sequence: ActionSequence  # after the assert stage (Alg. 5): what is refined
+    assertions: tuple[Assertion, ...]
     binding: Binding
-    success_models: dict = field(default_factory=dict)
-    assertions: tuple[Assertion, ...] = ()
-    instantiated: ActionSequence | None = None
+    models_source: ModelSource
+    models: dict[str, ActionModel]
+    success_models: dict
+    options: Options
+
+    @property
+    def empty(self) -> bool:
+        """The goal holds initially: nothing to refine or execute."""
+        return not self.sequence.actions
+
+    @property
+    def models_dir(self) -> Path:
+        return self.models_source.path
+
+
+@dataclass(frozen=True)
+class Result(Prepared):
+    """One run of the driver: every stage's output (Prepared's) and the executions refinement made."""
+
+    refined: Execution | None = None
+    greedy: Execution | None = None
+    zero: Execution | None = None
+    decision: MetaDecision | None = None
 
 
 def resolve_task(domain_arg: str, problem_arg: str, belief: str | Path | None = None,
@@ -65,31 +145,45 @@ def resolve_task(domain_arg: str, problem_arg: str, belief: str | Path | None = 
     return Task(domain, problem, Path(belief) if belief else belief_path_for(problem), models)
 
 
-def load_binding(task: Task) -> Binding:
+def load_binding(task: Task, signature=None) -> Binding:
+    """The binding beside the task's domain, checked against the domain (its signature where it was read)."""
     if not (task.domain_dir / BINDING_FILE).exists():
         raise BindingError(f"no action library binding {BINDING_FILE} beside the domain; refinement needs one",
                            file=str(task.domain_dir / BINDING_FILE))
-    return load_domain_binding(task.domain_dir, task.domain)
+    return load_domain_binding(task.domain_dir, task.domain, signature)
 
 
-def load_models(task: Task, sequence: ActionSequence) -> dict[str, ActionModel]:
-    needed = tuple(sorted({a.action for a in sequence.actions}))
-    models_dir = task.models_dir
-    if not models_dir.is_dir():
+def read_task(task: Task, models: str | Path | None = None, belief: Mapping | None = None, pddl: bool = True,
+              ) -> Inputs:
+    """Read each input of `task` once: the PDDL pair first (read and checked; `pddl` False where the caller brings
+    its own plan or Problem), then the binding against the domain's signature, the belief (the values `belief`
+    as a belief file's `objects` table, else the task's belief file) and the model folder (`models`, else
+    model_store's order)."""
+    read = read_pddl(task.domain, task.problem) if pddl else None
+    binding = load_binding(task, read.signature if read is not None else None)
+    if belief is not None:
+        belief = parse_belief({"objects": belief}, BELIEF_ARGUMENT, None, binding.quantities)
+    elif task.belief is None:
+        raise BeliefError("no belief: a unified-planning Problem has no belief file beside it; give the values as "
+                          "{object: {quantity: value}} or a belief file", file=BELIEF_ARGUMENT)
+    else:
+        belief = load_belief(task.belief, None, binding.quantities)
+    source = resolve_models(task.domain_dir, models)
+    return Inputs(replace(task, models=source.path), read, binding, belief, source)
+
+
+def load_models(models_dir: Path, sequence: ActionSequence) -> dict[str, ActionModel]:
+    """The duration models of the sequence's executable actions."""
+    if not Path(models_dir).is_dir():
         raise ModelFileError("no learned action models here (train them with `tailor train`)", file=str(models_dir))
-    return load_action_models(models_dir, needed)
-
-
-def success_models_for(task: Task, binding: Binding, sequence: ActionSequence) -> dict:
-    """The success classifiers the binding names for the sequence's PDDL actions (subgoal assertion)."""
-    return success_models_in(task.models_dir, binding, sequence)
+    return load_action_models(Path(models_dir), tuple(sorted({a.action for a in sequence.actions})))
 
 
 def success_models_in(models_dir: Path, binding: Binding, sequence: ActionSequence) -> dict:
     """The success classifiers in `models_dir` that the binding names for the sequence's PDDL actions."""
     names = {binding.action(a.pddl.strip("()").split()[0]).success_model for a in sequence.actions}
     names.discard(None)
-    return load_success_models(models_dir, names) if names else {}
+    return load_success_models(Path(models_dir), names) if names else {}
 
 
 def assert_task(sequence: ActionSequence, binding: Binding, success_models: dict, plan: AbstractPlan | None = None
@@ -99,52 +193,84 @@ def assert_task(sequence: ActionSequence, binding: Binding, success_models: dict
     return assert_subgoals(sequence, binding, success_models, types)
 
 
-def plan_task(task: Task, planner: str = DEFAULT_PLANNER, timeout: float | None = None) -> AbstractPlan:
-    return plan_files(task.domain, task.problem, planner=planner, timeout=timeout)
+def resolve_options(options: Options, binding: Binding, models: dict[str, ActionModel]) -> Options:
+    """`options` with the binding's `[refinement]` defaults and the risk filled in."""
+    defaults = binding.refinement
+    return replace(options,
+                   risk=resolve_risk(options.risk, models.values()),
+                   neighbourhood=defaults.neighbourhood if options.neighbourhood is None else options.neighbourhood,
+                   filter=defaults.filter if options.filter is None else options.filter,
+                   zero=defaults.zero_baseline if options.zero is None else options.zero)
 
 
-def instantiate_task(task: Task, plan: AbstractPlan, binding: Binding, belief: BeliefState | None = None
-                     ) -> ActionSequence:
-    """Algorithm 3 with the problem's objects, their types (and ancestors) and initial facts from the plan."""
-    if belief is None:
-        belief = load_belief(task.belief, [name for name, _ in plan.objects] or None, binding.quantities)
-    return instantiate(plan, binding, belief)
+def zero_assignment(sequence: ActionSequence) -> dict[str, float]:
+    """Every free parameter at 0, clipped into its range (e.g. stop at every way-point)."""
+    return {p.id: min(max(0.0, p.low), p.high) for p in sequence.free_parameters()}
 
 
-def prepare(task: Task, planner: str = DEFAULT_PLANNER, timeout: float | None = None, assertion: bool = True
-            ) -> Prepared:
-    """Plan, instantiate and (unless `assertion` is False: the plain executable actions) assert subgoals."""
-    binding = load_binding(task)  # a bad binding fails before the planner runs,
-    load_belief(task.belief, None, binding.quantities)  # and so does a belief file bad in itself (its objects
-    plan = plan_task(task, planner, timeout)             # are checked against the plan's once there is one)
-    instantiated = instantiate_task(task, plan, binding)
-    success_models = success_models_for(task, binding, instantiated) if assertion else {}
-    asserted = assert_task(instantiated, binding, success_models, plan) if assertion else None
-    sequence = asserted.sequence if asserted else instantiated
-    return Prepared(task, plan, sequence, load_models(task, sequence), binding, success_models,
-                    asserted.assertions if asserted else (), instantiated)
+def refine_stage(sequence: ActionSequence, models: dict[str, ActionModel], success_models: dict, options: Options,
+                 meta=None) -> Refinements:
+    """Refine an asserted sequence with resolved `options` (see resolve_options): greedy where asked for or
+    where the meta model `meta` judges refinement (Sec. 5.5.4: refine, or keep greedy), the zero baseline, and
+    with `options.simulate` each execution dispatched with the same simulator seed."""
+    seed = options.seed
+
+    def execution(refined: RefinedSequence) -> Execution:
+        return Execution(refined, dispatch(refined.sequence, seed=seed) if options.simulate else None)
+
+    judged = meta is not None and options.horizon > GREEDY_HORIZON and sequence.actions
+    greedy = None
+    if options.greedy or judged:
+        greedy = refine(sequence, models, horizon=GREEDY_HORIZON, method=options.optimizer, seed=seed,
+                        success_models=success_models)
+    optimized = refine(sequence, models, horizon=options.horizon, method=options.optimizer, seed=seed,
+                       success_models=success_models, risk=options.risk, neighbourhood=options.neighbourhood)
+    decision = decide(meta, greedy, models, optimized) if judged else None
+    kept_greedy = decision is not None and not decision.refine
+    greedy_run = execution(greedy) if greedy is not None else None
+    refined_run = greedy_run if kept_greedy else execution(optimized)
+    zero = None
+    if options.zero and sequence.free_parameters():
+        bound = sequence.bind(zero_assignment(sequence))
+        zero = execution(RefinedSequence(bound, predicted_durations(bound, models), (), 0))
+    return Refinements(refined_run, greedy_run if options.greedy else None, zero, decision, optimized)
 
 
-@dataclass(frozen=True)
-class Outcome:
-    """A refined sequence and, when dispatched, what the simulator measured."""
+def prepare(inputs: Inputs, options: Options = Options(), plan: AbstractPlan | None = None) -> Prepared:
+    """Algorithm 4 up to refinement on a task read by `read_task`: plan (unless `plan` is given), instantiate,
+    assert (unless `options.assertion` is False), load the models, resolve the options' defaults."""
+    if plan is None:
+        plan = plan_pddl(inputs.pddl, planner=options.planner, timeout=options.timeout)
+    objects = [name for name, _ in plan.objects]
+    belief = inputs.belief.check_objects(objects) if objects else inputs.belief
+    instantiated = instantiate(plan, inputs.binding, belief)
+    success_models: dict = {}
+    sequence, assertions = instantiated, ()
+    if options.assertion:
+        success_models = success_models_in(inputs.models.path, inputs.binding, instantiated)
+        asserted = assert_task(instantiated, inputs.binding, success_models, plan)
+        sequence, assertions = asserted.sequence, asserted.assertions
+    models = load_models(inputs.models.path, sequence)
+    resolved = resolve_options(options, inputs.binding, models)
+    if not sequence.actions:
+        resolved = replace(resolved, simulate=False)  # nothing to execute
+    return Prepared(plan, instantiated, sequence, tuple(assertions), inputs.binding, inputs.models, models,
+                    success_models, resolved)
 
-    refined: RefinedSequence
-    simulated: SequenceResult | None
 
-
-def refine_prepared(prepared: Prepared, horizon: int, method: str, seed: int, risk: float = 0.0,
-                    neighbourhood: float = 0.0) -> RefinedSequence:
-    """The prepared sequence with its free parameters fixed by refinement with `horizon` (1: greedy)."""
-    return refine(prepared.sequence, prepared.models, horizon=horizon, method=method, seed=seed,
-                  success_models=prepared.success_models, risk=risk, neighbourhood=neighbourhood)
-
-
-def dispatched(refined: RefinedSequence, seed: int, simulate: bool) -> Outcome:
-    """The refined sequence with, if `simulate`, what the simulator measured executing it."""
-    return Outcome(refined, dispatch(refined.sequence, seed=seed) if simulate else None)
-
-
-def refine_and_dispatch(prepared: Prepared, horizon: int, method: str, seed: int, simulate: bool,
-                        risk: float = 0.0, neighbourhood: float = 0.0) -> Outcome:
-    return dispatched(refine_prepared(prepared, horizon, method, seed, risk, neighbourhood), seed, simulate)
+def run(inputs: Inputs, options: Options = Options(), plan: AbstractPlan | None = None, meta=None) -> Result:
+    """Algorithm 4 on a task read by `read_task`: prepare (plan unless `plan` is given, instantiate, assert),
+    refine and, with `options.simulate`, dispatch. `meta` is the meta action model where the filter may run (the
+    caller loads it before planning, so a bad one fails before the planner's time is spent)."""
+    prepared = prepare(inputs, options, plan)
+    resolved = prepared.options
+    if not resolved.filter:
+        meta = None
+    elif meta is not None and meta.horizon != resolved.horizon and resolved.horizon > GREEDY_HORIZON:
+        logging.getLogger(__name__).warning("the meta model judges refinement with h=%d, not the h=%d asked for",
+                                            meta.horizon, resolved.horizon)
+    if resolved.simulate:  # a scene object the simulator lacks fails before refining
+        check_scene(prepared.sequence, inputs.binding.file)
+    stage = refine_stage(prepared.sequence, prepared.models, prepared.success_models, resolved, meta)
+    return Result(**{f.name: getattr(prepared, f.name) for f in fields(Prepared)}, refined=stage.refined,
+                  greedy=stage.greedy, zero=stage.zero, decision=stage.decision)

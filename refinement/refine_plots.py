@@ -1,12 +1,16 @@
-"""Pictures of subgoal refinement: the executions side by side in each of the simulator's views (Fig. 5.1 for
-a mobile robot, Fig. 5.14 for the arm: Cartesian and joint space), and the predicted time over the first free
-parameter (Fig. 5.8: a polar plot where that parameter is an angle spanning the full circle)."""
+"""Pictures of subgoal refinement: the executions side by side in each view the simulator declares (Fig. 5.1:
+one view from above; Fig. 5.14: two views, one in the plane, one of two configuration quantities), and the
+predicted time over the first free parameter (Fig. 5.8: a polar plot where the simulator declares that
+parameter's quantity an angle and its range spans the full circle)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
+
+from tailor.sims import registry
+from tailor.sims.protocol import UNDECLARED, Quantity, SimulatorEntry
 
 FULL_CIRCLE = 2 * np.pi - 1e-9
 LAYER_STYLES = (("-", "tab:blue"), ("--", "tab:orange"), (":", "tab:green"))
@@ -104,12 +108,17 @@ def tidy_polar(ax, largest: float) -> None:
     ax.grid(alpha=0.4)
 
 
+def on_the_circle(parameter, quantity: Quantity) -> bool:
+    """Whether a free parameter is drawn on polar axes: its quantity is an angle and its range the full circle."""
+    return quantity.angle and parameter.high - parameter.low >= FULL_CIRCLE
+
+
 def plot_costs(path: Path, parameter, values: np.ndarray, curves: list[tuple[str, np.ndarray]],
-               marks: list[tuple[str, float]], note: str = "") -> None:
+               marks: list[tuple[str, float]], note: str = "", quantity: Quantity = UNDECLARED) -> None:
     """Predicted duration over one free parameter, one panel per curve, written to `path`; `note` under them."""
     import matplotlib.pyplot as plt
 
-    fig = costs_figure(parameter, values, curves, marks)
+    fig = costs_figure(parameter, values, curves, marks, quantity)
     if note:
         fig.supxlabel(note, fontsize=8)
     _save(fig, path)
@@ -117,15 +126,16 @@ def plot_costs(path: Path, parameter, values: np.ndarray, curves: list[tuple[str
 
 
 def costs_figure(parameter, values: np.ndarray, curves: list[tuple[str, np.ndarray]],
-                 marks: list[tuple[str, float]]):
-    """The figure of `plot_costs`: polar where the parameter is an angle spanning the full circle (Fig. 5.8),
-    Cartesian otherwise; the greedy and refined choices marked, each panel with its legend."""
+                 marks: list[tuple[str, float]], quantity: Quantity = UNDECLARED):
+    """The figure of `plot_costs`: polar where the parameter's `quantity` is an angle and its range spans the
+    full circle (Fig. 5.8), Cartesian otherwise (the quantity's unit on the axis); the greedy and refined choices
+    marked, each panel with its legend."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    polar = parameter.high - parameter.low >= FULL_CIRCLE
+    polar = on_the_circle(parameter, quantity)
     fig, axes = plt.subplots(1, len(curves), subplot_kw={"projection": "polar"} if polar else {},
                              figsize=(4.6 * len(curves), 5.0), layout="constrained")
     for ax, (title, predicted) in zip(np.atleast_1d(axes), curves):
@@ -135,7 +145,8 @@ def costs_figure(parameter, values: np.ndarray, curves: list[tuple[str, np.ndarr
         else:
             from matplotlib.ticker import MaxNLocator
 
-            ax.set(xlabel=parameter.id, ylabel="predicted duration (s)")
+            ax.set(xlabel=f"{parameter.id} ({quantity.unit})" if quantity.unit else parameter.id,
+                   ylabel="predicted duration (s)")
             ax.xaxis.set_major_locator(MaxNLocator(nbins=5))  # tick labels apart in a narrow panel
             ax.grid(alpha=0.3)
         for label, value in marks:
@@ -156,10 +167,15 @@ def cost_plot_names(path) -> tuple[Path, Path]:
     return tuple(path.with_name(path.stem + kind + (path.suffix or ".png")) for kind in ("_polar", "_costs"))
 
 
+def _quantity(entry: SimulatorEntry | None, name: str) -> Quantity:
+    return entry.quantity(name) if entry is not None else UNDECLARED
+
+
 def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
     """The executions in `outcomes` (greedy, refined, and any other) in each view of the simulator as FILE, and
-    the predicted time of the first actions over the first free parameter as FILE_polar.png (or FILE_costs.png
-    where that parameter is not a full-circle angle). Returns the files written."""
+    the predicted time of the first actions over the first free parameter that is a full-circle angle (else
+    the first one) as FILE_polar.png (or FILE_costs.png where it is not a full-circle angle), angles as the
+    simulator declares them. Returns the files written."""
     path = Path(path)
     panels = []
     for key, o in outcomes.items():
@@ -169,9 +185,8 @@ def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
         if not o.simulated.succeeded:
             title += " (failed)"
         panels.append((title, o.simulated))
-    from tailor.sims import registry
-
-    draw_scene = registry.get(prepared.sequence.simulator).draw_scene if prepared.sequence.simulator else None
+    entry = registry.get(prepared.sequence.simulator) if prepared.sequence.simulator else None
+    draw_scene = entry.draw_scene if entry is not None else None
     chosen_values = [{p.id: p.value for a in o.refined.sequence.actions for p in a.params} for o in outcomes.values()]
     background = (None if draw_scene is None
                   else (lambda ax, col: draw_scene(ax, prepared.sequence, chosen_values[col])))
@@ -182,7 +197,7 @@ def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
     free = prepared.sequence.actions[0].free_parameters()
     if not free:
         return written
-    parameter = next((p for p in free if p.high - p.low >= FULL_CIRCLE), free[0])
+    parameter = next((p for p in free if on_the_circle(p, _quantity(entry, p.id))), free[0])
     window = prepared.sequence.actions[:max(2, refined.horizon)]
     chosen = {p.id: p.value for a in refined.sequence.actions for p in a.params}
     greedy = {p.id: p.value for a in outcomes["greedy"].refined.sequence.actions for p in a.params}
@@ -195,12 +210,13 @@ def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
         total += predicted
         curves.append((f"{action.step} {action.action}", predicted))
     curves.append(("sum over the horizon", total))
-    polar = parameter.high - parameter.low >= FULL_CIRCLE
+    quantity = _quantity(entry, parameter.id)
+    polar = on_the_circle(parameter, quantity)
     costs = cost_plot_names(path)[0 if polar else 1]
     others = len({p.id for a in window for p in a.free_parameters()} - {parameter.id})
     note = (f"{parameter.id} varied, the {others} other free parameter{'s' if others != 1 else ''} of these actions at "
             "their refined values: a mark is where a choice of it lies on this slice, not that choice's own "
             "predicted total" if others else "")
     plot_costs(costs, parameter, values, curves, [("greedy", greedy[parameter.id]), ("refined", chosen[parameter.id])],
-               note)
+               note, quantity)
     return written + [costs]

@@ -19,7 +19,10 @@ from tailor.refinement.belief import BeliefState
 from tailor.errors import TailorError
 from tailor.refinement.instantiate import instantiate
 from tailor.refinement.binding import Binding
-from tailor.refinement.pipeline import Task, load_binding, load_models, plan_task, resolve_task
+from tailor.refinement.models.meta_model import load_meta_model
+from tailor.planner_bridge import plan_pddl, read_pddl
+from tailor.refinement.pipeline import (Task, assert_task, load_binding, load_models, resolve_task,
+                                        success_models_in)
 
 
 @dataclass(frozen=True)
@@ -32,9 +35,11 @@ class Job:
 
 
 def planned_job(task: Task, seed: int) -> Job:
-    """A job for `task` without its learned models (training plans before any exist): binding, then plan."""
-    load_binding(task)  # a bad binding fails before the planner runs
-    return Job(task=task, plan=plan_task(task), seed=seed)
+    """A job for `task` without its learned models (training plans before any exist): the PDDL pair read, the
+    binding checked against it (a bad binding fails before the planner runs), then the plan."""
+    pddl = read_pddl(task.domain, task.problem)
+    load_binding(task, pddl.signature)
+    return Job(task=task, plan=plan_pddl(pddl), seed=seed)
 
 
 _CACHE: dict = {}  # per worker process: bindings and models, loaded once
@@ -50,14 +55,12 @@ def job_binding(job: Job):
 def job_models(job: Job, sequence: ActionSequence):
     key = ("models", str(job.task.models_dir), tuple(sorted({a.action for a in sequence.actions})))
     if key not in _CACHE:
-        _CACHE[key] = load_models(job.task, sequence)
+        _CACHE[key] = load_models(job.task.models_dir, sequence)
     return _CACHE[key]
 
 
 def job_meta_model(job: Job):
     """The meta action model beside the job's action models (models/meta.json), loaded once per process."""
-    from tailor.refinement.models.meta_model import load_meta_model
-
     key = ("meta", str(job.task.models_dir))
     if key not in _CACHE:
         _CACHE[key] = load_meta_model(job.task.models_dir)
@@ -66,19 +69,15 @@ def job_meta_model(job: Job):
 
 def job_success_models(job: Job, sequence: ActionSequence) -> dict:
     """The success classifiers the binding names for the sequence's actions, loaded once per process."""
-    from tailor.refinement.pipeline import success_models_for
-
     key = ("success", str(job.task.models_dir), tuple(sorted({a.pddl.split()[0] for a in sequence.actions})))
     if key not in _CACHE:
-        _CACHE[key] = success_models_for(job.task, job_binding(job), sequence)
+        _CACHE[key] = success_models_in(job.task.models_dir, job_binding(job), sequence)
     return _CACHE[key]
 
 
 def asserted_situation(job: Job, objects: dict) -> tuple[ActionSequence, dict]:
     """One situation through Algorithm 4 up to refinement: instantiated, subgoals asserted where the binding's
     success classifiers predict failure; with the classifiers the refinement must respect (Alg. 6)."""
-    from tailor.refinement.pipeline import assert_task
-
     sequence = situation_sequence(job, objects)
     success = job_success_models(job, sequence)
     if not success:

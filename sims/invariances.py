@@ -1,5 +1,6 @@
 """Random changes of action parameters that a feature space's features must not change under (the invariance
-tests of Table 4.1's rows), shared by the generic feature spaces and those a robot brings."""
+tests of Table 4.1's rows), shared by the generic feature spaces and those a robot brings. A change that
+assumes a robot's parameter layout (a planar pose, say) lives in that robot's package."""
 
 from __future__ import annotations
 
@@ -21,17 +22,3 @@ def shift_mirror_axes(params: np.ndarray, rng: np.random.Generator, axes: Sequen
             out[:, k] = flip * params[:, k]
     return out
 
-
-def rigid_motion(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """A navigation's parameters (x, y, phi, v, xg, yg, phig, vg) with the scene rotated, translated and (half
-    the time) mirrored about the x axis."""
-    angle, (sx, sy), mirror = rng.uniform(-np.pi, np.pi), rng.uniform(-5, 5, 2), rng.random() < 0.5
-    out = params.copy()
-    c, s = np.cos(angle), np.sin(angle)
-    for ix, iy, iphi in ((0, 1, 2), (4, 5, 6)):
-        x, y = params[:, ix], params[:, iy]
-        out[:, ix], out[:, iy] = c * x - s * y + sx, s * x + c * y + sy
-        out[:, iphi] = params[:, iphi] + angle
-        if mirror:
-            out[:, iy], out[:, iphi] = -out[:, iy], -out[:, iphi]
-    return out

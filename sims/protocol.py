@@ -3,8 +3,9 @@
 A robot package provides a `SimulatorEntry`: its executable actions (each with an observed parameter group,
 read from the world, and an internal one, the subgoal, each group with its own quantities), a factory of
 simulators that follow `Simulator`, the experience scenarios its actions are learned from, and the random
-situations of its problems that evaluations draw. The core finds entries in the registry (`tailor.sims.registry`)
-and never imports a robot by name.
+situations of its problems that evaluations draw; and, as data, what its quantities are (a unit, whether an
+angle) and which pictures of it can be drawn. The core finds entries in the registry (`tailor.sims.registry`)
+and never imports a robot by name: it asks these declarations, never guesses from a name.
 """
 
 from __future__ import annotations
@@ -28,7 +29,8 @@ class ActionSpec:
     """An executable action: its parameter names per group and the object quantity each one takes.
 
     a navigation to a pose: observed (x, y, phi, v) of quantities (x, y, phi, v), internal (xg, yg, phig, vg) of
-    the same quantities of the goal object; a manipulator grasp: observed base pose, internal gripper target.
+    the same quantities of the goal object; a manipulator's reach to a point: observed the robot's own
+    quantities, internal the point's.
     """
 
     name: str
@@ -81,6 +83,70 @@ class Simulator(Protocol):
 
 
 @dataclass(frozen=True)
+class Quantity:
+    """What a simulator's quantity (or logged state column) is: its unit ("m", "rad", "m/s"; "" where none is
+    declared) and whether it is an angle (a value on the circle: shown in degrees, drawn on polar axes where its
+    range spans the full circle)."""
+
+    unit: str = ""
+    angle: bool = False
+
+
+UNDECLARED = Quantity()  # what a quantity a simulator says nothing about is: no unit, not an angle
+
+
+@dataclass(frozen=True)
+class DurationCurve:
+    """A picture of learned duration models a simulator can draw (Fig. 4.7): the predicted duration in one
+    situation, parameter `varied` swept over the full circle (an angle), every other parameter at its value in
+    `situation` (0 where not given). Drawn for each model whose feature space reads `varied` and every parameter
+    of `situation`; `label` names the swept value on the axes (what it means in this situation, e.g. the angle
+    of approach where the goal lies straight ahead), `meaning` says it in words, `description` the situation."""
+
+    varied: str
+    label: str
+    situation: Mapping[str, float]
+    description: str
+    meaning: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "situation", MappingProxyType(dict(self.situation)))
+
+    @property
+    def parameters(self) -> frozenset[str]:
+        """The action parameters the picture sets: a model must read them all."""
+        return frozenset((self.varied, *self.situation))
+
+
+@dataclass(frozen=True)
+class SuccessRegion:
+    """A picture of learned success classifiers a simulator can draw (Fig. 4.8): where a classifier predicts
+    failure, over starts on a square grid of parameters `x` and `y` within `half_size` of the goal at the
+    origin; parameter `heading` points from each start toward the origin, turned by each of `turns` (rad, with
+    the panel's title); every other parameter at its value in `situation` (0 where not given). Drawn for each
+    classifier whose feature space reads them all. `goal` labels the origin in the legend, `goal_heading` (a
+    parameter of `situation`, or "") is drawn there as an arrow; `description` titles the picture, "{action}"
+    replaced by the classifier's action."""
+
+    x: str
+    y: str
+    heading: str
+    half_size: float
+    turns: tuple[tuple[float, str], ...]
+    situation: Mapping[str, float]
+    description: str
+    goal: str = "goal"
+    goal_heading: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "situation", MappingProxyType(dict(self.situation)))
+
+    @property
+    def parameters(self) -> frozenset[str]:
+        return frozenset((self.x, self.y, self.heading, *self.situation))
+
+
+@dataclass(frozen=True)
 class Scenario:
     """An experience scenario (Sec. 4.1): `run(seed)` executes one episode of `action` from a random initial
     and goal state drawn from documented ranges; the episode depends only on the seed."""
@@ -104,6 +170,9 @@ class FeatureSpace:
     compute: Callable[[np.ndarray], np.ndarray]  # (n, len(parameters)) -> (n, len(names))
     invariance: str
     transform: Callable[[np.ndarray, np.random.Generator], np.ndarray] | None = None
+    # a guaranteed enclosure of the features over boxes of parameters, for the certified optimizer: (low, high),
+    # each (k, len(parameters)), -> (feature_low, feature_high), each (k, len(names)); None: the space has none
+    bounds: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
 
     def __call__(self, params: np.ndarray) -> np.ndarray:
         params = np.atleast_2d(np.asarray(params, dtype=float))
@@ -130,7 +199,9 @@ class SimulatorEntry:
     scenarios: Mapping[str, Scenario] = field(default_factory=dict)
     situations: Mapping[str, Situation] = field(default_factory=dict)
     subgoal_episode: SubgoalEpisode | None = None
-    views: tuple = ()  # trajectory columns worth drawing: pairs ("x", "y") or layers (("x", "y", "phi"), ...)
+    # trajectory columns worth drawing: pairs ("x", "y") or layers (("x", "y", "phi"), ...), a layer's third
+    # column a heading drawn as arrows
+    views: tuple = ()
     feature_spaces: tuple[FeatureSpace, ...] = ()  # feature spaces of its own (Table 4.1 rows)
     scene_objects: tuple[str, ...] = ()  # the objects reset(scene) places; () = not declared (not checked)
     # draw_scene(ax, sequence, values): draws the static world of an instantiated sequence (its scene, its
@@ -139,6 +210,12 @@ class SimulatorEntry:
     description: str = ""
     extras: Mapping[str, Any] = field(default_factory=dict)
     team: Any = None  # a tailor.sims.team.TeamScene for the coordination experiments (Ch. 7), or None
+    # quantity or state column -> its unit and whether it is an angle (pictures and printed values ask it);
+    # one not declared is UNDECLARED
+    units: Mapping[str, Quantity] = field(default_factory=dict)
+    # pictures of its learned models it can draw, besides the learning curves every simulator gets: Fig. 4.7's
+    # DurationCurve, Fig. 4.8's SuccessRegion
+    model_pictures: tuple[DurationCurve | SuccessRegion, ...] = ()
 
     def __post_init__(self) -> None:
         for key, spec in self.actions.items():
@@ -151,11 +228,28 @@ class SimulatorEntry:
         object.__setattr__(self, "actions", MappingProxyType(dict(self.actions)))
         object.__setattr__(self, "scenarios", MappingProxyType(dict(self.scenarios)))
         object.__setattr__(self, "situations", MappingProxyType(dict(self.situations)))
+        for name, quantity in self.units.items():
+            if not isinstance(quantity, Quantity):
+                raise ValueError(f"simulator {self.name}: units[{name!r}] must be a Quantity, got "
+                                 f"{type(quantity).__name__}")
+        object.__setattr__(self, "units", MappingProxyType(dict(self.units)))
 
     @property
     def quantities(self) -> tuple[str, ...]:
         """Every quantity its actions take, without repeats."""
         return tuple(dict.fromkeys(q for spec in self.actions.values() for q in spec.quantities))
+
+    def quantity(self, name: str) -> Quantity:
+        """What quantity `name` is (its unit, whether it is an angle), as this simulator declares it. `name` may
+        be a quantity or state column ("phi"), a parameter id, which ends in its quantity ("pos2.phi"), or an
+        action's parameter name ("phig", the goal's phi). UNDECLARED where the simulator says nothing of it."""
+        if name in self.units:
+            return self.units[name]
+        if "." in name:
+            return self.units.get(name.rpartition(".")[2], UNDECLARED)
+        meant = {quantity for spec in self.actions.values() for parameter, quantity
+                 in zip(spec.parameters, spec.observed_quantities + spec.internal_quantities) if parameter == name}
+        return self.units.get(meant.pop(), UNDECLARED) if len(meant) == 1 else UNDECLARED
 
     def action(self, name: str) -> ActionSpec:
         from tailor.errors import SimError

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from tailor.sims.pose import norm
+from tailor.sims.soccer.pose import norm
 from tailor.sims.episode import Episode
 from tailor.sims.experience import scenario as find_scenario
 

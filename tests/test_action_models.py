@@ -52,12 +52,39 @@ def test_action_model_json_round_trip_predicts_identically(action_model, tmp_pat
     loaded = load_action_models(tmp_path)
     assert list(loaded) == ["goToPose"]
     model = loaded["goToPose"]
-    assert (model.action, model.feature_set, model.feature_names, model.n_i, model.report) == (
+    assert (model.action, model.feature_space, model.feature_names, model.n_i, model.report) == (
         "goToPose", "pose", feature_names("pose"), 5, {"mae": 0.1})
     params = random_params(2000, seed=13)
     np.testing.assert_array_equal(model.predict_duration(params), action_model.predict_duration(params))
     assert model.to_json() == action_model.to_json()
     assert [p.name for p in tmp_path.iterdir()] == ["goToPose.json"]  # no temp file left behind
+
+
+def test_model_files_name_their_feature_space_and_files_of_the_old_key_still_load(action_model, collision_model,
+                                                                                 tmp_path):
+    """Written as `feature_space` (as the binding names it); files written as `feature_set` before (the bundled
+    models among them) load as they did."""
+    from pathlib import Path
+
+    for model in (action_model, collision_model):
+        data = model.to_json()
+        assert data["feature_space"] == "pose" and "feature_set" not in data
+    old = action_model.to_json()
+    old["feature_set"] = old.pop("feature_space")
+    write(tmp_path / "goToPose.json", old)
+    assert load_action_models(tmp_path)["goToPose"].feature_space == "pose"
+    old = collision_model.to_json()
+    old["feature_set"] = old.pop("feature_space")
+    write(tmp_path / "goToPose.collision.json", old)
+    assert load_collision_model(tmp_path / "goToPose.collision.json").feature_space == "pose"
+    domains = Path(__file__).resolve().parent.parent / "domains"
+    for folder in sorted(domains.glob("*/models")):
+        files = {p.name for p in folder.glob("*.json")} - {"meta.json"}
+        actions = tuple(sorted(n.removesuffix(".json") for n in files if not n.endswith(".collision.json")))
+        assert "feature_set" in json.loads((folder / f"{actions[0]}.json").read_text())  # an old file ...
+        assert set(load_action_models(folder, actions)) == set(actions)  # ... that loads
+        for name in sorted(n for n in files if n.endswith(".collision.json")):
+            assert load_collision_model(folder / name).action == name.removesuffix(".collision.json")
 
 
 def test_collision_tree_arrays_predict_like_scikit_learn(collision_model):
@@ -170,8 +197,8 @@ def mutate(data: dict, path: tuple, value) -> dict:
 
 @pytest.mark.parametrize("path, value, message", [
     (("schema",), "tailor.action_model/0", "schema is 'tailor.action_model/0', expected 'tailor.action_model/1'"),
-    (("feature_set",), "polar", "unknown feature set 'polar'"),
-    (("feature_names",), ["v", "dist"], "feature_names ['v', 'dist'] do not match feature set 'pose'"),
+    (("feature_space",), "polar", "unknown feature space 'polar'"),
+    (("feature_names",), ["v", "dist"], "feature_names ['v', 'dist'] do not match feature space 'pose'"),
     (("n_i",), 0, "'n_i' must be a positive integer"),
     (("duration",), [1, 2], "'duration' must be a model tree object"),
     (("report",), 3, "'report' must be an object"),
@@ -185,9 +212,9 @@ def test_loader_rejects_wrong_fields(action_model, tmp_path, path, value, messag
 
 def test_loader_rejects_a_tree_of_the_wrong_shape(action_model, collision_model, tmp_path):
     data = action_model.to_json()
-    data["feature_set"], data["feature_names"] = "pose_delta", list(feature_names("pose_delta"))
+    data["feature_space"], data["feature_names"] = "pose_delta", list(feature_names("pose_delta"))
     write(tmp_path / "goToPose.json", data)
-    with pytest.raises(ModelFileError, match="goToPose.json: duration model tree takes 5 features, feature set has 6"):
+    with pytest.raises(ModelFileError, match="goToPose.json: duration model tree takes 5 features, feature space has 6"):
         load_action_models(tmp_path)
 
     path = tmp_path / "goToPose.collision.json"

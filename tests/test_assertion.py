@@ -16,7 +16,7 @@ from tailor.refinement.optimizers import analytic
 from tailor.refinement.optimizers.synthetic import random_objective
 from tailor.refinement.belief import parse_belief
 from tailor.refinement.instantiate import instantiate
-from tailor.refinement.pipeline import assert_task, prepare, resolve_task
+from tailor.refinement.pipeline import Options, assert_task, prepare, read_task, resolve_task
 from tailor.refinement.refine import predicted_success, refine
 
 
@@ -93,7 +93,7 @@ def test_ga_and_sampling_return_valid_parameterizations(method):
 @pytest.fixture(scope="module")
 def soccer():
     """The approach problem planned and its models loaded once (its own belief file asserts a subgoal)."""
-    return prepare(resolve_task("soccer", "approach"))
+    return prepare(read_task(resolve_task("soccer", "approach")))
 
 
 def approach(prepared, robot, ball):
@@ -137,7 +137,7 @@ def test_subgoal_inserted_exactly_when_the_classifier_predicts_failure(soccer, r
 
 def test_assert_stage_switched_off_leaves_the_plain_action(soccer):
     assert soccer.assertions[0].inserted and len(soccer.sequence.actions) == 2
-    plain = prepare(resolve_task("soccer", "approach"), assertion=False)
+    plain = prepare(read_task(resolve_task("soccer", "approach")), Options(assertion=False))
     assert plain.assertions == () and len(plain.sequence.actions) == 1 and not plain.sequence.actions[0].guard
 
 
@@ -253,9 +253,7 @@ def test_success_margin_keeps_choices_off_the_edge_of_the_region(soccer):
     heading range to either side; without it the optimizer may sit on the very edge."""
     from dataclasses import replace as copy
 
-    from tailor.refinement.pipeline import prepare as prepare_task
-
-    score = prepare_task(resolve_task("soccer", "score"))
+    score = prepare(read_task(resolve_task("soccer", "score")))
     guarded = score.sequence.actions[0]
     assert guarded.guard == "goToPose" and guarded.guard_margin == 0.05
     classifier = score.success_models["goToPose"]

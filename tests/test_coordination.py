@@ -20,6 +20,7 @@ from tailor.refinement.evaluation.coordination import (
     fuse,
     going,
     most_certain,
+    perturbed_columns,
     team_view,
 )
 from tailor.refinement.models.action_models import load_action_models
@@ -134,6 +135,24 @@ def test_a_fresh_message_is_preferred_to_a_perception_and_a_stale_one_is_not():
     assert np.isnan(most_certain([(np.full((1, 2), np.nan), np.array([1.0]))])).all()
     heading = fuse([(np.array([[0.0, 3.1]]), np.array([1.0])), (np.array([[2.0, -3.1]]), np.array([1.0]))], heading=1)
     assert heading[0, 0] == pytest.approx(1.0) and abs(heading[0, 1]) == pytest.approx(math.pi, abs=1e-9)
+
+
+def test_the_scene_declares_its_robots_state_and_what_the_added_noise_perturbs(predictor):
+    """The core reads a robot's state as its scene declares it: Q4's noise on the soccer robots' pose, not on
+    their speed (and the same draws as before the declaration: the first three columns)."""
+    from tailor.sims.team import TeamScene
+
+    assert isinstance(TEAM, TeamScene) and TEAM.state == ("x", "y", "phi", "v")
+    assert perturbed_columns(TEAM) == [0, 1, 2]
+    log = TEAM.dynamic(("pioneer",) * 2, 1.0, seed=5)
+    team = team_view(log, TEAM, Perception(field_of_view=360.0), seed=5)
+    plain = team.beliefs("shared")
+    noisy = team.beliefs("shared", 0.5, np.random.default_rng(1), perturbed_columns(TEAM))
+    known = np.isfinite(plain.states[..., 0]) & ~np.eye(2, dtype=bool)  # teammates' estimates
+    assert (noisy.states[..., 3][known] == plain.states[..., 3][known]).all()  # the speed as estimated
+    assert not np.allclose(noisy.states[..., :3][known], plain.states[..., :3][known])
+    draws = np.random.default_rng(1).standard_normal(plain.states[..., :3].shape) * 0.5  # as drawn before it
+    np.testing.assert_array_equal(noisy.states[..., :3][known], (plain.states[..., :3] + draws)[known])
 
 
 def test_a_robot_that_knows_no_target_chooses_nobody():

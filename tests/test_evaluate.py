@@ -9,12 +9,10 @@ import numpy as np
 import pytest
 
 from tailor.planner_bridge.bundled import DOMAINS_DIR
-from tailor.refinement.binding import load_domain_binding, parse_binding
+from tailor.refinement.binding import EvaluationPlan, RefinementDefaults, load_domain_binding, parse_binding
 from tailor.cli.main import main
 from tailor.errors import BindingError
 from tailor.refinement.evaluation.experiments import (
-    EvaluationPlan,
-    evaluation_plan,
     summarize_comparison,
     summarize_horizons,
 )
@@ -68,9 +66,11 @@ def test_per_action_tables_keep_asserted_sequences_apart():
         (1, "goToPose", 1, 3.0, 3.0), (2, "goToPose", 1, 2.0, 2.0), (3, "dribbleBall", 1, 10.0, 10.0)]
 
 
-def test_the_evaluation_plan_is_data_in_the_binding():
-    soccer = evaluation_plan(load_domain_binding(DOMAINS_DIR / "soccer"))
-    assert soccer == EvaluationPlan("score", "waypoints", False, "approach", neighbourhood=0.02)
+def test_the_evaluation_plan_and_refinement_defaults_are_typed_data_in_the_binding():
+    soccer = load_domain_binding(DOMAINS_DIR / "soccer")
+    assert soccer.require_evaluation() == EvaluationPlan("score", "waypoints", "approach")
+    assert soccer.refinement == RefinementDefaults(filter=False, neighbourhood=0.02, zero_baseline=False)
+    assert load_domain_binding(DOMAINS_DIR / "arm").refinement.zero_baseline is True
     head = 'schema = 2\nsimulator = "soccer"\n'
     for table, message in (("", r"\[evaluation\] missing"),
                            ('[evaluation]\ncomparison = "tour"\n',
@@ -78,14 +78,19 @@ def test_the_evaluation_plan_is_data_in_the_binding():
                             r"\(known: score, score_anywhere, waypoints, approach\)"),
                            ('[evaluation]\ncomparison = "score"\nhorizon = "waypoints"\n',
                             r"\[evaluation\] unknown key 'horizon'"),
-                           ('[evaluation]\ncomparison = "score"\nzero_baseline = 1\n',
-                            r"\[evaluation\] zero_baseline must be true or false, not 1"),
-                           ('[evaluation]\ncomparison = "score"\nneighbourhood = -0.1\n',
-                            r"\[evaluation\] neighbourhood must be a share of each free range in \[0, 0.5\), not -0.1")):
+                           ('[refinement]\nzero_baseline = 1\n',
+                            r"\[refinement\] zero_baseline must be true or false, not 1"),
+                           ('[refinement]\nneighbourhood = -0.1\n',
+                            r"\[refinement\] neighbourhood must be a share of each free range in \[0, 0.5\), not -0.1"),
+                           ('[refinement]\nneighborhood = 0.1\n', r"\[refinement\]: unknown key 'neighborhood'"),
+                           ('[evaluation]\ncomparison = "score"\nfilter = true\n[refinement]\nfilter = false\n',
+                            r"\[evaluation\] filter and \[refinement\] filter both given")):
         with pytest.raises(BindingError, match=r"^e.toml: " + message):
-            evaluation_plan(parse_binding(tomllib.loads(head + table), "e.toml"))
-    only = parse_binding(tomllib.loads(head + '[evaluation]\ncomparison = "waypoints"\nzero_baseline = true\n'))
-    assert evaluation_plan(only) == EvaluationPlan("waypoints", None, True)
+            parse_binding(tomllib.loads(head + table), "e.toml").require_evaluation()
+    # a binding written before [refinement] existed still reads: its keys in [evaluation] are refinement defaults
+    old = parse_binding(tomllib.loads(head + '[evaluation]\ncomparison = "waypoints"\nzero_baseline = true\n'))
+    assert old.require_evaluation() == EvaluationPlan("waypoints", None, None)
+    assert old.refinement == RefinementDefaults(zero_baseline=True)
 
 
 def test_horizon_statistics_compare_each_horizon_with_greedy_and_the_previous():

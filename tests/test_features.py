@@ -1,8 +1,11 @@
-"""Feature spaces (Table 4.1) and intermediate examples (Sec. 4.1.2)."""
+"""Feature spaces (Table 4.1): the registry, the generic "line" space, every registered space's invariance test,
+the spaces the bundled domains name; and intermediate examples (Sec. 4.1.2)."""
 
 from __future__ import annotations
 
-import math
+import json
+import tomllib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,96 +13,57 @@ import pytest
 from tailor.errors import DataError
 from tailor.refinement.models.features import (
     FEATURE_SPACES,
-    feature_spaces,
-    POSE_PARAMETERS,
     compute_features,
     feature_names,
+    feature_space,
+    feature_spaces,
     first_examples,
     intermediate_examples,
 )
+from tailor.sims import registry
 from tailor.sims.episode import Episode
-from tailor.sims.pose import norm
-from synthetic_episodes import COLUMNS, random_params
+from synthetic_episodes import COLUMNS
 
-PI = math.pi
-# the feature spaces of a navigation to a pose (x, y, phi, v, xg, yg, phig, vg)
-POSE_SPACES = sorted(name for name, space in FEATURE_SPACES.items() if space.parameters == POSE_PARAMETERS)
+ROOT = Path(__file__).resolve().parent.parent
 
 
-def transform(params: np.ndarray, angle: float, shift: tuple[float, float], mirror: bool) -> np.ndarray:
-    """Rotate the whole scene by `angle` about the origin, translate it by `shift`, optionally mirror in y."""
-    out = params.copy()
-    c, s = math.cos(angle), math.sin(angle)
-    for xi, yi, hi in ((0, 1, 2), (4, 5, 6)):
-        x, y = params[:, xi], params[:, yi]
-        out[:, xi] = c * x - s * y + shift[0]
-        out[:, yi] = s * x + c * y + shift[1]
-        out[:, hi] = params[:, hi] + angle
-        if mirror:
-            out[:, yi], out[:, hi] = -out[:, yi], -out[:, hi]
-    return out
+def test_the_core_brings_only_spaces_of_no_particular_robot():
+    """A robot's rows of Table 4.1 (a pose, joints) come with its package; the arm's own space is its "ramps"."""
+    assert tuple(FEATURE_SPACES) == ("line",)
+    assert feature_names("line") == ("dist", "v", "vg")
+    assert feature_space("ramps") is next(s for s in registry.get("arm").feature_spaces if s.name == "ramps")
+    assert not {"reach", "joints"} & set(feature_spaces())
 
 
-def test_norm_wraps_into_minus_pi_to_pi():
-    angles = np.array([0.0, 0.5, PI - 1e-9, PI + 0.25, -PI - 0.25, 7 * PI + 0.1, -5.0])
-    wrapped = norm(angles)
-    assert np.all((wrapped >= -PI) & (wrapped < PI))
-    np.testing.assert_allclose(wrapped, [0.0, 0.5, PI - 1e-9, -PI + 0.25, PI - 0.25, -PI + 0.1, 2 * PI - 5.0], atol=1e-12)
+def test_the_line_space_by_hand():
+    params = np.array([[0.0, 0.5, 2.0, 0.1], [3.0, 0.5, 1.0, -0.2], [1.0, -0.3, 1.0, 0.4]])
+    expected = np.array([[2.0, 0.5, 0.1], [2.0, -0.5, 0.2], [0.0, -0.3, 0.4]])  # signed toward the goal (+ at 0)
+    np.testing.assert_allclose(compute_features("line", params), expected)
 
 
-def test_pose_features_by_hand():
-    names = feature_names("pose")
-    assert names == ("v", "vg", "dist", "angle_to", "angle_at")
-    params = np.array([
-        # robot at the origin facing +x, goal at (1, 1) facing +y: goal 45 deg to the left, arrive 45 deg left
-        [0.0, 0.0, 0.0, 0.3, 1.0, 1.0, PI / 2, 0.1],
-        # robot facing +y: the goal is 45 deg to its right, so angle_at is mirrored: -norm(0 - pi/4)
-        [0.0, 0.0, PI / 2, 0.0, 1.0, 1.0, 0.0, 0.2],
-        # across the wrap: bearing pi, heading -3 -> angle_to_signed = 3 - pi < 0; phig = -3
-        [1.0, 2.0, -3.0, 0.5, -1.0, 2.0, -3.0, 0.0],
-    ])
-    expected = np.array([
-        [0.3, 0.1, math.sqrt(2), PI / 4, PI / 4],
-        [0.0, 0.2, math.sqrt(2), PI / 4, PI / 4],
-        [0.5, 0.0, 2.0, PI - 3.0, -(PI - 3.0)],
-    ])
-    np.testing.assert_allclose(compute_features("pose", params), expected, atol=1e-12)
-    delta = compute_features("pose_delta", params)[:, -1]
-    np.testing.assert_allclose(delta, [PI / 2, PI / 2, 0.0], atol=1e-12)
+def _named_spaces() -> list[tuple[str, str]]:
+    """(file, feature space) for every space a bundled binding or model file names."""
+    named = []
+    for binding in sorted(ROOT.glob("domains/*/actions.toml")):
+        training = tomllib.loads(binding.read_text(encoding="utf-8")).get("training", {})
+        for kind in ("models", "classifiers"):
+            for table in training.get(kind, {}).values():
+                named.append((binding.relative_to(ROOT).as_posix(), table["feature_space"]))
+    for model in sorted(ROOT.glob("domains/*/models/*.json")):
+        data = json.loads(model.read_text(encoding="utf-8"))
+        for space in [data.get("feature_space", data.get("feature_set"))] + [
+                w.get("feature_space", w.get("feature_set")) for w in data.get("window", [])]:
+            if space is not None:
+                named.append((model.relative_to(ROOT).as_posix(), space))
+    return named
 
 
-def test_the_pose_spaces_are_registered():
-    assert POSE_SPACES == ["pose", "pose_delta", "position"]
-    assert FEATURE_SPACES["pose_delta"].names == feature_names("pose") + ("delta_angle",)
-    assert feature_names("position") == ("v", "dist", "angle_to")  # Table 4.1's goToPosition row
-
-
-def test_the_position_space_ignores_the_goal_heading_and_speed():
-    params = random_params(50, seed=4)
-    other = params.copy()
-    other[:, 6:] = np.random.default_rng(5).uniform(-3, 3, (50, 2))
-    pose = compute_features("pose", params)
-    np.testing.assert_array_equal(compute_features("position", params), pose[:, [0, 2, 3]])
-    np.testing.assert_array_equal(compute_features("position", other), compute_features("position", params))
-
-
-@pytest.mark.parametrize("feature_set", POSE_SPACES)
-@pytest.mark.parametrize("mirror", [False, True])
-def test_features_invariant_to_translation_rotation_and_mirroring(feature_set, mirror):
-    params = random_params(500, seed=1)
-    before = compute_features(feature_set, params)
-    for angle, shift in ((0.7, (1.5, -2.0)), (-2.9, (-3.0, 0.4)), (PI, (0.0, 0.0))):
-        after = compute_features(feature_set, transform(params, angle, shift, mirror))
-        np.testing.assert_allclose(after, before, atol=1e-9)
-
-
-def test_features_see_a_change_of_the_goal_relative_to_the_robot():
-    params = random_params(200, seed=2)
-    moved = params.copy()
-    moved[:, 6] += 0.3  # turn only the goal heading: angle_at must change, the rest must not
-    a, b = compute_features("pose", params), compute_features("pose", moved)
-    np.testing.assert_array_equal(a[:, :4], b[:, :4])
-    assert np.all(np.abs(b[:, 4] - a[:, 4]) > 0.29)
+def test_every_feature_space_the_bundled_domains_name_resolves():
+    named = _named_spaces()
+    assert {space for _, space in named} >= {"goto", "approach", "dribble", "position", "pose_walls", "ramps",
+                                             "route", "grasp"}
+    for source, space in named:
+        assert feature_space(space).name == space, source
 
 
 @pytest.mark.parametrize("name", sorted(feature_spaces()))
@@ -117,26 +81,12 @@ def test_every_feature_space_passes_its_own_invariance_test(name):
         np.testing.assert_allclose(space(moved), before, atol=1e-9)  # ... but not the features
 
 
-@pytest.mark.parametrize("feature_set", POSE_SPACES)
-@pytest.mark.parametrize("column", [2, 3, 6, 7])  # phi, v, phig, vg
-def test_features_piecewise_affine_in_headings_and_speeds(feature_set, column):
-    """With positions fixed, each feature is affine in phi, v, phig, vg between a few kinks (App. C.3.4)."""
-    base = random_params(20, seed=3)
-    grid = np.linspace(-PI, PI, 2001) if column in (2, 6) else np.linspace(0.0, 1.0, 2001)
-    for row in base:
-        params = np.repeat(row[None, :], len(grid), axis=0)
-        params[:, column] = grid
-        values = compute_features(feature_set, params)
-        bends = np.abs(np.diff(values, n=2, axis=0)) > 1e-9  # second differences vanish on affine pieces
-        assert np.all(bends.sum(axis=0) <= 8), bends.sum(axis=0)
-
-
 def test_compute_features_rejects_bad_input():
-    with pytest.raises(ValueError, match=r"shape \(n, 8\)"):
-        compute_features("pose", np.zeros((3, 7)))
-    with pytest.raises(DataError, match=r"unknown feature space 'speed' \(known: .*pose.*\)"):
+    with pytest.raises(ValueError, match=r"shape \(n, 4\)"):
+        compute_features("line", np.zeros((3, 7)))
+    with pytest.raises(DataError, match=r"unknown feature space 'speed' \(known: .*line.*\)"):
         compute_features("speed", np.zeros((1, 8)))
-    assert compute_features("pose", np.zeros(8)).shape == (1, 5)
+    assert compute_features("line", np.zeros(4)).shape == (1, 3)
 
 
 def make_episode(rows: int, duration: float, seed: int = 0) -> Episode:

@@ -72,8 +72,7 @@ def test_a_plot_whose_companion_cannot_be_written_fails_before_planning(companio
 def test_a_belief_file_bad_in_itself_fails_before_planning(tmp_path, monkeypatch, capsys):
     belief = tmp_path / "belief.toml"
     belief.write_text('[objects.pos1]\nx = "far"\n')
-    # (plan_files, which plan_task calls: a module importing plan_task meanwhile must not keep the patch)
-    monkeypatch.setattr("tailor.refinement.pipeline.plan_files", _no_work)
+    monkeypatch.setattr("tailor.refinement.pipeline.plan_pddl", _no_work)
     assert main(["refine", "soccer", "score", "--belief", str(belief)]) == 10
     assert one_line(capsys.readouterr().err) == f"tailor refine: error: {belief}: [objects.pos1] x = 'far' is not a number"
 
@@ -218,7 +217,7 @@ def test_binding_names_the_domain_lacks_are_errors(soccer, capsys, monkeypatch, 
     binding = soccer / "actions.toml"
     binding.write_text(binding.read_text().replace(old, new))
     monkeypatch.setattr("tailor.planner_bridge.plan_files", _no_work)  # before planning
-    monkeypatch.setattr("tailor.refinement.pipeline.plan_files", _no_work)
+    monkeypatch.setattr("tailor.refinement.pipeline.plan_pddl", _no_work)
     assert main(refine(soccer)) == 11
     line = one_line(capsys.readouterr().err)
     assert line.startswith(f"tailor refine: error: {binding}: " + message.format(domain=soccer / "domain.pddl"))
@@ -237,7 +236,7 @@ def test_train_and_evaluate_check_the_binding_against_the_domain_too(soccer, cap
 def test_a_scene_object_the_simulator_lacks_fails_when_the_binding_is_read(soccer, capsys, monkeypatch, simulate):
     binding = soccer / "actions.toml"
     binding.write_text(binding.read_text().replace('scene = "ball"', 'scene = "goalpost"'))
-    monkeypatch.setattr("tailor.refinement.pipeline.plan_task", _no_work)  # caught before planning
+    monkeypatch.setattr("tailor.refinement.pipeline.plan_pddl", _no_work)  # caught before planning
     assert main(refine(soccer, *simulate)) == 11
     line = one_line(capsys.readouterr().err)
     assert line.startswith(f"tailor refine: error: {binding}: ") and "scene = 'goalpost' is not a scene object" in line

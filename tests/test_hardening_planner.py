@@ -271,3 +271,22 @@ def test_links_name_what_a_universal_conditional_effect_needed(capsys):
     status, out, err = run_plan(capsys, briefcase / "domain.pddl", briefcase / "p01.pddl")
     assert (status, err) == (0, "")
     assert "1 -> (in dictionary)" in links_by_step(out)["Step 2"]  # moving the briefcase carries what is in it
+
+
+def test_two_messages_in_one_read_of_the_pipe_are_both_answered():
+    """The child may send "searching" and its plan so close together that one read of the pipe takes both: the
+    parent must answer the second from what it already read, not wait on the pipe for it (it hung there)."""
+    import time
+
+    from tailor.planner_bridge.worker import _Limits, _read_message
+
+    script = 'import sys, time; sys.stdout.write(\'{"event": "searching"}\\n{"plan": 1}\\n\'); sys.stdout.flush(); time.sleep(60)'
+    child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    try:
+        limits = _Limits("stub", "p.pddl", 10.0, None, deadline=time.monotonic() + 10.0)
+        time.sleep(0.5)  # both lines are in the pipe before the first read
+        assert _read_message(child, limits) == {"event": "searching"}
+        assert _read_message(child, limits) == {"plan": 1}  # (a PlannerTimeoutError after 10 s where it hung)
+    finally:
+        child.kill()
+        child.wait()

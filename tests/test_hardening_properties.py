@@ -33,11 +33,11 @@ def documented_statuses() -> set[int]:
 @pytest.fixture(scope="module")
 def pristine(tmp_path_factory):
     """The soccer domain copied once, and its plan computed once."""
-    from tailor.refinement.pipeline import plan_task, resolve_task
+    from tailor.planner_bridge import plan_files
 
     domain = tmp_path_factory.mktemp("pristine") / "soccer"
     shutil.copytree(DOMAINS_DIR / "soccer", domain, ignore=shutil.ignore_patterns("training"))
-    plan = plan_task(resolve_task(str(domain / "domain.pddl"), "score"))
+    plan = plan_files(domain / "domain.pddl", domain / "problems" / "score.pddl")
     return domain, plan
 
 
@@ -106,7 +106,7 @@ def test_mutated_inputs_end_in_one_documented_line(mutation, pristine, tmp_path_
     target = domain / FILES[name]
     target.write_bytes(mutate(target.read_bytes(), kind, args))
     before = listing(domain)
-    monkeypatch.setattr("tailor.refinement.pipeline.plan_task", lambda *a, **k: plan)
+    monkeypatch.setattr("tailor.refinement.pipeline.plan_pddl", lambda *a, **k: plan)
     capsys.readouterr()
     status = main(["refine", str(domain / "domain.pddl"), "score", "--json"])
     captured = capsys.readouterr()

@@ -6,7 +6,8 @@ from __future__ import annotations
 import json
 
 from tailor.planner_bridge import plan_files, resolve_problem
-from tailor.refinement import instantiate, load_domain_binding
+from tailor.refinement.binding import load_domain_binding
+from tailor.refinement.instantiate import instantiate
 from tailor.refinement.belief import load_belief
 from tailor.cli.main import main
 from tailor.sims import registry

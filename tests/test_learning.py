@@ -11,7 +11,8 @@ from sklearn.linear_model import LinearRegression
 
 from tailor.refinement.learning.classifiers import FAIL, SUCCESS, confusion, labels, train_collision_model
 from tailor.errors import DataError
-from tailor.refinement.models.features import compute_features, feature_names, first_examples, intermediate_examples
+from tailor.refinement.models.features import (compute_features, feature_names, feature_space, first_examples,
+                                                intermediate_examples)
 from tailor.refinement.learning.duration_protocol import held_out_mae, split_episodes, train_duration_model
 from synthetic_episodes import gather
 
@@ -59,7 +60,7 @@ def test_duration_protocol_uses_each_part_for_its_purpose():
     test = [used[i] for i in split.test]
 
     Recorder.fitted = []
-    result = train_duration_model("goToPose", episodes, seed=9, feature_set="pose", observed=OBSERVED,
+    result = train_duration_model("goToPose", episodes, seed=9, feature_space="pose", observed=OBSERVED,
                                   n_i_candidates=(1, 4, 9), leaf_candidates=(10,),
                                   episode_fractions=(0.5, 1.0), make_model=lambda seed, leaf: Recorder(),
                                   make_reference=lambda seed, leaf: LinearRegression())
@@ -103,7 +104,7 @@ def test_duration_protocol_uses_each_part_for_its_purpose():
 
 def test_model_tree_learns_the_synthetic_durations():
     episodes = gather("soccer", "goToPose", 400, seed=6)
-    report = train_duration_model("goToPose", episodes, seed=0, feature_set="pose", observed=OBSERVED,
+    report = train_duration_model("goToPose", episodes, seed=0, feature_space="pose", observed=OBSERVED,
                                   n_i_candidates=(1, 5), episode_fractions=(1.0,),
                                   leaf_candidates=(10, 40)).report
     # the synthetic noise is 0.05 s and durations average ~5.5 s
@@ -114,7 +115,7 @@ def test_model_tree_learns_the_synthetic_durations():
 def test_too_few_successes_is_a_data_error():
     episodes = [dataclasses.replace(e, outcome="ball_lost") for e in gather("soccer", "dribbleBall", 20, seed=1)]
     with pytest.raises(DataError, match="dribbleBall: 0 successful episodes of 20; need at least 8"):
-        train_duration_model("dribbleBall", episodes, seed=0, feature_set="pose", observed=OBSERVED)
+        train_duration_model("dribbleBall", episodes, seed=0, feature_space="pose", observed=OBSERVED)
 
 
 def test_confusion_matrix_by_hand():
@@ -129,7 +130,7 @@ def test_confusion_matrix_by_hand():
 
 def test_collision_classifier_is_pessimistic_and_evaluated_on_fresh_episodes():
     train, fresh = gather("soccer", "goToPoseAtBall", 400, seed=2), gather("soccer", "goToPoseAtBall", 300, seed=3)
-    result = train_collision_model("goToPose", train, fresh, seed=0, feature_set="pose")
+    result = train_collision_model("goToPose", train, fresh, seed=0, feature_space="pose")
     report = result.report
     X_fresh = compute_features("pose", first_examples(fresh)[0])
     expected = confusion(result.model.tree.predict(X_fresh).astype(int), labels(fresh))
@@ -169,7 +170,7 @@ class Shrunk(RegressorMixin, BaseEstimator):
 ])
 def test_leaf_size_choice(leaves, pulls, chosen):
     episodes = gather("soccer", "goToPose", 80, seed=8)
-    report = train_duration_model("goToPose", episodes, seed=1, feature_set="pose", observed=OBSERVED,
+    report = train_duration_model("goToPose", episodes, seed=1, feature_space="pose", observed=OBSERVED,
                                   n_i_candidates=(2,), leaf_candidates=(5, 10, 20, 40),
                                   episode_fractions=(1.0,),
                                   make_model=lambda seed, leaf: Shrunk(pulls[leaf], leaves[leaf])).report
@@ -208,7 +209,7 @@ def test_n_i_is_chosen_among_trees_small_enough_to_store():
     few = len(rows_of(train, 2))
     assert len(rows_of(train, 5)) > few
     pulls = {(True, 10): 0.0, (True, 20): 0.3, (False, 10): 0.1, (False, 20): 0.5}
-    report = train_duration_model("goToPose", episodes, seed=1, feature_set="pose", observed=OBSERVED,
+    report = train_duration_model("goToPose", episodes, seed=1, feature_space="pose", observed=OBSERVED,
                                   n_i_candidates=(2, 5), leaf_candidates=(10, 20),
                                   episode_fractions=(1.0,),
                                   make_model=lambda seed, leaf: Sized(leaf, few, pulls)).report
@@ -225,7 +226,7 @@ def test_n_i_whose_capped_tree_wins_is_chosen_with_its_leaf_size():
     used = [e for e in episodes if e.succeeded]
     few = len(rows_of([used[i] for i in split_episodes(len(used), seed=1).train], 2))
     pulls = {(True, 10): 0.0, (True, 20): 0.05, (False, 10): 0.3, (False, 20): 0.5}
-    report = train_duration_model("goToPose", episodes, seed=1, feature_set="pose", observed=OBSERVED,
+    report = train_duration_model("goToPose", episodes, seed=1, feature_space="pose", observed=OBSERVED,
                                   n_i_candidates=(2, 5), leaf_candidates=(10, 20),
                                   episode_fractions=(1.0,),
                                   make_model=lambda seed, leaf: Sized(leaf, few, pulls)).report
@@ -233,9 +234,12 @@ def test_n_i_whose_capped_tree_wins_is_chosen_with_its_leaf_size():
 
 
 def test_collision_region_grid_faces_the_goal_and_matches_the_features():
+    """Fig. 4.8's starts as the soccer robot declares them (SUCCESS_REGION), in the pose space's parameters."""
     from tailor.refinement.learning.plots import REGION_SAMPLES, region_params
+    from tailor.sims.soccer import SUCCESS_REGION
 
-    x, y, params = region_params(0.0)
+    order = feature_space("pose").parameters
+    x, y, params = region_params(SUCCESS_REGION, order, 0.0)
     assert x.shape == (REGION_SAMPLES, REGION_SAMPLES)
     features = compute_features("pose", params)
     names = feature_names("pose")
@@ -246,5 +250,46 @@ def test_collision_region_grid_faces_the_goal_and_matches_the_features():
     row = REGION_SAMPLES // 2
     assert abs(features[row * REGION_SAMPLES + REGION_SAMPLES - 1, names.index("angle_at")]) == pytest.approx(np.pi)
     assert features[row * REGION_SAMPLES, names.index("angle_at")] == pytest.approx(0.0)
-    _, _, turned = region_params(np.pi)
+    _, _, turned = region_params(SUCCESS_REGION, order, np.pi)
     np.testing.assert_allclose(compute_features("pose", turned)[away, names.index("angle_to")], np.pi, atol=1e-9)
+    # every other parameter as declared: standing, the goal pose at the origin heading +x, arriving at 0.15 m/s
+    np.testing.assert_array_equal(params[:, [3, 4, 5, 6, 7]], np.tile([0.0, 0.0, 0.0, 0.0, 0.15], (len(params), 1)))
+
+
+def test_the_duration_curve_sweeps_the_declared_angle_in_the_declared_situation():
+    """Fig. 4.7's situation of the soccer robot: the goal 1.5 m ahead, standing, arriving at rest, phig swept (the
+    angle of approach where the goal lies straight ahead)."""
+    from tailor.refinement.learning.plots import curve_params
+    from tailor.sims.soccer import APPROACH_ANGLE
+
+    angles = np.linspace(-np.pi, np.pi, 9)[:-1]  # (angle_at wraps pi to -pi)
+    params = curve_params(APPROACH_ANGLE, feature_space("pose").parameters, angles)
+    expected = np.zeros((8, 8))
+    expected[:, 4], expected[:, 6] = 1.5, angles
+    np.testing.assert_array_equal(params, expected)
+    np.testing.assert_allclose(compute_features("pose", params)[:, feature_names("pose").index("angle_at")], angles)
+    # the same situation whatever order a space reads the parameters in
+    shuffled = ("phig", "vg", "x", "y", "phi", "v", "xg", "yg")
+    np.testing.assert_array_equal(curve_params(APPROACH_ANGLE, shuffled, angles)[:, [2, 3, 4, 5, 6, 7, 0, 1]], params)
+
+
+def test_a_simulator_gets_the_model_pictures_it_declares_and_no_others():
+    """Figs. 4.7 and 4.8 where the simulator declares them, for the models whose spaces read the parameters they
+    set; the learning curves for every simulator; nothing guessed from a parameter's name."""
+    from types import SimpleNamespace
+
+    from tailor.refinement.learning.plots import caption, training_plots
+
+    pose = {"goToPose": SimpleNamespace(feature_space="pose", report={}),
+            "approachBall": SimpleNamespace(feature_space="approach", report={})}
+    line = {"move": SimpleNamespace(feature_space="line", report={})}
+    classifiers = {"goToPose": SimpleNamespace(feature_space="pose_walls", action="goToPose")}
+    assert list(training_plots("soccer", pose, classifiers)) == [
+        "mae_vs_n_i.png", "mae_vs_episodes.png", "angle_at_polar.png", "goToPose.success_region.png"]
+    assert list(training_plots("soccer", line, {})) == ["mae_vs_n_i.png", "mae_vs_episodes.png"]  # reads no pose
+    for simulator in ("arm", "kitchen", ""):  # none declared: no picture of a pose, whatever the spaces read
+        assert list(training_plots(simulator, pose, classifiers)) == ["mae_vs_n_i.png", "mae_vs_episodes.png"]
+    assert caption("angle_at_polar.png", "soccer") == (
+        "Predicted duration over the angle of approach in one situation (Fig. 4.7)")
+    assert caption("goToPose.success_region.png") == (
+        "Where the success classifier of goToPose predicts failure, over start positions (Fig. 4.8)")

@@ -189,7 +189,7 @@ def test_binding_filter_option(tmp_path):
     shutil.copytree(SOCCER, domain)
     (domain / "models" / "meta.json").write_text(json.dumps(_one_leaf("worse").to_json()))
     binding = (domain / "actions.toml").read_text()
-    (domain / "actions.toml").write_text(binding + "filter = true\n")  # the last table is [evaluation]
+    (domain / "actions.toml").write_text(binding + "filter = true\n")  # the last table is [refinement]
     pddl = domain / "domain.pddl"
     greedy = tailor.refine(pddl, "score", horizon=1, risk=0, neighbourhood=0)  # the filter's greedy: plain h = 1
     kept = tailor.refine(pddl, "score")

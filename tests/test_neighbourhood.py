@@ -87,14 +87,13 @@ def test_a_bad_share_in_the_binding_is_one_line(tmp_path):
     from tailor.errors import BindingError
     from tailor.planner_bridge import resolve_domain_dir
     from tailor.refinement.binding import load_domain_binding
-    from tailor.refinement.evaluation.experiments import binding_neighbourhood
 
     domain = tmp_path / "soccer"
     shutil.copytree(resolve_domain_dir("soccer"), domain, ignore=shutil.ignore_patterns("models", "training"))
     binding = domain / "actions.toml"
     binding.write_text(binding.read_text().replace("neighbourhood = 0.02", "neighbourhood = 0.7"))
-    with pytest.raises(BindingError, match=r"\[evaluation\] neighbourhood must be a share .* not 0.7") as error:
-        binding_neighbourhood(load_domain_binding(domain))
+    with pytest.raises(BindingError, match=r"\[refinement\] neighbourhood must be a share .* not 0.7") as error:
+        load_domain_binding(domain)
     assert "\n" not in str(error.value) and str(binding) in str(error.value)
 
 

@@ -34,7 +34,7 @@ def test_a_duration_model_fitted_by_two_workers_is_the_serial_one(monkeypatch):
         return results(function, calls, jobs)
 
     monkeypatch.setattr(protocol, "_results", spy)
-    kwargs = dict(seed=2, feature_set="pose", observed=OBSERVED, n_i_candidates=(1, 3, 5),
+    kwargs = dict(seed=2, feature_space="pose", observed=OBSERVED, n_i_candidates=(1, 3, 5),
                   leaf_candidates=(5, 20, 40), episode_fractions=(0.5, 1.0))
     serial = train_duration_model("goToPose", episodes, jobs=1, **kwargs)
     parallel = train_duration_model("goToPose", episodes, jobs=2, **kwargs)

@@ -11,7 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tailor.planner_bridge import GOAL, INITIAL, AbstractPlan, plan_files, plan_here, render_text
+from tailor.planner_bridge import (GOAL, INITIAL, AbstractPlan, PDDLTask, plan_files, plan_here, plan_pddl, plan_pddl_here,
+                                   read_pddl, render_text)
+from tailor.planner_bridge.worker import PlannerProcess
 
 FIXTURES = Path(__file__).parent / "fixtures" / "pddl"
 CLASSIC = [
@@ -213,3 +215,26 @@ def test_text_rendering_lists_each_steps_links_like_vhpop():
         "Orderings : 1<2\n"
     )
     assert plan.to_text() == render_text(plan)
+
+
+def test_a_pair_is_read_once_into_a_task_that_plans_like_the_files():
+    domain, problem = files("logistics", "p01")
+    task = read_pddl(domain, problem)
+    assert (task.domain, task.problem) == (domain, problem)
+    assert task.domain_text == domain.read_text(encoding="utf-8") and task.problem_text == problem.read_text(encoding="utf-8")
+    assert (task.domain_name, task.problem_name) == (task.signature.name, plan_files(domain, problem).problem)
+    assert {"in", "at"} <= set(task.signature.predicates) and "load-truck" in task.signature.actions
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        task.signature.name = "other"  # type: ignore[misc]
+    assert PDDLTask.from_json(json.loads(json.dumps(task.to_json()))) == task  # what the planner child receives
+    assert hash(task) == hash(PDDLTask.from_json(task.to_json()))
+    assert plan_pddl(task) == plan_files(domain, problem)
+    assert plan_pddl_here(task) == plan_here(domain, problem)
+
+
+def test_a_kept_planner_process_plans_tasks_and_files_alike():
+    task = read_pddl(*files("blocks", "p01"))
+    with PlannerProcess() as process:
+        first = plan_pddl(task, process=process)
+        assert process.plan(*files("blocks", "p01"), "pyperplan", None) == first
+        assert plan_pddl(read_pddl(*files("gripper", "p01")), process=process).problem == "gripper-four"

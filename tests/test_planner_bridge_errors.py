@@ -111,6 +111,13 @@ def test_an_object_declared_twice(capsys):
                           "of the domain)")
 
 
+def test_a_fault_only_the_reader_finds_is_named_in_the_domain_file(capsys, tmp_path):
+    """The pair is parsed once; when that fails, the domain alone is parsed to tell which file the fault is in."""
+    f = tmp_path / "domain.pddl"
+    f.write_text(DOMAIN.read_text().replace("(not (at ?from)))", "(not (at ?from))) :cost 3"))
+    assert_one_line_error(capsys, [f, PROBLEM], 4, f"{f}:9:56", "syntax error: Expected ')'")
+
+
 def test_problem_naming_another_domain(capsys):
     f = BAD / "other_domain_problem.pddl"
     assert_one_line_error(

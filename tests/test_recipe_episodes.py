@@ -31,7 +31,7 @@ def _run(tmp_path, monkeypatch, own_episodes: bool) -> tuple[list, dict]:
         return [SimpleNamespace(scenario=scenario, index=i, seed=(scenario, seed, i), succeeded=True)
                 for i in range(episodes)]
 
-    def train(action, episodes, seed, feature_set, observed, **kwargs):
+    def train(action, episodes, seed, feature_space, observed, **kwargs):
         learned[action] = [e.index for e in episodes]
         return SimpleNamespace(model=SimpleNamespace(report={}))
 

@@ -248,7 +248,7 @@ def test_verbose_adds_debug_lines_on_stderr_only(capsys):
     verbose = capsys.readouterr()
     timed = re.compile(r"^Optimizer: .*$", re.M)  # the optimizer's time differs from run to run
     assert timed.sub("", verbose.out) == timed.sub("", plain.out)
-    assert "tailor refine: debug: planned, instantiated and loaded the models in" in verbose.err
+    assert "tailor refine: debug: planned and refined greedy and with h=2 in" in verbose.err
     assert "debug" not in plain.err
 
 
@@ -282,12 +282,13 @@ def test_polar_cost_panels_keep_markers_inside_and_labels_apart():
     import matplotlib.pyplot as plt
 
     from tailor.refinement.refine_plots import POLAR_MARGIN, costs_figure
+    from tailor.sims.protocol import Quantity
 
     parameter = SimpleNamespace(id="pos2.phi", low=-np.pi, high=np.pi)
     values = np.linspace(-np.pi, np.pi, 361)
     first = 5.0 + 3.0 * np.cos(values)
     curves = [("1 first", first), ("2 second", 9.0 - 2.0 * np.sin(values)), ("sum", first + 9.0 - 2.0 * np.sin(values))]
-    fig = costs_figure(parameter, values, curves, [("greedy", 0.0), ("refined", 3.0)])
+    fig = costs_figure(parameter, values, curves, [("greedy", 0.0), ("refined", 3.0)], Quantity("rad", angle=True))
     fig.canvas.draw()
     axes = fig.axes
     labels = []
@@ -304,16 +305,38 @@ def test_polar_cost_panels_keep_markers_inside_and_labels_apart():
     plt.close(fig)
 
 
+def test_the_polar_cost_plot_is_chosen_by_the_declared_quantity_not_by_its_name():
+    """A full-circle range is drawn on polar axes where the simulator declares its quantity an angle; a
+    parameter named like a heading (or any undeclared one) spanning the same range stays Cartesian."""
+    from types import SimpleNamespace
+
+    import matplotlib.pyplot as plt
+
+    from tailor.refinement.refine_plots import costs_figure, on_the_circle
+    from tailor.sims import registry
+    from tailor.sims.protocol import UNDECLARED
+
+    full = SimpleNamespace(id="pos2.phi", low=-np.pi, high=np.pi)
+    soccer, kitchen = registry.get("soccer"), registry.get("kitchen")
+    assert on_the_circle(full, soccer.quantity(full.id)) and not on_the_circle(full, UNDECLARED)
+    assert on_the_circle(SimpleNamespace(id="s1.heading", low=-np.pi, high=np.pi), kitchen.quantity("s1.heading"))
+    assert not on_the_circle(SimpleNamespace(id="s1.heading", low=-1.0, high=1.0), kitchen.quantity("s1.heading"))
+    values = np.linspace(-np.pi, np.pi, 31)
+    fig = costs_figure(full, values, [("sum", 2.0 + np.cos(values))], [("refined", 0.0)])  # nothing declared
+    assert fig.axes[0].name == "rectilinear" and fig.axes[0].get_xlabel() == "pos2.phi"
+    plt.close(fig)
+
+
 def test_execution_panels_mark_the_start_in_the_legend():
     import matplotlib.pyplot as plt
 
-    from tailor.refinement.pipeline import GREEDY_HORIZON, prepare, refine_and_dispatch, resolve_task
+    from tailor.refinement.pipeline import Options, read_task, resolve_task, run
     from tailor.refinement.refine_plots import executions_figure
 
-    prepared = prepare(resolve_task("soccer", "score"))
-    outcome = refine_and_dispatch(prepared, GREEDY_HORIZON, "analytic", 0, True)
+    result = run(read_task(resolve_task("soccer", "score")), Options(horizon=1, greedy=False, simulate=True))
+    outcome = result.refined
     assert outcome.simulated.succeeded
-    fig = executions_figure(prepared.binding.entry.views, [("greedy", outcome.simulated)])
+    fig = executions_figure(result.binding.entry.views, [("greedy", outcome.simulated)])
     ax = fig.axes[0]
     assert (ax.get_xlabel(), ax.get_ylabel()) == ("x", "y")  # the field from above, not time over time
     legend = [t.get_text() for t in ax.get_legend().get_texts()]
@@ -327,12 +350,14 @@ def test_cartesian_cost_panels_keep_tick_labels_and_legend_apart():
     import matplotlib.pyplot as plt
 
     from tailor.refinement.refine_plots import costs_figure
+    from tailor.sims.protocol import Quantity
 
     parameter = SimpleNamespace(id="f2.omega_a", low=-1.0, high=1.0)  # not an angle: Cartesian panels
     values = np.linspace(-1.0, 1.0, 201)
     curves = [("1 reach", 1.0 - 0.4 * values), ("2 reach", 0.8 - 0.3 * values), ("sum", 1.8 - 0.7 * values)]
-    fig = costs_figure(parameter, values, curves, [("greedy", 0.96), ("refined", 0.978)])
+    fig = costs_figure(parameter, values, curves, [("greedy", 0.96), ("refined", 0.978)], Quantity("rad/s"))
     fig.canvas.draw()
+    assert fig.axes[0].get_xlabel() == "f2.omega_a (rad/s)"  # the declared unit on the axis
     for ax in fig.axes:
         ticks = _boxes(fig, ax.get_xticklabels())
         assert not any(a.overlaps(b) for k, a in enumerate(ticks) for b in ticks[k + 1:])

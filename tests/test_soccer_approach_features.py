@@ -75,7 +75,7 @@ def test_the_approach_model_is_accurate_from_standing_starts_near_the_ball():
     6000 episodes (3.4 s at worst; the one before), 0.37 s from 24000; with the planned path 0.27 s from 6000,
     0.24 s from 24000 (the bundled one)."""
     model = load_action_models(MODELS, ("approachBall",))["approachBall"]
-    assert model.feature_set == "approach"
+    assert model.feature_space == "approach"
     rng = np.random.default_rng(7)
     errors = []
     for k in range(24):

@@ -93,7 +93,7 @@ def test_the_bundled_dribble_model_sees_its_path():
     (3.7% of the mean) a model tree on the pose features alone reaches from the same experience (5-fold
     cross-validated; 0.38 s with the free shortest word, 0.31 s with the word planned inside the walls)."""
     model = load_action_models(MODELS, ("dribbleBall",))["dribbleBall"]
-    assert model.feature_set == "dribble"
+    assert model.feature_space == "dribble"
     episodes = [e for e in gather("soccer", "dribbleBall", 60, seed=424242, jobs=1, progress=False) if e.succeeded]
     assert len(episodes) >= 55
     params = np.array([e.params for e in episodes])

@@ -59,8 +59,8 @@ def test_each_round_chooses_subgoals_with_the_model_the_round_before_retrained(m
         caches.append(planned)
         return [SimpleNamespace(action=action, succeeded=True, index=first + i) for i in range(situations)]
 
-    def train(action, episodes, seed, feature_set, observed, **kwargs):
-        assert (feature_set, observed) == ("dribble", ("x", "y", "phi", "v"))
+    def train(action, episodes, seed, feature_space, observed, **kwargs):
+        assert (feature_space, observed) == ("dribble", ("x", "y", "phi", "v"))
         model = f"model {len(trained)} on {len(episodes)}"
         trained.append(model)
         return SimpleNamespace(model=model)

@@ -64,7 +64,7 @@ def check_outputs(out, report: dict, episodes: int, fresh: int) -> None:
     assert c["action"] == "goToPose"
     assert 0.0 <= c["accuracy"] <= 1.0 and 0.0 <= c["false_success"] <= 1.0 and c["fresh_episodes"] == fresh
     assert collision.predict_success(params).dtype == bool
-    assert collision.feature_set == "pose_walls"  # the soccer robot's own space: it sees the walls
+    assert collision.feature_space == "pose_walls"  # the soccer robot's own space: it sees the walls
     text = (out / "training" / "report.txt").read_text()
     for action in models:
         assert f"Rules of {action}" in text
@@ -211,7 +211,7 @@ def test_interrupt_while_writing_leaves_nothing_half_written(tmp_path, monkeypat
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("tailor.refinement.learning.plots.plot_angle_at", interrupted)  # a figure being drawn
+    monkeypatch.setattr("tailor.refinement.learning.plots.plot_duration_curve", interrupted)  # a figure being drawn
     code = main(["train", "soccer", "--episodes", "24", "--fresh-episodes", "20", "--n-i", "1", "--out", str(tmp_path)])
     assert code == 130
     assert capsys.readouterr().err.strip().endswith("tailor train: interrupted")

@@ -9,13 +9,14 @@ import numpy as np
 
 
 def _layer(result, views) -> tuple[str, ...]:
-    """The trajectory columns to draw: the simulator's first view, else the first two (and a heading) columns."""
+    """The trajectory columns to draw: the first layer of the simulator's first view (a third column in it a
+    heading, as the view declares), else the first two columns after the time."""
     if views:
         first = views[0]
         layer = tuple(first) if isinstance(first[0], str) else tuple(first[0])
         if all(result.has_column(c) for c in layer[:2]):
             return layer
-    return tuple(c for c in result.columns[1:4])
+    return tuple(result.columns[1:3])
 
 
 def draw_instances(path: Path, rows: list[dict], views=()) -> Path:

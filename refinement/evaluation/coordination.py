@@ -18,8 +18,9 @@ An estimate is weighed by its uncertainty: its noise grown with its age (a teamm
 forgotten after a while (Perception.memory, .target_memory). Why a teammate's state is chosen, not fused: a
 message is common knowledge (every teammate holds the same one), a perception is private; fusing a little of
 the private perception into everyone's estimate of a teammate makes their predicted times differ just where
-two robots are nearly as quick, and the team disagrees there (measured with `tailor coordinate`, README). The generic part of Ch. 7 lives here; what a
-robot perceives and how its state becomes action parameters is its TeamScene's business (tailor.sims.team).
+two robots are nearly as quick, and the team disagrees there (measured with `tailor coordinate`, README). The
+generic part of Ch. 7 lives here; what a robot's state is, what it perceives and how its state becomes action
+parameters is its TeamScene's business (tailor.sims.team).
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ class Predictor:
     models: Mapping[str, ActionModel]  # action -> its duration model
 
     def times(self, kinds: np.ndarray, states: np.ndarray, target: np.ndarray) -> np.ndarray:
-        """(M,) predicted time of robots of `kinds` (M,) in `states` (M, 4) to `target` (M, 2); NaN where a state
+        """(M,) predicted time of robots of `kinds` (M,) in `states` (M, d) to `target` (M, 2); NaN where a state
         or the target is unknown (NaN)."""
         kinds = np.asarray(kinds)
         out = np.full(len(kinds), np.nan)
@@ -108,9 +109,14 @@ def fuse(estimates: list[tuple[np.ndarray, np.ndarray]], heading: int | None = N
     return out
 
 
+def perturbed_columns(scene: TeamScene) -> list[int]:
+    """The columns of a robot's state that Q4's added estimation noise perturbs, as the scene declares them."""
+    return [scene.state.index(quantity) for quantity in scene.perturbed]
+
+
 @dataclass(frozen=True, eq=False)
 class Beliefs:
-    """Robot i's belief at tick t of the state of every robot j, (T, N, N, 4) (its own estimate on the diagonal),
+    """Robot i's belief at tick t of the state of every robot j, (T, N, N, d) (its own estimate on the diagonal),
     and of the target, (T, N, 2); NaN where unknown."""
 
     states: np.ndarray
@@ -159,10 +165,12 @@ class Team:
         states[:, np.arange(N), np.arange(N)] = self.obs.own
         return states
 
-    def beliefs(self, strategy: str, extra_noise: float = 0.0, rng: np.random.Generator | None = None) -> Beliefs:
+    def beliefs(self, strategy: str, extra_noise: float = 0.0, rng: np.random.Generator | None = None,
+                perturbed: list[int] | None = None) -> Beliefs:
         """The beliefs perspective taking uses: `implicit` (own perception only) or `shared` (a teammate as the
-        more certain of perceived and communicated, the target fused from all observations); `extra_noise` (m,
-        and rad on headings) is added to every estimate of a teammate (Q4)."""
+        more certain of perceived and communicated, the target fused from all observations); `extra_noise` (in
+        each one's unit) is added to the state columns `perturbed` (default: all) of every estimate of a
+        teammate (Q4)."""
         if strategy == "implicit":
             others, target = self.perceived[0], self.own_target[0]
         elif strategy in ("shared", "distance"):
@@ -179,7 +187,8 @@ class Team:
             if rng is None:
                 raise ValueError("extra noise needs a seeded generator")
             others = others.copy()
-            others[..., :3] += rng.standard_normal(others[..., :3].shape) * extra_noise
+            columns = list(range(others.shape[-1])) if perturbed is None else perturbed
+            others[..., columns] += rng.standard_normal(others[..., columns].shape) * extra_noise
         return Beliefs(self._with_self(others), target)
 
     def utilities(self, strategy: str, predictor: Predictor, extra_noise: float = 0.0,
@@ -187,14 +196,14 @@ class Team:
         """(T, N, N): robot i's utility (predicted time, or distance) of robot j at each tick; NaN unknown."""
         T, N = self.log.states.shape[:2]
         if strategy == "explicit":
-            own = predictor.times(np.tile(self.kinds, T), self.obs.own.reshape(-1, 4),
+            own = predictor.times(np.tile(self.kinds, T), self.obs.own.reshape(-1, self.obs.own.shape[-1]),
                                   self.own_target[0].reshape(-1, 2)).reshape(T, N)
             sender = np.broadcast_to(np.arange(N), (T, N, N))
             received = np.where(self.message_fresh, own[np.maximum(self.message_at, 0), sender], np.nan)
             received[:, np.arange(N), np.arange(N)] = own
             return received
-        belief = self.beliefs(strategy, extra_noise, rng)
-        states = belief.states.reshape(-1, 4)
+        belief = self.beliefs(strategy, extra_noise, rng, perturbed_columns(predictor.scene))
+        states = belief.states.reshape(-1, belief.states.shape[-1])
         target = np.broadcast_to(belief.target[:, :, None, :], (T, N, N, 2)).reshape(-1, 2)
         if strategy == "distance":
             out = np.full(len(states), np.nan)
@@ -244,7 +253,7 @@ def failure_features(log: TeamLog, predictor: Predictor) -> np.ndarray:
     """(T, 3) the situation as the true states show it (FAILURE_FEATURES): the gap between the two lowest
     predicted times, the lowest, and the gap between the two smallest distances."""
     T, N = log.states.shape[:2]
-    states = log.states.reshape(-1, 4)
+    states = log.states.reshape(-1, log.states.shape[-1])
     target = np.repeat(log.target, N, axis=0)
     times = np.sort(predictor.times(np.tile(np.array(log.kinds), T), states, target).reshape(T, N), axis=1)
     distances = np.sort(predictor.scene.distance(states, target).reshape(T, N), axis=1)

@@ -12,8 +12,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from tailor.refinement.learning.plots import _save  # noqa: E402  (atomic: a temp file renamed into place)
 from tailor.outputs import write_error  # noqa: E402
+from tailor.refinement.learning.plots import _save  # noqa: E402  (atomic: a temp file renamed into place)
+from tailor.sims import registry  # noqa: E402
 
 FILES = ("q4_noise.png", "q5_failure_example.png", "q6_communication_fov.png")
 
@@ -38,10 +39,21 @@ def plot_noise(report: dict, path: Path) -> None:
     _save(fig, path)
 
 
+def heading_column(simulator: str) -> int | None:
+    """The column of a team robot's state that `simulator` declares an angle (its heading, drawn as an arrow),
+    None where it declares none (or has no team scene)."""
+    entry = registry.simulators().get(simulator)
+    scene = entry.team if entry is not None else None
+    if scene is None:
+        return None
+    return next((k for k, quantity in enumerate(scene.state) if entry.quantity(quantity).angle), None)
+
+
 def plot_failure_example(report: dict, bounds: tuple[float, float, float, float], path: Path) -> None:
-    """Fig. 7.11: robots standing still; for each target position the robot chosen (solid green) or, where the
-    failure tree predicts confusion, both robots that might go (dashed red). Beside it, Fig. 7.10's tree as
-    regions over the time gap and the quickest time, with the rules."""
+    """Fig. 7.11: robots standing still (at the first two columns of their state, the heading where the
+    simulator declares one); for each target position the robot chosen (solid green) or, where the failure
+    tree predicts confusion, both robots that might go (dashed red). Beside it, Fig. 7.10's tree as regions
+    over the time gap and the quickest time, with the rules."""
     ex, tree = report["example"], report["dynamic"]["failure_tree"]
     robots, targets = np.array(ex["robots"]), np.array(ex["targets"])
     fig, (ax, text) = plt.subplots(1, 2, figsize=(12, 5), gridspec_kw={"width_ratios": [3, 2]})
@@ -57,8 +69,13 @@ def plot_failure_example(report: dict, bounds: tuple[float, float, float, float]
             r = ex["chosen"][k]
             ax.plot([robots[r, 0], tx], [robots[r, 1], ty], "-", color="tab:green", lw=0.8)
     ax.plot(targets[:, 0], targets[:, 1], ".", color="k", ms=2)
-    for n, (x, y, phi, _) in enumerate(robots):
-        ax.arrow(x, y, 0.4 * np.cos(phi), 0.4 * np.sin(phi), width=0.05, color="tab:blue")
+    heading = heading_column(report.get("simulator", ""))
+    for n, state in enumerate(robots):
+        x, y = state[:2]
+        if heading is not None:
+            ax.arrow(x, y, 0.4 * np.cos(state[heading]), 0.4 * np.sin(state[heading]), width=0.05, color="tab:blue")
+        else:
+            ax.plot([x], [y], "o", color="tab:blue")
         ax.annotate(f"{n} ({ex['kinds'][n]})", (x, y), textcoords="offset points", xytext=(6, -12), fontsize=8)
     ax.set_aspect("equal")
     ax.set_xlim(x0 - 0.3, x1 + 0.3)

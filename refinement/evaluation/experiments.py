@@ -6,14 +6,9 @@ parameter zero, and the horizons 1-4 (Table 5.3), for any domain whose binding n
     comparison = "score"     # situation generator of the simulator for greedy vs refined (Tables 5.1, 5.4)
     horizons = "waypoints"   # situation generator for the horizon experiment (Table 5.3); optional
     assertion = "approach"   # situation generator for subgoal assertion (Table 6.1, `--assertion`); optional
-    zero_baseline = false    # also dispatch every situation with its free parameters set to 0 (e.g. the arm's
-                             # way-point velocities: stop at every way-point)
-    filter = false           # refine only where the meta action model (models/meta.json) predicts "better"
-                             # (Sec. 5.5.4), in `tailor refine`, `tailor evaluate` and `tailor.refine`; the
-                             # commands' --filter / --no-filter override it
-    neighbourhood = 0.0      # share of each free range (the execution noise): refinement minimizes the worst
-                             # predicted time within it around a choice, in the same three; --neighbourhood
-                             # overrides it (refine.refine)
+
+The binding's `[refinement]` table (binding.RefinementDefaults) says whether the zero baseline (every free
+parameter 0) is executed too, whether the meta filter runs, and the neighbourhood refinement minimizes over.
 
 Every situation goes through the real pipeline: a random belief state, Algorithm 3 on the problem's plan
 (planned once per problem), subgoal assertion (Alg. 5) where the binding names success models, refinement
@@ -31,11 +26,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from tailor.refinement.action_sequence import ActionSequence
-from tailor.refinement.binding import Binding
 from tailor.refinement.dispatch import dispatch
-from tailor.errors import BindingError
-from tailor.refinement.refine import is_neighbourhood, refine
-from tailor.refinement.meta_filter import decide
+from tailor.refinement.pipeline import Options, refine_stage
+from tailor.refinement.refine import refine
 from tailor.refinement.models.meta_model import EQUAL_BAND  # "equal" within 1% (Table 5.4), as the meta model's
 from tailor.refinement.situations import Job, asserted_situation, job_meta_model, job_models, stream_seed
 
@@ -51,71 +44,8 @@ FULL_CIRCLE = 2 * math.pi - 1e-9
 FAILURE_PENALTY_S = 30.0
 
 
-@dataclass(frozen=True)
-class EvaluationPlan:
-    """The [evaluation] table of a domain's binding."""
-
-    comparison: str
-    horizons: str | None
-    zero_baseline: bool
-    assertion: str | None = None  # situation generator of the subgoal assertion experiment (Table 6.1)
-    filter: bool = False  # refine only where the meta action model predicts "better" (Sec. 5.5.4)
-    neighbourhood: float = 0.0  # share of each free range whose worst predicted case refinement minimizes
-
-
-def evaluation_plan(binding: Binding) -> EvaluationPlan:
-    """Validate the binding's [evaluation] table against its simulator's situation generators."""
-    table = dict(binding.evaluation)
-
-    def fail(message: str) -> BindingError:
-        return BindingError(f"[evaluation] {message}", file=binding.file)
-
-    if not table:
-        raise fail("missing: the domain's binding names no situations to evaluate on (add an [evaluation] table)")
-    for key in table:
-        if key not in ("comparison", "horizons", "zero_baseline", "assertion", "filter", "neighbourhood"):
-            raise fail(f"unknown key '{key}' (expected comparison, horizons, zero_baseline, assertion, filter, "
-                       "neighbourhood)")
-    known = binding.entry.situations
-    for key in ("comparison", "horizons", "assertion"):
-        value = table.get(key)
-        if value is None and key in ("horizons", "assertion"):
-            continue
-        if not isinstance(value, str) or value not in known:
-            raise fail(f"{key} = {value!r} is not a situation generator of simulator {binding.simulator!r} "
-                       f"(known: {', '.join(known) or 'none'})")
-    zero = table.get("zero_baseline", False)
-    if not isinstance(zero, bool):
-        raise fail(f"zero_baseline must be true or false, not {zero!r}")
-    return EvaluationPlan(table["comparison"], table.get("horizons"), zero, table.get("assertion"),
-                          binding_filter(binding), binding_neighbourhood(binding))
-
-
-def binding_filter(binding: Binding) -> bool:
-    """The binding's `[evaluation] filter` (default false): refine only where the meta model predicts "better"."""
-    value = dict(binding.evaluation).get("filter", False)
-    if not isinstance(value, bool):
-        raise BindingError(f"[evaluation] filter must be true or false, not {value!r}", file=binding.file)
-    return value
-
-
-def binding_neighbourhood(binding: Binding) -> float:
-    """The binding's `[evaluation] neighbourhood` (default 0): the share of each free range around a choice
-    whose worst predicted time refinement minimizes."""
-    value = dict(binding.evaluation).get("neighbourhood", 0.0)
-    if not is_neighbourhood(value):
-        raise BindingError(f"[evaluation] neighbourhood must be a share of each free range in [0, 0.5), not {value!r}",
-                           file=binding.file)
-    return float(value)
-
-
 def situation_seed(seed: int, index: int) -> int:
     return stream_seed(seed, index)
-
-
-def zero_assignment(sequence: ActionSequence) -> dict[str, float]:
-    """Every free parameter at 0, clipped into its range (e.g. stop at every way-point)."""
-    return {p.id: min(max(0.0, p.low), p.high) for p in sequence.free_parameters()}
 
 
 def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: bool, meta: bool = False,
@@ -128,16 +58,15 @@ def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: 
     seed = situation_seed(job.seed, index)
     sequence, success = asserted_situation(job, objects)
     models = job_models(job, sequence)
-    greedy = refine(sequence, models, horizon=1, method="analytic", seed=seed, success_models=success)
-    optimized = refine(sequence, models, horizon=2, method="analytic", seed=seed, success_models=success, risk=risk,
-                       neighbourhood=neighbourhood)
-    decision = decide(job_meta_model(job), greedy, models, optimized) if meta else None
-    refined = optimized if decision is None or decision.refine else greedy
+    options = Options(horizon=2, optimizer="analytic", seed=seed, risk=risk, neighbourhood=neighbourhood, filter=meta,
+                      zero=zero, simulate=True)
+    stage = refine_stage(sequence, models, success, options, job_meta_model(job) if meta else None)
+    greedy, refined, optimized, decision = stage.greedy.refined, stage.refined.refined, stage.optimized, stage.decision
     # where the analytic minimization fell back to the GA everywhere, the GA run is that same run
     fell_back = optimized.windows and all(w.method == "ga" for w in optimized.windows)
     genetic = optimized if fell_back else refine(sequence, models, horizon=2, method="ga", seed=seed,
                                                  success_models=success, risk=risk, neighbourhood=neighbourhood)
-    g, r = dispatch(greedy.sequence, seed=seed), dispatch(refined.sequence, seed=seed)
+    g, r = stage.greedy.simulated, stage.refined.simulated
     out = {"index": index, "seed": seed, "problem": job.plan.problem,
            "greedy": g.duration, "refined": r.duration, "greedy_ok": g.succeeded, "refined_ok": r.succeeded,
            "greedy_outcome": outcome_of(g), "refined_outcome": outcome_of(r),
@@ -160,8 +89,8 @@ def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: 
             out["sweep"][repr(float(lam))] = {"refined": result.duration, "refined_ok": result.succeeded,
                                               "refined_outcome": outcome_of(result),
                                               "predicted_refined": at.predicted_total}
-    if zero:
-        z = dispatch(sequence.bind(zero_assignment(sequence)), seed=seed)
+    if zero:  # (a sequence without free parameters has nothing to set to zero: its zero run is the greedy one)
+        z = stage.zero.simulated if stage.zero is not None else g
         out["zero"], out["zero_ok"] = z.duration, z.succeeded
     if oracle:
         start = {p.id: p.value for a in refined.sequence.actions for p in a.params}
@@ -251,8 +180,9 @@ def horizon_episode(job: Job, index: int, objects: dict, horizons: tuple[int, ..
     models = job_models(job, sequence)
     out = {"index": index, "seed": seed, "problem": job.plan.problem}
     for h in horizons:
-        refined = refine(sequence, models, horizon=h, method="analytic", seed=seed, success_models=success)
-        result = dispatch(refined.sequence, seed=seed)
+        options = Options(horizon=h, seed=seed, risk=0.0, neighbourhood=0.0, greedy=False, simulate=True)
+        stage = refine_stage(sequence, models, success, options)
+        refined, result = stage.refined.refined, stage.refined.simulated
         out[f"h{h}"] = result.duration
         out[f"h{h}_ok"] = result.succeeded
         out[f"h{h}_predicted"] = refined.predicted_total

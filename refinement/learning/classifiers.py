@@ -118,14 +118,14 @@ def train_collision_model(
     episodes: list[Episode],
     fresh: list[Episode],
     seed: int,
-    feature_set: str,
+    feature_space: str,
     step: Callable[[str], None] = lambda label: None,
 ) -> CollisionTraining:
     """Learn the pessimistic success tree from `episodes`; evaluate it on the `fresh` ones."""
     y = labels(episodes)
     if not episodes or not fresh:
         raise DataError(f"{action} collision data: {len(episodes)} training and {len(fresh)} fresh episodes")
-    X = compute_features(feature_set, first_examples(episodes)[0])
+    X = compute_features(feature_space, first_examples(episodes)[0])
     step("collision: choosing cost and leaf size")
     note = ""
     if np.bincount(y, minlength=2).min() >= CV_FOLDS:
@@ -136,7 +136,7 @@ def train_collision_model(
     step("collision: fitting the tree")
     classifier = make_classifier(cost, class_balance(y), leaf, seed).fit(X, y)
     tree = tree_arrays(classifier).simplified()  # same predictions, no split between leaves that agree
-    evaluation = confusion(tree.predict(compute_features(feature_set, first_examples(fresh)[0])), labels(fresh))
+    evaluation = confusion(tree.predict(compute_features(feature_space, first_examples(fresh)[0])), labels(fresh))
     outcomes, counts = np.unique([e.outcome for e in episodes], return_counts=True)
     report = {
         "action": action,
@@ -154,5 +154,5 @@ def train_collision_model(
         "note": note,
         "seed": seed,
     }
-    model = CollisionModel(action, feature_set, feature_names(feature_set), tree, report)
+    model = CollisionModel(action, feature_space, feature_names(feature_space), tree, report)
     return CollisionTraining(model, report)

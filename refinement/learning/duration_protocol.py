@@ -72,18 +72,18 @@ def split_episodes(n: int, seed: int) -> Split:
     return Split(order[:half], order[half:three_quarters], order[three_quarters:])
 
 
-def fit_on_episodes(episodes: list[Episode], feature_set: str, n_i: int, regressor: RegressorMixin,
+def fit_on_episodes(episodes: list[Episode], feature_space: str, n_i: int, regressor: RegressorMixin,
                     observed: tuple[str, ...]) -> RegressorMixin:
-    """Fit `regressor` on the first n_i examples of each episode, in the features of `feature_set`; `observed`
+    """Fit `regressor` on the first n_i examples of each episode, in the features of `feature_space`; `observed`
     names the action's observed parameters (read from each episode's log for the later examples)."""
     params, targets, _ = intermediate_examples(episodes, n_i, observed)
-    return regressor.fit(compute_features(feature_set, params), targets)
+    return regressor.fit(compute_features(feature_space, params), targets)
 
 
-def held_out_mae(regressor: RegressorMixin, episodes: list[Episode], feature_set: str) -> float:
+def held_out_mae(regressor: RegressorMixin, episodes: list[Episode], feature_space: str) -> float:
     """Mean absolute error (s) on the first example of each episode."""
     params, durations = first_examples(episodes)
-    predicted = regressor.predict(compute_features(feature_set, params))
+    predicted = regressor.predict(compute_features(feature_space, params))
     return float(np.mean(np.abs(predicted - durations)))
 
 
@@ -101,7 +101,7 @@ def train_duration_model(
     action: str,
     episodes: list[Episode],
     seed: int,
-    feature_set: str,
+    feature_space: str,
     observed: tuple[str, ...],
     n_i_candidates: tuple[int, ...] = N_I_CANDIDATES,
     leaf_candidates: tuple[int, ...] = MIN_SAMPLES_LEAF,
@@ -129,10 +129,10 @@ def train_duration_model(
     def examples(n_i: int) -> tuple[np.ndarray, np.ndarray]:
         if n_i not in train_examples:
             params, targets, _ = intermediate_examples(train, n_i, observed)
-            train_examples[n_i] = compute_features(feature_set, params), targets
+            train_examples[n_i] = compute_features(feature_space, params), targets
         return train_examples[n_i]
 
-    validation_set = _first_example_features(validation, feature_set)
+    validation_set = _first_example_features(validation, feature_space)
     growth = len(used) / len(train)  # leaves grow about in proportion to the episodes (Fig. 4.6 data)
     fitted: dict[tuple[int, int], dict] = {}
 
@@ -179,11 +179,11 @@ def train_duration_model(
     subsets = [learn[: max(MIN_EPISODES // 2, round(fraction * len(learn)))] for fraction in episode_fractions]
     if not subsets or len(subsets[-1]) != len(learn):  # the curve does not end with the full three quarters
         subsets.append(learn)
-    test_set = _first_example_features(test, feature_set)
+    test_set = _first_example_features(test, feature_space)
     calls = []
     for subset in subsets:
         params, targets, _ = intermediate_examples(subset, n_i, observed)
-        features = compute_features(feature_set, params)
+        features = compute_features(feature_space, params)
         calls += [(factory, seed, leaf, features, targets, *test_set) for factory in (make_model, make_reference)]
     results = []
     for k, result in enumerate(_results(_fit_and_test, calls, jobs)):
@@ -201,8 +201,8 @@ def train_duration_model(
 
     step(f"{action}: final model")
     with threadpool_limits(limits=ONE_THREAD):
-        final = fit_on_episodes(used, feature_set, n_i, make_model(seed, leaf), observed)
-    uncertainty = _leaf_uncertainty(final, used, seed, leaf, n_i, feature_set, observed, make_model, step, action,
+        final = fit_on_episodes(used, feature_space, n_i, make_model(seed, leaf), observed)
+    uncertainty = _leaf_uncertainty(final, used, seed, leaf, n_i, feature_space, observed, make_model, step, action,
                                     jobs)
     durations = np.array([e.duration for e in used])
     report = {
@@ -231,12 +231,12 @@ def train_duration_model(
     }
     if uncertainty is not None:
         report["uncertainty_overall"] = uncertainty.overall  # the cross-fitted held-out MAE of all episodes
-    model = ActionModel(action, feature_set, feature_names(feature_set), final, n_i, report,
+    model = ActionModel(action, feature_space, feature_names(feature_space), final, n_i, report,
                         uncertainty=uncertainty)
     return DurationTraining(model, report)
 
 
-def _leaf_uncertainty(final: RegressorMixin, used: list[Episode], seed: int, leaf: int, n_i: int, feature_set: str,
+def _leaf_uncertainty(final: RegressorMixin, used: list[Episode], seed: int, leaf: int, n_i: int, feature_space: str,
                       observed: tuple[str, ...], make_model: RegressorFactory, step: Callable[[str], None],
                       action: str, jobs: int) -> LeafUncertainty | None:
     """Cross-fitted held-out errors of every episode, averaged per leaf of `final` (None if it has no leaves)."""
@@ -248,13 +248,13 @@ def _leaf_uncertainty(final: RegressorMixin, used: list[Episode], seed: int, lea
     for k, fold in enumerate(folds):
         rest = np.concatenate([f for j, f in enumerate(folds) if j != k])
         params, targets, _ = intermediate_examples([used[i] for i in rest], n_i, observed)
-        calls.append((make_model, seed, leaf, compute_features(feature_set, params), targets,
-                      *_first_example_features([used[i] for i in fold], feature_set)))
+        calls.append((make_model, seed, leaf, compute_features(feature_space, params), targets,
+                      *_first_example_features([used[i] for i in fold], feature_space)))
     residual = np.empty(len(used))
     for fold, errors in zip(folds, _results(_fit_and_residuals, calls, jobs)):
         step(f"{action}: uncertainty fold")
         residual[fold] = errors
-    features, _ = _first_example_features(used, feature_set)
+    features, _ = _first_example_features(used, feature_space)
     return LeafUncertainty.from_residuals(final.apply(features), residual, int(final.n_leaves_))
 
 
@@ -266,10 +266,10 @@ def _fit_and_residuals(factory: RegressorFactory, seed: int, leaf: int, features
         return test_durations - regressor.predict(test_features)
 
 
-def _first_example_features(episodes: list[Episode], feature_set: str) -> tuple[np.ndarray, np.ndarray]:
+def _first_example_features(episodes: list[Episode], feature_space: str) -> tuple[np.ndarray, np.ndarray]:
     """Features and durations of the first example of each episode (the held-out examples)."""
     params, durations = first_examples(episodes)
-    return compute_features(feature_set, params), durations
+    return compute_features(feature_space, params), durations
 
 
 def _fit_and_test(factory: RegressorFactory, seed: int, leaf: int, features: np.ndarray, targets: np.ndarray,

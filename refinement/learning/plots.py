@@ -1,7 +1,8 @@
-"""Figures of the training report: MAE over n_i (Fig. 4.5), MAE over episodes (Fig. 4.6) for every domain;
-for models in the pose feature space, the predicted duration over the angle of approach for one situation
-(Fig. 4.7) and where a success classifier predicts failure (Fig. 4.8). Drawn headless (Agg) to a PNG file or
-buffer: the training run writes them atomically beside its report and embeds the same bytes in the HTML one."""
+"""Figures of the training report: MAE over n_i (Fig. 4.5), MAE over episodes (Fig. 4.6) for every domain; and
+the pictures of learned models the domain's simulator declares it can draw (its SimulatorEntry's model_pictures):
+the predicted duration over an angle for one situation (Fig. 4.7) and where a success classifier predicts failure
+(Fig. 4.8). Drawn headless (Agg) to a PNG file or buffer: the training run writes them atomically beside its
+report and embeds the same bytes in the HTML one."""
 
 from __future__ import annotations
 
@@ -17,14 +18,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from tailor.refinement.models.action_models import ActionModel, CollisionModel  # noqa: E402
-from tailor.refinement.models.features import POSE_PARAMETERS, feature_space  # noqa: E402
+from tailor.refinement.models.features import feature_space  # noqa: E402
 from tailor.refinement.refine_plots import tidy_polar  # noqa: E402
+from tailor.sims import registry  # noqa: E402
+from tailor.sims.protocol import UNDECLARED, DurationCurve, SimulatorEntry, SuccessRegion  # noqa: E402
 
-# the situation of Fig. 4.7: goal 1.5 m straight ahead, robot standing, arriving at rest
-SITUATION_DIST = 1.5  # m
-SITUATION_V = 0.0  # m/s
-SITUATION_VG = 0.0  # m/s
 ANGLE_SAMPLES = 361
+REGION_SAMPLES = 121  # grid points per side of Fig. 4.8's square of starts
 
 Target = Path | BinaryIO  # a file name or a writable binary buffer
 
@@ -32,8 +32,10 @@ CAPTIONS = {
     "mae_vs_n_i.png": "Validation MAE against the examples kept per episode, n_i (Fig. 4.5)",
     "mae_vs_episodes.png": "Test MAE against the number of training episodes, model tree and gradient boosting "
                            "(Fig. 4.6)",
-    "angle_at_polar.png": "Predicted duration over the angle of approach in one situation (Fig. 4.7)",
 }
+CURVE_SUFFIX = "_polar.png"  # Fig. 4.7's file: <label>_polar.png
+CURVE_CAPTION = "Predicted duration over {meaning} in one situation (Fig. 4.7)"
+REGION_SUFFIX = ".success_region.png"  # Fig. 4.8's file: <action>.success_region.png
 REGION_CAPTION = "Where the success classifier of {action} predicts failure, over start positions (Fig. 4.8)"
 
 
@@ -91,113 +93,130 @@ def plot_mae_vs_episodes(reports: Mapping[str, dict], path: Target) -> None:
     _save(fig, path)
 
 
-def situation_params(angle_at: np.ndarray) -> np.ndarray:
-    """Action parameters with dist 1.5 m, angle_to 0, v 0 and the given angles of approach (rad)."""
-    params = np.zeros((len(angle_at), 8))
-    params[:, 4] = SITUATION_DIST  # goal straight ahead of a robot at the origin facing +x
-    params[:, 3] = SITUATION_V
-    params[:, 6] = angle_at  # phig; the bearing to the goal is 0, so angle_at = phig
-    params[:, 7] = SITUATION_VG
+def _parameters(names: tuple[str, ...], values: Mapping[str, float], rows: int) -> np.ndarray:
+    """(rows, len(names)) action parameters: each name's value in `values`, 0 where it has none."""
+    return np.tile(np.array([float(values.get(name, 0.0)) for name in names]), (rows, 1))
+
+
+def curve_params(curve: DurationCurve, names: tuple[str, ...], angles: np.ndarray) -> np.ndarray:
+    """The parameters (in the order `names`) of Fig. 4.7's situation with `curve.varied` at each of `angles`."""
+    params = _parameters(names, curve.situation, len(angles))
+    params[:, names.index(curve.varied)] = angles
     return params
 
 
-def plot_angle_at(models: Mapping[str, ActionModel], path: Target) -> None:
-    """Predicted duration over angle_at for one situation, Cartesian and polar (Fig. 4.7)."""
-    angle_at = np.linspace(-np.pi, np.pi, ANGLE_SAMPLES)
-    params = situation_params(angle_at)
+def plot_duration_curve(curve: DurationCurve, models: Mapping[str, ActionModel], path: Target) -> None:
+    """Predicted duration over the swept angle for one situation, Cartesian and polar (Fig. 4.7)."""
+    angles = np.linspace(-np.pi, np.pi, ANGLE_SAMPLES)
     fig = plt.figure(figsize=(10.0, 4.6))
     cartesian = fig.add_subplot(1, 2, 1)
     polar = fig.add_subplot(1, 2, 2, projection="polar")
     largest = 0.0
     for action, model in models.items():
-        predicted = model.predict_duration(params)
+        predicted = model.predict_duration(curve_params(curve, feature_space(model.feature_space).parameters, angles))
         largest = max(largest, float(np.nanmax(predicted)))
-        cartesian.plot(np.degrees(angle_at), predicted, label=action)
-        polar.plot(angle_at, predicted, label=action)
+        cartesian.plot(np.degrees(angles), predicted, label=action)
+        polar.plot(angles, predicted, label=action)
     tidy_polar(polar, largest)
-    cartesian.set(xlabel="angle_at (deg)", ylabel="predicted duration (s)", xticks=range(-180, 181, 90),
-                  title=f"dist {SITUATION_DIST} m, angle_to 0, v {SITUATION_V} m/s, vg {SITUATION_VG} m/s")
+    cartesian.set(xlabel=f"{curve.label} (deg)", ylabel="predicted duration (s)", xticks=range(-180, 181, 90),
+                  title=curve.description)
     cartesian.grid(True, alpha=0.3)
     cartesian.legend()
-    polar.set_title("predicted duration (s) over angle_at (Fig. 4.7)", fontsize="medium", pad=14)
+    polar.set_title(f"predicted duration (s) over {curve.label} (Fig. 4.7)", fontsize="medium", pad=14)
     _save(fig, path)
 
 
-REGION_HALF_SIZE = 3.0  # m, the start positions of Fig. 4.8's picture: a square this far round the goal
-REGION_SAMPLES = 121  # per side
-REGION_VG = 0.15  # m/s, mid-range of the collision experience (0 to 0.3 m/s)
-
-
-def region_params(start_heading: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(x, y, params): starts on a grid round the goal (the goal at the origin, heading +x), standing,
-    with heading `start_heading` relative to the direction toward the goal (0: facing it)."""
-    axis = np.linspace(-REGION_HALF_SIZE, REGION_HALF_SIZE, REGION_SAMPLES)
+def region_params(region: SuccessRegion, names: tuple[str, ...], turn: float
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(x, y, params): starts on a grid round the goal at the origin (parameters in the order `names`), the
+    heading turned by `turn` from the direction toward the goal (0: facing it)."""
+    axis = np.linspace(-region.half_size, region.half_size, REGION_SAMPLES)
     x, y = np.meshgrid(axis, axis)
-    params = np.zeros((x.size, 8))
-    params[:, 0], params[:, 1] = x.ravel(), y.ravel()
-    params[:, 2] = np.arctan2(-params[:, 1], -params[:, 0]) + start_heading
-    params[:, 7] = REGION_VG
+    params = _parameters(names, region.situation, x.size)
+    ix, iy = names.index(region.x), names.index(region.y)
+    params[:, ix], params[:, iy] = x.ravel(), y.ravel()
+    params[:, names.index(region.heading)] = np.arctan2(-params[:, iy], -params[:, ix]) + turn
     return x, y, params
 
 
-def plot_collision_region(model: CollisionModel, path: Target) -> None:
-    """Where the classifier predicts that its action fails (e.g. bumps an object lying at its goal), over start
-    positions round the goal pose (Fig. 4.8): facing the goal, and turned 135 degrees from it (not 180: there
-    the sign of angle_at flips with the last bit of the heading, which would speckle the picture)."""
-    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.8))
-    for ax, (heading, label) in zip(axes, ((0.0, "facing the goal"), (0.75 * np.pi, "turned 135 deg from the goal"))):
-        x, y, params = region_params(heading)
+def plot_success_region(region: SuccessRegion, model: CollisionModel, path: Target,
+                        entry: SimulatorEntry | None = None) -> None:
+    """Where the classifier predicts that its action fails (e.g. bumps an object lying at its goal), over starts
+    round the goal (Fig. 4.8), one panel per turn of the start heading; axes in the units `entry` declares."""
+    names = feature_space(model.feature_space).parameters
+    units = {q: (entry.quantity(q) if entry is not None else UNDECLARED).unit for q in (region.x, region.y)}
+    fig, axes = plt.subplots(1, len(region.turns), figsize=(5.0 * len(region.turns), 4.8), squeeze=False)
+    for ax, (turn, label) in zip(axes[0], region.turns):
+        x, y, params = region_params(region, names, turn)
         success = model.predict_success(params).reshape(x.shape)
         ax.contourf(x, y, success.astype(float), levels=[-0.5, 0.5, 1.5], colors=["#d62728", "#2ca02c"], alpha=0.45)
         ax.plot(0.0, 0.0, "ko", ms=4)
-        ax.annotate("", xy=(0.6, 0.0), xytext=(0.0, 0.0), arrowprops={"arrowstyle": "->", "lw": 2})
-        ax.set(aspect="equal", xlabel="start x (m)", ylabel="start y (m)", title=f"robot standing, {label}")
+        if region.goal_heading:
+            heading = float(region.situation.get(region.goal_heading, 0.0))
+            ax.annotate("", xy=(0.6 * np.cos(heading), 0.6 * np.sin(heading)), xytext=(0.0, 0.0),
+                        arrowprops={"arrowstyle": "->", "lw": 2})
+        ax.set(aspect="equal", xlabel=_axis_label(f"start {region.x}", units[region.x]),
+               ylabel=_axis_label(f"start {region.y}", units[region.y]), title=label)
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     handles = [Patch(color="#d62728", alpha=0.45, label="predicted failure"),
                Patch(color="#2ca02c", alpha=0.45, label="predicted success"),
-               Line2D([], [], color="black", marker="o", ms=4, lw=2, label="goal pose (heading +x)")]
+               Line2D([], [], color="black", marker="o", ms=4, lw=2 if region.goal_heading else 0, label=region.goal)]
     fig.legend(handles=handles, loc="lower center", ncol=3, frameon=False)
-    fig.suptitle(f"{model.action} to the goal pose, arriving at {REGION_VG} m/s, from a standing start at each point "
-                 "(Fig. 4.8)", fontsize="medium")
+    fig.suptitle(f"{region.description.format(action=model.action)} (Fig. 4.8)", fontsize="medium")
     fig.tight_layout(rect=(0.0, 0.06, 1.0, 1.0))
     _save(fig, path, layout=False)
 
 
-POSE_SPACES = ("pose", "pose_delta")  # the duration models' feature spaces Fig. 4.7 is drawn in (goal heading)
+def _axis_label(name: str, unit: str) -> str:
+    return f"{name} ({unit})" if unit else name
 
 
-def _posed(feature_set: str) -> bool:
-    """Whether Figs. 4.7 and 4.8 apply to a model: its feature space reads a start and a goal pose."""
-    return feature_space(feature_set).parameters == POSE_PARAMETERS
+def _reads(space: str, parameters: frozenset[str]) -> bool:
+    """Whether a model in feature space `space` reads every action parameter a picture sets."""
+    return parameters <= set(feature_space(space).parameters)
 
 
-def caption(name: str) -> str:
-    """What the training figure of file `name` shows."""
-    if name.endswith(".success_region.png"):
-        return REGION_CAPTION.format(action=name.removesuffix(".success_region.png"))
+def caption(name: str, simulator: str = "") -> str:
+    """What the training figure of file `name` shows (a picture `simulator` declares, in its own words)."""
+    if name.endswith(REGION_SUFFIX):
+        return REGION_CAPTION.format(action=name.removesuffix(REGION_SUFFIX))
+    if name.endswith(CURVE_SUFFIX):
+        label = name.removesuffix(CURVE_SUFFIX)
+        curve = next((c for c in _pictures(simulator, DurationCurve) if c.label == label), None)
+        return CURVE_CAPTION.format(meaning=(curve.meaning if curve is not None and curve.meaning else label))
     return CAPTIONS.get(name, name)
+
+
+def _entry(simulator: str) -> SimulatorEntry | None:
+    return registry.simulators().get(simulator) if simulator else None
+
+
+def _pictures(simulator: str, kind: type) -> list:
+    entry = _entry(simulator)
+    return [p for p in (entry.model_pictures if entry is not None else ()) if isinstance(p, kind)]
 
 
 def training_plots(simulator: str, models: Mapping[str, ActionModel],
                    classifiers: Mapping[str, CollisionModel]) -> dict[str, Callable[[Target], None]]:
-    """File name -> writer of each figure of a training run (those that apply to its models' feature spaces)."""
+    """File name -> writer of each figure of a training run: the learning curves, and each picture the simulator
+    declares for the models and classifiers whose feature spaces read the parameters it sets."""
     reports = {action: model.report for action, model in models.items()}
     plots: dict[str, Callable[[Target], None]] = {
         "mae_vs_n_i.png": lambda p: plot_mae_vs_n_i(reports, p),
         "mae_vs_episodes.png": lambda p: plot_mae_vs_episodes(reports, p),
     }
-    # every duration model that reads a start and a goal pose, whatever features it derives from them (a robot's
-    # own space that adds the path its controller plans)
-    posed = {action: m for action, m in models.items() if m.feature_set in POSE_SPACES or _posed(m.feature_set)}
-    if posed:
-        plots["angle_at_polar.png"] = lambda p: plot_angle_at(posed, p)
-    for action, classifier in classifiers.items():
-        if _posed(classifier.feature_set):
-            plots[f"{action}.success_region.png"] = lambda p, c=classifier: plot_collision_region(c, p)
+    for curve in _pictures(simulator, DurationCurve):
+        drawn = {action: m for action, m in models.items() if _reads(m.feature_space, curve.parameters)}
+        if drawn:
+            plots[curve.label + CURVE_SUFFIX] = lambda p, c=curve, d=drawn: plot_duration_curve(c, d, p)
+    entry = _entry(simulator)
+    for region in _pictures(simulator, SuccessRegion):
+        for action, classifier in classifiers.items():
+            if _reads(classifier.feature_space, region.parameters):
+                plots[action + REGION_SUFFIX] = lambda p, r=region, c=classifier: plot_success_region(r, c, p, entry)
     return plots
-
 
 
 def png_bytes(draw: Callable[[Target], None]) -> bytes:

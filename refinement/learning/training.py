@@ -197,7 +197,7 @@ def training_files(out: Path, recipe: TrainingRecipe, models: dict, classifiers:
         files[models_dir / f"{action}.json"] = _json_writer(model.to_json())
     for action, classifier in classifiers.items():
         files[models_dir / f"{action}{COLLISION_SUFFIX}"] = _json_writer(classifier.to_json())
-    figures = {name: (plots.png_bytes(draw), plots.caption(name))
+    figures = {name: (plots.png_bytes(draw), plots.caption(name, recipe.simulator))
                for name, draw in plots.training_plots(recipe.simulator, models, classifiers).items()}
     warnings = report.get("warnings", [])
     files[training_dir / "report.json"] = _json_writer(report)

@@ -34,6 +34,8 @@ META_FILE = "meta.json"  # the meta action model (tailor.refinement.models.meta_
 RANGE_MARGIN = 1.0
 OLD_FILE_SPAN = 2.0
 NO_REPORT_BOUND = 86400.0  # s: plausible for a file that states neither (one day either side)
+FEATURE_SPACE_KEY = "feature_space"  # a model file's feature space (Table 4.1), as the binding names it
+OLD_FEATURE_SPACE_KEY = "feature_set"  # the same in files written before: still read, never written
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,7 +43,7 @@ class ActionModel:
     """Predicts an action's execution duration (s) from its parameters with a model tree over features."""
 
     action: str
-    feature_set: str
+    feature_space: str
     feature_names: tuple[str, ...]
     duration: ModelTree
     n_i: int  # intermediate examples per episode it was trained with (Sec. 4.1.2)
@@ -52,7 +54,7 @@ class ActionModel:
 
     def features(self, params: np.ndarray) -> np.ndarray:
         """(n, p) action parameters -> (n, f) features."""
-        return compute_features(self.feature_set, params)
+        return compute_features(self.feature_space, params)
 
     def predict_duration(self, params: np.ndarray) -> np.ndarray:
         """Predicted duration (s) for each row of (n, p) action parameters."""
@@ -112,7 +114,7 @@ class ActionModel:
         return {
             "schema": ACTION_MODEL_SCHEMA,
             "action": self.action,
-            "feature_set": self.feature_set,
+            FEATURE_SPACE_KEY: self.feature_space,
             "feature_names": list(self.feature_names),
             "n_i": self.n_i,
             "rules": self.rules_text().splitlines(),
@@ -125,7 +127,7 @@ class ActionModel:
     def from_json(cls, data: dict, source: str) -> ActionModel:
         """Build from parsed JSON; anything malformed raises ModelFileError naming `source`."""
         _check_schema(data, ACTION_MODEL_SCHEMA, source)
-        action, feature_set, names = _common_fields(data, source)
+        action, space, names = _common_fields(data, source)
         n_i = data.get("n_i")
         if not isinstance(n_i, int) or isinstance(n_i, bool) or n_i < 1:
             raise ModelFileError(f"'n_i' must be a positive integer, got {n_i!r}", file=source)
@@ -139,11 +141,12 @@ class ActionModel:
             raise ModelFileError(f"invalid duration model tree: {exc}", file=source) from None
         n_in = getattr(tree, "n_features_in_", None)
         if n_in != len(names):
-            raise ModelFileError(f"duration model tree takes {n_in} features, feature set has {len(names)}", file=source)
+            raise ModelFileError(f"duration model tree takes {n_in} features, feature space has {len(names)}",
+                                 file=source)
         uncertainty = None
         if "uncertainty" in data:  # optional: files written before it existed load without it
             uncertainty = LeafUncertainty.from_json(data["uncertainty"], tree.n_leaves_, source)
-        return cls(action, feature_set, names, tree, n_i, _report(data, source), source, uncertainty)
+        return cls(action, space, names, tree, n_i, _report(data, source), source, uncertainty)
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,7 +158,7 @@ class CollisionModel:
     """
 
     action: str
-    feature_set: str
+    feature_space: str
     feature_names: tuple[str, ...]
     tree: DecisionTree
     report: dict = field(default_factory=dict)
@@ -166,7 +169,7 @@ class CollisionModel:
             raise ValueError(f"a node tests a feature outside 0..{len(self.feature_names) - 1}")
 
     def features(self, params: np.ndarray) -> np.ndarray:
-        return compute_features(self.feature_set, params)
+        return compute_features(self.feature_space, params)
 
     def predict_success(self, params: np.ndarray) -> np.ndarray:
         """True where the action is predicted to reach its goal without failing, per row of (n, p)."""
@@ -193,7 +196,7 @@ class CollisionModel:
         return {
             "schema": COLLISION_MODEL_SCHEMA,
             "action": self.action,
-            "feature_set": self.feature_set,
+            FEATURE_SPACE_KEY: self.feature_space,
             "feature_names": list(self.feature_names),
             "rules": self.rules_text().splitlines(),
             "tree": self.tree.to_json(),
@@ -203,10 +206,10 @@ class CollisionModel:
     @classmethod
     def from_json(cls, data: dict, source: str) -> CollisionModel:
         _check_schema(data, COLLISION_MODEL_SCHEMA, source)
-        action, feature_set, names = _common_fields(data, source)
+        action, space, names = _common_fields(data, source)
         try:
             tree = DecisionTree.from_json(data["tree"])
-            return cls(action, feature_set, names, tree, _report(data, source))
+            return cls(action, space, names, tree, _report(data, source))
         except (KeyError, TypeError, ValueError, OverflowError) as exc:
             raise ModelFileError(f"invalid decision tree: {exc}", file=source) from None
 
@@ -294,16 +297,20 @@ def _check_schema(data: dict, schema: str, source: str) -> None:
 
 
 def _common_fields(data: dict, source: str) -> tuple[str, str, tuple[str, ...]]:
-    action, feature_set, names = data.get("action"), data.get("feature_set"), data.get("feature_names")
+    """(action, feature space, feature names) of a model file; the space under FEATURE_SPACE_KEY, or under the
+    older key `feature_set` in files written before it was named so (the bundled models among them)."""
+    action, names = data.get("action"), data.get("feature_names")
+    space = data.get(FEATURE_SPACE_KEY, data.get(OLD_FEATURE_SPACE_KEY))
     if not isinstance(action, str) or not action:
         raise ModelFileError("'action' must be a non-empty string", file=source)
     spaces = feature_spaces()
-    if not isinstance(feature_set, str) or feature_set not in spaces:
-        raise ModelFileError(f"unknown feature set {feature_set!r} (known: {', '.join(sorted(spaces))})", file=source)
-    expected = spaces[feature_set].names
+    if not isinstance(space, str) or space not in spaces:
+        raise ModelFileError(f"unknown feature space {space!r} (known: {', '.join(sorted(spaces))})", file=source)
+    expected = spaces[space].names
     if not isinstance(names, list) or tuple(names) != expected:
-        raise ModelFileError(f"feature_names {names!r} do not match feature set {feature_set!r} {list(expected)}", file=source)
-    return action, feature_set, expected
+        raise ModelFileError(f"feature_names {names!r} do not match feature space {space!r} {list(expected)}",
+                             file=source)
+    return action, space, expected
 
 
 def _report(data: dict, source: str) -> dict:

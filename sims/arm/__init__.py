@@ -1,18 +1,35 @@
 """The arm simulator (pymunk): a PowerCube-like planar 2-DOF arm drawing letters (Sec. 5.5, App. A.4).
 
 `SIMULATOR` is what the package registers (entry point `tailor.simulators: arm`): the reach action in joint
-space (Table 2.1), the simulator factory, the experience scenario and the random letters.
+space (Table 2.1), the simulator factory, the experience scenario and the random letters, its own feature
+space, and its quantities' units (joint angles are angles, but within their limits: never a full circle).
+
+Declaring the robot loads no physics: the simulator module (sims.arm.simulator, which imports pymunk) is
+imported when a simulator is first created or an episode first runs, so that `tailor domains` and
+`tailor plan` stay light; `ArmSim`, `Noise` and `simulate_sequence` still import from here.
 """
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 from tailor.sims.arm.features import RAMPS
 from tailor.sims.arm.scenarios import SITUATIONS, run_reach, run_stroke_leg, subgoal_episode
-from tailor.sims.arm.simulator import ArmSim, Noise, simulate_sequence
-from tailor.sims.protocol import ActionSpec, Scenario, SimulatorEntry
+from tailor.sims.protocol import ActionSpec, Quantity, Scenario, SimulatorEntry
+
+if TYPE_CHECKING:
+    from tailor.sims.arm.simulator import ArmSim, Noise
 
 _JOINTS = ("theta_a", "omega_a", "theta_b", "omega_b")
+_ANGLE, _SPEED, _METRES = Quantity("rad", angle=True), Quantity("rad/s"), Quantity("m")
+UNITS = {"theta_a": _ANGLE, "theta_b": _ANGLE, "omega_a": _SPEED, "omega_b": _SPEED, "tip_x": _METRES,
+         "tip_y": _METRES}
 
 
 def _create(seed: int, noise: Noise | None = None) -> ArmSim:
+    # deferred: the simulator module loads pymunk, which declaring the robot must not
+    from tailor.sims.arm.simulator import ArmSim, Noise
+
     return ArmSim(seed, Noise() if noise is None else noise)
 
 
@@ -29,7 +46,21 @@ SIMULATOR = SimulatorEntry(
     subgoal_episode=subgoal_episode,
     views=(("tip_x", "tip_y"), ("theta_a", "theta_b")),
     feature_spaces=(RAMPS,),
+    units=UNITS,
     description="PowerCube-like planar arm (shoulder, elbow), ramp velocity profiles tracked by PID (pymunk)",
 )
+
+# names of the simulator module, imported on first use (see above)
+_FROM_SIMULATOR = ("ArmSim", "Noise", "simulate_sequence")
+
+
+def __getattr__(name: str):
+    if name in _FROM_SIMULATOR:
+        from tailor.sims.arm import simulator  # deferred: pymunk loads with the first use of these names
+
+        value = globals()[name] = getattr(simulator, name)
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = ["SIMULATOR", "ArmSim", "Noise", "simulate_sequence"]

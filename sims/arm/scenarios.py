@@ -12,12 +12,16 @@ The situations are random strokes of 4-6 way-points (letters.random_stroke), pro
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from tailor.sims.arm import world as W
 from tailor.sims.arm.letters import STROKE_LENGTHS, belief_objects, random_stroke
-from tailor.sims.arm.simulator import ArmSim, Noise
 from tailor.sims.episode import ActionCall, Episode
+
+if TYPE_CHECKING:
+    from tailor.sims.arm.simulator import Noise
 
 ANGLE_MARGIN = 0.05  # rad, start and goal angles keep this distance to the joint limits
 SAMPLING_STREAM = 1  # second seed word: the scenario's draws are independent of the simulator's noise
@@ -42,28 +46,32 @@ def sample_stroke_leg(rng: np.random.Generator) -> tuple[tuple[float, float, flo
     return (a0, float(omega[0]), b0, float(omega[1])), ActionCall("reach", (a1, float(omega[2]), b1, float(omega[3])))
 
 
-def run_stroke_leg(seed: int, noise: Noise | None = None) -> Episode:
-    """One random stroke leg (see the module doc)."""
-    start, call = sample_stroke_leg(np.random.default_rng((seed, SAMPLING_STREAM)))
+def _episode(seed: int, start: tuple[float, float, float, float], call: ActionCall,
+             noise: Noise | None = None) -> Episode:
+    """One reach from `start` in a fresh ArmSim."""
+    from tailor.sims.arm.simulator import ArmSim, Noise  # deferred: pymunk loads when an episode runs
+
     sim = ArmSim(seed, Noise() if noise is None else noise)
     sim.place(*start)
     return sim.run(call)
+
+
+def run_stroke_leg(seed: int, noise: Noise | None = None) -> Episode:
+    """One random stroke leg (see the module doc)."""
+    start, call = sample_stroke_leg(np.random.default_rng((seed, SAMPLING_STREAM)))
+    return _episode(seed, start, call, noise)
 
 
 def run_reach(seed: int, noise: Noise | None = None) -> Episode:
     """One random reach: start and goal within the joint limits, any joint velocities (see the module doc)."""
     start, call = sample_reach(np.random.default_rng((seed, SAMPLING_STREAM)))
-    sim = ArmSim(seed, Noise() if noise is None else noise)
-    sim.place(*start)
-    return sim.run(call)
+    return _episode(seed, start, call, noise)
 
 
 def subgoal_episode(action: str, params: np.ndarray, seed: int) -> Episode:
     """An episode of `action` from a refined subgoal: `params` are one reach's start and goal states."""
     p = [float(v) for v in params]
-    sim = ArmSim(seed)
-    sim.place(*p[:4])
-    return sim.run(ActionCall(action, tuple(p[4:8])))
+    return _episode(seed, (p[0], p[1], p[2], p[3]), ActionCall(action, tuple(p[4:8])))
 
 
 def letters(rng: np.random.Generator) -> tuple[str, dict[str, dict[str, float]]]:

@@ -1,18 +1,37 @@
 """The kitchen simulator (pymunk, top view): a B21-like robot fetching cups between tables (Sec. 5.5).
 
 `SIMULATOR` is what the package registers (entry point `tailor.simulators: kitchen`): navigate, grip and put
-(Table 2.1), the simulator factory, the experience scenarios, the random situations of scenarios 1 and 2, and
-the kitchen's feature spaces.
+(Table 2.1), the simulator factory, the experience scenarios, the random situations of scenarios 1 and 2, the
+kitchen's feature spaces, and its quantities' units.
+
+Declaring the robot loads no physics: the simulator module (sims.kitchen.simulator, which imports pymunk) is
+imported when a simulator is first created or an episode first runs, so that `tailor domains` and
+`tailor plan` stay light; `KitchenSim`, `Noise` and `simulate_sequence` still import from here.
 """
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 from tailor.sims.kitchen.drawing import draw_scene
 from tailor.sims.kitchen.features import GRASP, ROUTE, SPOT
 from tailor.sims.kitchen.scenarios import SITUATIONS, run_goto, run_grip, run_put, subgoal_episode
-from tailor.sims.kitchen.simulator import KitchenSim, Noise, simulate_sequence
-from tailor.sims.protocol import ActionSpec, Scenario, SimulatorEntry
+from tailor.sims.protocol import ActionSpec, Quantity, Scenario, SimulatorEntry
+
+if TYPE_CHECKING:
+    from tailor.sims.kitchen.simulator import KitchenSim, Noise
+
+_METRES, _ANGLE = Quantity("m"), Quantity("rad", angle=True)
+# a spot's frame and offsets, a cup's and a put location's position, and the logged and drawn state
+_LENGTHS = ("ox", "oy", "along", "dist", "x", "y", "tx", "ty", "ext", "gripper_x", "gripper_y")
+UNITS = {**{q: _METRES for q in _LENGTHS}, **{q: _ANGLE for q in ("ophi", "heading", "phi", "pan")},
+         "v": Quantity("m/s")}
 
 
 def _create(seed: int, noise: Noise | None = None) -> KitchenSim:
+    # deferred: the simulator module loads pymunk, which declaring the robot must not
+    from tailor.sims.kitchen.simulator import KitchenSim, Noise
+
     return KitchenSim(seed, Noise() if noise is None else noise)
 
 
@@ -34,9 +53,23 @@ SIMULATOR = SimulatorEntry(
     subgoal_episode=subgoal_episode,
     views=(("x", "y", "phi"),),
     feature_spaces=(ROUTE, GRASP),
+    units=UNITS,
     scene_objects=("robot", "table {object}", "cup {object}"),
     draw_scene=draw_scene,
     description="B21-like base with a pan/extend arm among tables (pymunk), routes through a visibility graph",
 )
+
+# names of the simulator module, imported on first use (see above)
+_FROM_SIMULATOR = ("KitchenSim", "Noise", "simulate_sequence")
+
+
+def __getattr__(name: str):
+    if name in _FROM_SIMULATOR:
+        from tailor.sims.kitchen import simulator  # deferred: pymunk loads with the first use of these names
+
+        value = globals()[name] = getattr(simulator, name)
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = ["SIMULATOR", "KitchenSim", "Noise", "simulate_sequence"]

@@ -18,12 +18,15 @@ from __future__ import annotations
 import math
 from itertools import pairwise
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from tailor.sims.episode import ActionCall, Episode
 from tailor.sims.kitchen import world as W
-from tailor.sims.kitchen.simulator import KitchenSim, Noise
+
+if TYPE_CHECKING:
+    from tailor.sims.kitchen.simulator import KitchenSim, Noise
 
 SAMPLING_STREAM = 1  # second seed word: a scenario's draws are independent of the simulator's noise
 PROBLEMS_DIR = Path(__file__).resolve().parents[2] / "domains" / "kitchen" / "problems"
@@ -68,6 +71,8 @@ def _offsets(rng: np.random.Generator) -> tuple[float, float, float]:
 
 
 def _sim(seed: int, layout: dict, pose, holding: str | None = None, noise: Noise | None = None) -> KitchenSim:
+    from tailor.sims.kitchen.simulator import KitchenSim, Noise  # deferred: pymunk loads when an episode runs
+
     sim = KitchenSim(seed, Noise() if noise is None else noise)
     cups = {f"cup{i}": c for i, c in enumerate(layout["cups"], start=1)}
     sim.place(pose, {"table1": layout["table1"], "table2": layout["table2"]}, cups, holding)

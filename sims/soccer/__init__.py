@@ -3,22 +3,65 @@ of them for the coordination experiments (sims.soccer.team).
 
 `SIMULATOR` is what the package registers (entry point `tailor.simulators: soccer`): the three actions with
 their pose parameters (Table 2.1), the simulator factory, the experience scenarios and the random situations,
-and approachBall's own feature space (sims.soccer.features).
+the feature spaces of a navigation to a pose (sims.soccer.pose) and the actions' own (sims.soccer.features,
+sims.soccer.walls), its quantities' units, and the pictures of its learned models (Figs. 4.7, 4.8).
+
+Declaring the robot loads no physics: the simulator module (sims.soccer.simulator, which imports pymunk) is
+imported when a simulator is first created or an episode first runs, so that `tailor domains` and
+`tailor plan` stay light; `SoccerSim`, `Noise` and `simulate_sequence` still import from here.
 """
 
-from tailor.sims.protocol import ActionSpec, Scenario, SimulatorEntry
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+from tailor.sims.protocol import ActionSpec, DurationCurve, Quantity, Scenario, SimulatorEntry, SuccessRegion
 from tailor.sims.soccer.actions import ACTION_FUNCTIONS, approachBall, dribbleBall, goToPose
 from tailor.sims.soccer.features import APPROACH, DRIBBLE, GOTO_SPACE
+from tailor.sims.soccer.pose import POSE_DELTA_SPACE, POSE_SPACE, POSITION_SPACE
 from tailor.sims.soccer.scenarios import RANGES, SITUATIONS, subgoal_episode
-from tailor.sims.soccer.simulator import Noise, SoccerSim, simulate_sequence
 from tailor.sims.soccer.team import TEAM
 from tailor.sims.soccer.walls import POSE_WALLS
+
+if TYPE_CHECKING:
+    from tailor.sims.soccer.simulator import Noise, SoccerSim
 
 _POSE = dict(observed=("x", "y", "phi", "v"), internal=("xg", "yg", "phig", "vg"),
              observed_quantities=("x", "y", "phi", "v"), internal_quantities=("x", "y", "phi", "v"))
 
 
+METRES, RADIANS = Quantity("m"), Quantity("rad", angle=True)
+UNITS = {"x": METRES, "y": METRES, "phi": RADIANS, "v": Quantity("m/s"), "ball_x": METRES, "ball_y": METRES}
+
+# Fig. 4.7's situation: goal 1.5 m straight ahead of a robot standing at the origin facing +x, arriving at rest;
+# the bearing to the goal is 0, so the goal heading phig is the angle of approach angle_at
+SITUATION_DIST = 1.5  # m
+SITUATION_V = 0.0  # m/s
+SITUATION_VG = 0.0  # m/s
+APPROACH_ANGLE = DurationCurve(
+    varied="phig", label="angle_at", meaning="the angle of approach",
+    situation={"x": 0.0, "y": 0.0, "phi": 0.0, "v": SITUATION_V,
+               "xg": SITUATION_DIST, "yg": 0.0, "vg": SITUATION_VG},
+    description=f"dist {SITUATION_DIST} m, angle_to 0, v {SITUATION_V} m/s, vg {SITUATION_VG} m/s")
+# Fig. 4.8: standing starts on a square round the goal pose (at the origin, heading +x), facing the goal and
+# turned 135 degrees from it (not 180: there the sign of angle_at flips with the last bit of the heading, which
+# would speckle the picture), arriving at mid-range of the collision experience's speeds (0 to 0.3 m/s)
+REGION_HALF_SIZE = 3.0  # m
+REGION_VG = 0.15  # m/s
+SUCCESS_REGION = SuccessRegion(
+    x="x", y="y", heading="phi", half_size=REGION_HALF_SIZE,
+    turns=((0.0, "robot standing, facing the goal"),
+           (0.75 * math.pi, "robot standing, turned 135 deg from the goal")),
+    situation={"v": 0.0, "xg": 0.0, "yg": 0.0, "phig": 0.0, "vg": REGION_VG},
+    description=f"{{action}} to the goal pose, arriving at {REGION_VG} m/s, from a standing start at each point",
+    goal="goal pose (heading +x)", goal_heading="phig")
+
+
 def _create(seed: int, noise: Noise | None = None) -> SoccerSim:
+    # deferred: the simulator module loads pymunk, which declaring the robot must not
+    from tailor.sims.soccer.simulator import Noise, SoccerSim
+
     return SoccerSim(seed, Noise() if noise is None else noise)
 
 
@@ -32,11 +75,26 @@ SIMULATOR = SimulatorEntry(
     views=((("x", "y", "phi"), ("ball_x", "ball_y")),),  # the field from above: robot with heading, and ball
     subgoal_episode=subgoal_episode,
     team=TEAM,
-    # approachBall's, goToPose's and dribbleBall's: the pose features and the path each controller plans; the success
-    # classifier's: the walls
-    feature_spaces=(APPROACH, DRIBBLE, GOTO_SPACE, POSE_WALLS),
+    # Table 4.1's pose rows; approachBall's, goToPose's and dribbleBall's: the pose features and the path each
+    # controller plans; the success classifier's: the walls
+    feature_spaces=(POSE_SPACE, POSE_DELTA_SPACE, POSITION_SPACE, APPROACH, DRIBBLE, GOTO_SPACE, POSE_WALLS),
+    units=UNITS,
+    model_pictures=(APPROACH_ANGLE, SUCCESS_REGION),
     description="RoboCup mid-size field, Pioneer-like robot with a ball guide, a ball (pymunk)",
 )
+
+# names of the simulator module, imported on first use (see above)
+_FROM_SIMULATOR = ("Noise", "SoccerSim", "simulate_sequence")
+
+
+def __getattr__(name: str):
+    if name in _FROM_SIMULATOR:
+        from tailor.sims.soccer import simulator  # deferred: pymunk loads with the first use of these names
+
+        value = globals()[name] = getattr(simulator, name)
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = ["ACTION_FUNCTIONS", "Noise", "SIMULATOR", "SoccerSim", "approachBall", "dribbleBall", "goToPose",
            "simulate_sequence"]

@@ -34,20 +34,19 @@ millions of approach times per run, and the genetic algorithm thousands of dribb
 from __future__ import annotations
 
 import numpy as np
-from tailor.sims.invariances import rigid_motion
-from tailor.sims.pose import POSE, POSE_PARAMETERS, pose_row
 from tailor.sims.protocol import FeatureSpace
 from tailor.sims.soccer.approach import PRE_DISTANCE, R_APPROACH
 from tailor.sims.soccer.dribble import DRIBBLE as DRIBBLE_FOLLOWER
 from tailor.sims.soccer.dribble import FINAL_STRAIGHT, R_DRIBBLE
 from tailor.sims.soccer.dubins import TANGENT_SLACK, WORDS
 from tailor.sims.soccer.goto import GOTO, GOTO_STRAIGHT, LURE_GAIN, LURE_MAX, LURE_MIN
+from tailor.sims.soccer.pose import POSE, POSE_PARAMETERS, pose_row, rigid_motion
 from tailor.sims.soccer.walls import mirror_field
 from tailor.sims.soccer.world import BALL_POINT_OFFSET
 
 TWO_PI = 2.0 * np.pi
 DRIBBLE_BOX = DRIBBLE_FOLLOWER.box  # where dribbleBall's axle path keeps the ball clear of the walls
-# Table 4.1's pose row (as the generic space "pose" computes it), then the planned path's length and its arcs'
+# Table 4.1's pose row (as the space "pose" computes it, sims.soccer.pose), then the planned path's length and its arcs'
 APPROACH_FEATURES = POSE + ("path", "arcs", "exact_path")
 # goToPose's: its planned word (inside the walls), that word's detour over the straight line (the switch to the
 # lure at MAX_DETOUR), the lure's length through the IP, the turn toward the IP and the turn at it

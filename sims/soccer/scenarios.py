@@ -10,12 +10,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from tailor.sims.episode import ActionCall, Episode
-from tailor.sims.soccer.simulator import Noise, SoccerSim, simulate_sequence
 from tailor.sims.soccer.world import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, PIONEER, SPARROW, V_MAX, Dynamics
+
+if TYPE_CHECKING:
+    from tailor.sims.episode import SequenceResult
+    from tailor.sims.soccer.simulator import Noise
 
 FIELD_MARGIN = 0.5  # m, start and goal positions keep this distance to the field lines
 BALL_CLEARANCE = 0.8  # m, minimum start distance of the ball point to a ball lying at the goal
@@ -49,9 +53,7 @@ class Ranges:
     def run(self, seed: int, noise: Noise | None = None) -> Episode:
         """One episode; the task and the simulator's noise both follow from `seed`."""
         robot, ball, call = sample_task(self, np.random.default_rng((seed, SAMPLING_STREAM)))
-        sim = SoccerSim(seed, Noise() if noise is None else noise, self.dynamics)
-        sim.place(robot, ball)
-        return sim.run(call)
+        return _episode(seed, robot, ball, call, noise, self.dynamics)
 
 
 RANGES: dict[str, Ranges] = {
@@ -69,6 +71,16 @@ RANGES: dict[str, Ranges] = {
     "goToPosition": Ranges("goToPosition", "goToPosition", "none", (0.0, SPARROW.v_max), (0.0, 0.0),
                            (BALL_CLEARANCE, FIELD_DIAGONAL), SPARROW),
 }
+
+
+def _episode(seed: int, robot: tuple[float, float, float, float], ball: tuple[float, float] | None,
+             call: ActionCall, noise: Noise | None = None, dynamics: Dynamics = PIONEER) -> Episode:
+    """One action from (robot, ball) in a fresh SoccerSim."""
+    from tailor.sims.soccer.simulator import Noise, SoccerSim  # deferred: pymunk loads when an episode runs
+
+    sim = SoccerSim(seed, Noise() if noise is None else noise, dynamics)
+    sim.place(robot, ball)
+    return sim.run(call)
 
 
 def _field_point(rng: np.random.Generator) -> tuple[float, float]:
@@ -94,9 +106,7 @@ def subgoal_episode(action: str, params: np.ndarray, seed: int) -> Episode:
     action's experience scenario (in the guide for dribbleBall): the on-line experience of Sec. 8.1."""
     p = [float(v) for v in params]
     ball = RANGES[action].ball_at((p[0], p[1]), (p[4], p[5]))
-    sim = SoccerSim(seed)
-    sim.place((p[0], p[1], p[2], p[3]), ball=ball)
-    return sim.run(ActionCall(action, tuple(p[4:])))
+    return _episode(seed, (p[0], p[1], p[2], p[3]), ball, ActionCall(action, tuple(p[4:])))
 
 
 CHAIN_SEPARATION = 1.0  # m, least distance between robot, ball and target in a random chain
@@ -122,8 +132,10 @@ def sample_chain(rng: np.random.Generator):
     return (x, y, phi, 0.0), ball, calls
 
 
-def run_chain(seed: int, noise: Noise | None = None):
+def run_chain(seed: int, noise: Noise | None = None) -> SequenceResult:
     """One random approachBall -> dribbleBall chain (sample_chain), dispatched without stopping."""
+    from tailor.sims.soccer.simulator import simulate_sequence  # deferred: pymunk loads when a chain runs
+
     robot, ball, calls = sample_chain(np.random.default_rng((seed, SAMPLING_STREAM)))
     return simulate_sequence(robot, ball, calls, seed, noise)
 

@@ -31,10 +31,8 @@ from tailor.sims.episode import ActionCall, Episode, SequenceResult, run_in_sequ
 from tailor.errors import SimError
 from tailor.sims.soccer import world as W
 from tailor.sims.soccer.actions import ACTION_FUNCTIONS, HEADING_FREE
+from tailor.sims.soccer.world import CONTROL_HZ, LOG_HZ, PHYSICS_HZ
 
-PHYSICS_HZ = 100  # Hz, fixed physics step
-CONTROL_HZ = 20  # Hz, controller rate (must divide PHYSICS_HZ)
-LOG_HZ = 10  # Hz, logging rate (must divide CONTROL_HZ)
 DT = 1.0 / PHYSICS_HZ  # s
 STEPS_PER_CONTROL = PHYSICS_HZ // CONTROL_HZ
 CONTROLS_PER_LOG = CONTROL_HZ // LOG_HZ

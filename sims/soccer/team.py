@@ -16,15 +16,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from tailor.sims.episode import ActionCall
 from tailor.sims.soccer.scenarios import RANGES
-from tailor.sims.soccer.simulator import CONTROL_HZ, LOG_HZ, Noise, SoccerSim
-from tailor.sims.soccer.world import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, PIONEER, SPARROW, Dynamics
+from tailor.sims.soccer.world import (CONTROL_HZ, FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, LOG_HZ, PIONEER,
+                                      SPARROW, Dynamics)
 from tailor.sims.team import Observations, Perception, StaticSituation, TeamLog
 
+if TYPE_CHECKING:
+    from tailor.sims.soccer.simulator import SoccerSim
+
+STATE = ("x", "y", "phi", "v")  # a robot's state in a team log: position (m), heading (rad), speed (m/s)
 PERIOD = 1.0 / LOG_HZ  # s, the robots' decision (and message) period: 10 Hz
 CONTROLS_PER_TICK = CONTROL_HZ // LOG_HZ
 OPPONENT_GOAL = (FIELD_HALF_LENGTH, 0.0)  # the ball is approached heading for this point
@@ -91,6 +96,8 @@ class SoccerTeam:
 
     kinds = {name: kind.approach for name, kind in KINDS.items()}
     bounds = (-FIELD_HALF_LENGTH, FIELD_HALF_LENGTH, -FIELD_HALF_WIDTH, FIELD_HALF_WIDTH)
+    state = STATE
+    perturbed = ("x", "y", "phi")  # Q4's added noise: on the pose (m, rad), not on the speed
 
     def team(self, robots: int, heterogeneous: bool) -> tuple[str, ...]:
         if robots < 2:
@@ -99,6 +106,8 @@ class SoccerTeam:
 
     # --- simulation -------------------------------------------------------------------------------------
     def _sims(self, kinds: tuple[str, ...], poses: list[tuple[float, float, float]], seed: int) -> list[SoccerSim]:
+        from tailor.sims.soccer.simulator import Noise, SoccerSim  # deferred: pymunk loads when the team runs
+
         sims = []
         for k, (kind, pose) in enumerate(zip(kinds, poses)):
             sim = SoccerSim(_seed(seed, 2, k), Noise(), KINDS[kind].dynamics)
@@ -187,6 +196,8 @@ class SoccerTeam:
     def approach_time(kind: str, robot: tuple[float, float, float, float], ball: tuple[float, float],
                       seed: int) -> float | None:
         """Fig. 7.7b: the time robot `kind` takes from `robot` to the ball, alone; None if it fails."""
+        from tailor.sims.soccer.simulator import Noise, SoccerSim  # deferred: pymunk loads when the team runs
+
         k = KINDS[kind]
         sim = SoccerSim(seed, Noise(), k.dynamics)
         sim.place((robot[0], robot[1], robot[2], 0.0), ball if k.approach == "approachBall" else None)

@@ -13,8 +13,8 @@ Invariant to mirroring the field about either axis (the walls are symmetric), no
 from __future__ import annotations
 
 import numpy as np
-from tailor.sims.pose import POSE, POSE_PARAMETERS, norm, pose_row, sgn
 from tailor.sims.protocol import FeatureSpace
+from tailor.sims.soccer.pose import POSE, POSE_PARAMETERS, norm, pose_row, sgn
 from tailor.sims.soccer.world import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, WALL_RUNOFF
 
 WALLS = ("wall_x", "wall_y", "heading_x", "heading_y")

@@ -30,6 +30,11 @@ FIELD_HALF_WIDTH = 3.0  # m, playing area y in [-3, 3]
 WALL_RUNOFF = 1.0  # m, walls stand this far outside the lines
 WALL_ELASTICITY = 0.5  # ball bounce off the walls
 
+# --- timing (the simulator's rates; here so that the team scene reads them without loading the physics) --
+PHYSICS_HZ = 100  # Hz, fixed physics step
+CONTROL_HZ = 20  # Hz, controller rate (must divide PHYSICS_HZ)
+LOG_HZ = 10  # Hz, logging rate (must divide CONTROL_HZ)
+
 # --- robot (Pioneer-like differential drive) ------------------------------------------------------------
 V_MAX = 1.0  # m/s, translational velocity limit (forward and backward)
 W_MAX = 3.0  # rad/s, rotational velocity limit

@@ -22,7 +22,6 @@ import pytest
 
 from tailor.planner_bridge import resolve_domain_dir
 from tailor.refinement.binding import load_domain_binding
-from tailor.refinement.evaluation.experiments import binding_neighbourhood
 from tailor.refinement.refine import refine
 from tailor.refinement.situations import draw_situations, job_models, situation_sequence, stream_seed
 
@@ -37,7 +36,7 @@ def test_ga_speed_on_the_waypoint_chain():
     binding = load_domain_binding(domain_dir)
     items = draw_situations(Path(domain_dir), binding, "waypoints",
                             [(i, stream_seed(7, i)) for i in range(SITUATIONS)], 7, {})
-    shares = sorted({0.0, binding_neighbourhood(binding)})
+    shares = sorted({0.0, binding.refinement.neighbourhood})
     keys = [(h, share) for h in HORIZONS for share in shares]
     cpu, wall, free = {k: [] for k in keys}, {k: [] for k in keys}, set()
     for job, index, objects in items:

@@ -63,7 +63,10 @@ def test_kitchen_optimizer_time_per_window():
     from types import MappingProxyType
 
     from tailor.planner_bridge import plan_files, resolve_problem
-    from tailor.refinement import instantiate, load_action_models, load_domain_binding, refine
+    from tailor.refinement.binding import load_domain_binding
+    from tailor.refinement.instantiate import instantiate
+    from tailor.refinement.models.action_models import load_action_models
+    from tailor.refinement.refine import refine
     from tailor.refinement.belief import BeliefState
     from tailor.sims.kitchen.scenarios import scenario2
 

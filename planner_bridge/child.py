@@ -1,0 +1,117 @@
+"""The planner child process, `python -m tailor.planner_bridge.child` (started by planner_bridge.worker, which
+says why a child and speaks the protocol): plan each pair the parent read and sent, in this process.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+import types
+
+from tailor import errors
+from tailor.planner_bridge.in_process import plan_pddl_here
+from tailor.planner_bridge.reading import PDDLTask
+from tailor.planner_bridge.solving import oneshot_planners
+from tailor.planner_bridge.worker import PARENT_ENV, out_of_memory, resident_gb
+
+PR_SET_PDEATHSIG = 1  # from <linux/prctl.h>
+WATCH_PARENT_S = 1.0  # how often the fallback thread checks that the parent is alive (not on Linux)
+# CPython (3.11 and later) keeps Python frames in chunks of 16 kB and frees a chunk as soon as the frame at its
+# base returns: unified-planning's imports, calling in and out across a chunk boundary, had one allocated and
+# freed about 18 000 times (an mmap, a munmap and page faults each time: about a tenth of the child's CPU time).
+# The child runs from a frame reserving this much stack (in words, never written), so it gets a chunk of its own
+# with room for every frame its imports and the planner push.
+ROOM_WORDS = 1 << 16
+
+
+def _error_json(exc: errors.PlannerError) -> dict:
+    return {"class": type(exc).__name__, "message": exc.message, "file": exc.file, "line": exc.line, "col": exc.col}
+
+
+def _die_with_parent() -> None:
+    """Make sure this child does not outlive the process that started it (SIGTERM or a crash of the parent)."""
+    parent = int(os.environ.get(PARENT_ENV, "0") or 0)
+    if sys.platform.startswith("linux"):
+        import ctypes
+        import signal
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    elif parent:
+        import threading
+
+        def watch() -> None:
+            while os.getppid() == parent:
+                time.sleep(WATCH_PARENT_S)
+            os._exit(1)
+
+        threading.Thread(target=watch, daemon=True).start()
+    if parent and os.getppid() != parent:  # the parent died before the kernel was asked to tell us
+        os._exit(1)
+
+
+def _limit_memory(limit_gb: float | None) -> None:
+    """Where the parent cannot read the child's resident memory (no /proc), limit the address space instead:
+    a coarser bound (an allocation beyond it fails, as MemoryError or worse inside an engine's C code)."""
+    if limit_gb is None or resident_gb(os.getpid()) is not None:
+        return
+    import resource
+
+    limit = int(limit_gb * 2**30)
+    _, hard = resource.getrlimit(resource.RLIMIT_AS)
+    if hard != resource.RLIM_INFINITY:
+        limit = min(limit, hard)
+    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
+
+
+def main() -> int:
+    """Plan each request line in this process, answer on the original stdout, until stdin ends."""
+    _die_with_parent()
+    answer = os.fdopen(os.dup(1), "w", encoding="utf-8")
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)  # from here on, anything printed by the engines is discarded
+
+    def send(message: dict) -> None:
+        answer.write(json.dumps(message) + "\n")
+        answer.flush()
+
+    # imported before the clock starts: the imports are not the user's time
+    import unified_planning.io
+    import unified_planning.shortcuts  # noqa: F401
+
+    oneshot_planners()  # imports the installed engines
+    send({"event": "ready"})
+    limited = False
+    for line in sys.stdin:  # one request per line; a reused child (PlannerProcess) gets many
+        request = json.loads(line)
+        task = PDDLTask.from_json(request["task"])
+        limit_gb = request.get("memory_gb")
+        try:
+            if not limited:
+                _limit_memory(limit_gb)
+                limited = True
+            plan = plan_pddl_here(task, request["planner"], lambda: send({"event": "searching"}))
+            send({"plan": plan.to_json(facts=True)})
+        except MemoryError:
+            send({"error": _error_json(errors.PlannerError(out_of_memory(limit_gb), str(task.problem)))})
+        except errors.PlannerError as exc:
+            send({"error": _error_json(exc)})
+        except Exception as exc:  # a bug or an engine's surprise: still one line for the user
+            send({"error": _error_json(errors.PlannerError(f"internal error: {type(exc).__name__}: {exc}"))})
+    return 0
+
+
+def _call(function):
+    return function()
+
+
+def _in_room(function):
+    """function() called from a frame reserving ROOM_WORDS of stack: _call's code with a larger declared stack
+    (which only CPython's frame chunks take into account)."""
+    return types.FunctionType(_call.__code__.replace(co_stacksize=ROOM_WORDS), {})(function)
+
+
+if __name__ == "__main__":
+    sys.exit(_in_room(main))
