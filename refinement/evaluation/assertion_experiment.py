@@ -11,13 +11,12 @@ time cost, and Table 6.1 (predicted x observed, before and after assertion).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from tailor.refinement.assertion import assert_subgoals
-from tailor.refinement.dispatch import dispatch
-from tailor.refinement.refine import refine
+from tailor.refinement.pipeline import Options, refine_stage
 from tailor.refinement.situations import Job, job_binding, job_models, situation_sequence, stream_seed
 
 COLLISION = "collision"
@@ -43,14 +42,15 @@ def assertion_episode(job: Job, index: int, objects: dict, setup: AssertionSetup
     sequence = situation_sequence(job, objects)
     asserted = assert_subgoals(sequence, job_binding(job), setup.success_models, job.plan.object_types or None)
     models = job_models(job, asserted.sequence)
-    plain_refined = refine(sequence, models, horizon=1, method=setup.method, seed=seed)
-    plain = dispatch(plain_refined.sequence, seed=seed)
+    options = Options(horizon=1, optimizer=setup.method, seed=seed, risk=0.0, neighbourhood=0.0, greedy=False,
+                      simulate=True)
+    stage = refine_stage(sequence, models, {}, options)  # the plain action: no guard, greedy
+    plain_refined, plain = stage.refined.refined, stage.refined.simulated
     inserted = any(a.inserted for a in asserted.assertions)
     predicted_success = all(a.predicted_success for a in asserted.assertions)
     if inserted or asserted.sequence.free_parameters():
-        refined = refine(asserted.sequence, models, horizon=REFINE_HORIZON, method=setup.method, seed=seed,
-                         success_models=setup.success_models)
-        result = dispatch(refined.sequence, seed=seed)
+        stage = refine_stage(asserted.sequence, models, setup.success_models, replace(options, horizon=REFINE_HORIZON))
+        refined, result = stage.refined.refined, stage.refined.simulated
     else:  # nothing asserted and nothing to choose: the same sequence, the same seed, the same execution
         refined, result = plain_refined, plain
     row = {"index": index, "seed": seed, "problem": job.plan.problem, "inserted": inserted,

@@ -10,10 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from tailor.refinement.dispatch import dispatch
 from tailor.refinement.evaluation.experiments import EQUAL_BAND, outcome_of, situation_seed
 from tailor.refinement.meta_filter import meta_features
-from tailor.refinement.refine import refine
+from tailor.refinement.pipeline import Options, refine_stage
 from tailor.refinement.situations import Job, asserted_situation, job_models
 
 CLASSES = ("better", "equal", "worse")  # Table 5.4's +, 0, -
@@ -33,10 +32,11 @@ def meta_episode(job: Job, index: int, objects: dict, horizon: int, risk: float 
     seed = situation_seed(job.seed, index)
     sequence, success = asserted_situation(job, objects)
     models = job_models(job, sequence)
-    greedy = refine(sequence, models, horizon=1, method="analytic", seed=seed, success_models=success)
-    refined = refine(sequence, models, horizon=horizon, method="analytic", seed=seed, success_models=success,
-                     risk=risk, neighbourhood=neighbourhood)
-    g, r = dispatch(greedy.sequence, seed=seed), dispatch(refined.sequence, seed=seed)
+    options = Options(horizon=horizon, optimizer="analytic", seed=seed, risk=risk, neighbourhood=neighbourhood,
+                      simulate=True)
+    stage = refine_stage(sequence, models, success, options)
+    greedy, refined = stage.greedy.refined, stage.refined.refined
+    g, r = stage.greedy.simulated, stage.refined.simulated
     features = meta_features(greedy, refined, models, horizon)
     return {"index": index, "seed": seed, "problem": job.plan.problem, "situation": objects,
             "greedy": g.duration, "refined": r.duration, "greedy_ok": g.succeeded, "refined_ok": r.succeeded,
