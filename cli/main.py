@@ -28,6 +28,8 @@ COMMANDS = {  # name: (module, one line of help); a module defines add_arguments
               "gather experience in the simulator and learn the action models (durations, success classifiers)"),
     "gather": ("tailor.cli.gather",
               "simulate episodes A..B-1 of the domain's experience scenarios and keep them as shards for `tailor train`"),
+    "check": ("tailor.cli.check",
+              "say what the binding and belief make of a problem: free parameters, belief values read, warnings"),
     "refine": ("tailor.cli.refine",
               "refine the free parameters of a plan for the fastest predicted execution, optionally simulate it"),
     "evaluate": ("tailor.cli.evaluate",

@@ -21,8 +21,8 @@ from tailor.refinement.action_sequence import ActionSequence
 from tailor.refinement.assertion import AssertedSequence, Assertion, assert_subgoals
 from tailor.refinement.belief import BeliefState, belief_path_for, load_belief, parse_belief
 from tailor.refinement.binding import BINDING_FILE, Binding, load_domain_binding
+from tailor.refinement.check import check_task
 from tailor.refinement.dispatch import check_scene, dispatch
-from tailor.refinement.instantiate import instantiate
 from tailor.refinement.meta_filter import MetaDecision, decide
 from tailor.refinement.model_store import ModelSource, resolve_models
 from tailor.refinement.models.action_models import ActionModel, load_action_models, load_success_models
@@ -81,6 +81,7 @@ class Options:
     simulate: bool = False  # dispatch each execution to the simulator
     planner: str = DEFAULT_PLANNER
     timeout: float | None = None
+    strict: bool = False  # the check's warnings (refinement.check) are errors
 
 
 @dataclass(frozen=True)
@@ -117,6 +118,7 @@ class Prepared:
     models: dict[str, ActionModel]
     success_models: dict
     options: Options
+    warnings: tuple[str, ...] = ()  # what refinement.check found odd in the binding and belief
 
     @property
     def empty(self) -> bool:
@@ -243,7 +245,12 @@ def prepare(inputs: Inputs, options: Options = Options(), plan: AbstractPlan | N
         plan = plan_pddl(inputs.pddl, planner=options.planner, timeout=options.timeout)
     objects = [name for name, _ in plan.objects]
     belief = inputs.belief.check_objects(objects) if objects else inputs.belief
-    instantiated = instantiate(plan, inputs.binding, belief)
+    checked = check_task(plan, inputs.binding, belief)  # Alg. 3, noting what it reads from the belief
+    for warning in checked.warnings:
+        if options.strict:
+            raise BindingError(f"{warning} (--strict)")
+        logging.getLogger(__name__).warning("%s", warning)
+    instantiated = checked.sequence
     success_models: dict = {}
     sequence, assertions = instantiated, ()
     if options.assertion:
@@ -255,7 +262,7 @@ def prepare(inputs: Inputs, options: Options = Options(), plan: AbstractPlan | N
     if not sequence.actions:
         resolved = replace(resolved, simulate=False)  # nothing to execute
     return Prepared(plan, instantiated, sequence, tuple(assertions), inputs.binding, inputs.models, models,
-                    success_models, resolved)
+                    success_models, resolved, checked.warnings)
 
 
 def run(inputs: Inputs, options: Options = Options(), plan: AbstractPlan | None = None, meta=None) -> Result:
