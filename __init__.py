@@ -20,11 +20,14 @@ from __future__ import annotations
 from importlib.metadata import PackageNotFoundError, version
 
 from tailor.errors import ArgumentTypeError, ArgumentValueError, TailorError
+from tailor.planner_bridge.engine_registration import install as install_engine
 
 try:
     __version__ = version("tailor")
 except PackageNotFoundError:  # run from a source tree that is not installed
     __version__ = "0+unknown"
+
+install_engine()  # `OneshotPlanner(name="tailor-pocl")` works once tailor is imported (see engine_registration)
 
 # name -> module: imported on first use, so `import tailor` (and the CLI) stays light
 _API = {

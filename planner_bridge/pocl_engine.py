@@ -19,13 +19,13 @@ from unified_planning.plans import ActionInstance, PartialOrderPlan
 
 from tailor.planner_bridge.abstract_plan import GOAL, INITIAL, CausalLink
 from tailor.planner_bridge.causal import transitive_reduction
+from tailor.planner_bridge.engine_registration import ENGINE_NAME
 from tailor.planner_bridge.pocl import GOAL as POCL_GOAL
 from tailor.planner_bridge.pocl import INIT as POCL_INIT
 from tailor.planner_bridge.pocl import Planner, flaws_of, linearization
 from tailor.planner_bridge.pocl_ground import UnsupportedCondition, ground
 from tailor.planner_bridge.pocl_order import least_commitment, pairs, reduced_orderings
 
-ENGINE_NAME = "tailor-pocl"
 # With least commitment on: expansions after the first plan, looking for other plans of no more steps that the
 # post-pass can leave less ordered (a node budget, not a clock: the same problem gives the same plan).
 ALTERNATIVES = 1000
