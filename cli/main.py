@@ -36,6 +36,8 @@ COMMANDS = {  # name: (module, one line of help); a module defines add_arguments
               "measure refined vs greedy execution in the simulator over random situations"),
     "coordinate": ("tailor.cli.coordinate",
               "measure implicit coordination of a robot team with learned action models (Ch. 7)"),
+    "new": ("tailor.cli.new",
+              "make a plug-in package for a robot of your own, ready to install, train, refine and evaluate"),
     "domains": ("tailor.cli.domains",
               "list installed simulators and bundled domains, and what each can do (plan, train, refine, evaluate)"),
 }
