@@ -5,11 +5,17 @@ The same functions run thousands of times inside `tailor evaluate` and `tailor t
 under their own bars), where a bar per call would be noise; so they are off unless the caller opens a
 `showing_progress()` block, as `tailor refine` does. Bars go to stderr (tqdm's `disable=None`: none when stderr
 is not a terminal).
+
+The long runs of a command (gathering experience, training, evaluating) report with `stage_bar`: a bar on a
+terminal; elsewhere (a log file, CI, a pipe) a log line when the stage starts, at least every LOG_EVERY_S while it
+runs, and when it ends, so a run that takes minutes never goes silent.
 """
 
 from __future__ import annotations
 
+import logging
 import sys
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
@@ -55,3 +61,48 @@ def progress_bar(**kwargs):
     from tqdm import tqdm
 
     return tqdm(file=sys.stderr, disable=None, **kwargs)
+
+
+LOG_EVERY_S = 30.0  # off a terminal, a long stage says how far it is at least this often
+log = logging.getLogger("tailor.progress")
+
+
+class _LoggedStage:
+    """A stage's progress as log lines (stderr is not a terminal): at the start, every LOG_EVERY_S, at the end."""
+
+    def __init__(self, total: int, desc: str, unit: str):
+        self.total, self.desc, self.unit, self.n = total, desc, unit, 0
+        self.started = self.said = time.monotonic()
+        log.info("%s: %d %s to do", desc, total, unit)
+
+    def update(self, n: int = 1) -> None:
+        self.n += n
+        now = time.monotonic()
+        if now - self.said >= LOG_EVERY_S and self.n < self.total:
+            self.said = now
+            log.info("%s: %d/%d %s (%.0f s)", self.desc, self.n, self.total, self.unit, now - self.started)
+
+    def set_postfix_str(self, *args, **kwargs) -> None:
+        return None
+
+    def close(self) -> None:
+        if self.n >= self.total:
+            log.info("%s: %d %s done in %.1f s", self.desc, self.n, self.unit, time.monotonic() - self.started)
+
+    def __enter__(self) -> "_LoggedStage":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def stage_bar(total: int, desc: str, unit: str, enabled: bool = True):
+    """The progress of one stage of a long command: a tqdm bar on a terminal, log lines elsewhere (_LoggedStage),
+    nothing where `enabled` is False (-q) or there is nothing to do."""
+    if not enabled or not total:
+        return _NoBar()
+    if sys.stderr is not None and sys.stderr.isatty():
+        from tqdm import tqdm
+
+        return tqdm(total=total, desc=desc, unit=unit, file=sys.stderr)
+    return _LoggedStage(total, desc, unit)

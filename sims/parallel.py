@@ -14,12 +14,12 @@ from __future__ import annotations
 import contextlib
 import logging
 import signal
-import sys
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 from tailor.errors import BackendError
+from tailor.progress import stage_bar
 
 BACKENDS = ("loky", "dask", "ray")
 EXTRAS = {"dask": ("dask", "distributed"), "ray": ("ray",)}  # the packages each optional backend needs
@@ -183,13 +183,11 @@ def ordered_results(function: Callable, calls: Sequence[tuple], jobs: int = 1) -
 
 def run_in_workers(function, items, jobs: int, desc: str, progress: bool = True, unit: str = "ep") -> list:
     """function(*item) for every item, in order, in `jobs` workers of the backend session in force (loky by
-    default, tailor.sims.parallel); one bar for the whole run, on a terminal. Ctrl-C stops the workers."""
-    from tqdm import tqdm
-
+    default, tailor.sims.parallel); one bar for the whole run on a terminal, log lines elsewhere (stage_bar).
+    Ctrl-C stops the workers."""
     items = list(items)
     results = []
-    with tqdm(total=len(items), desc=desc, unit=unit, file=sys.stderr,
-              disable=None if items and progress else True) as bar:
+    with stage_bar(len(items), desc, unit, progress) as bar:
         ordered = ordered_results(function, items, jobs)
         try:
             for result in ordered:
