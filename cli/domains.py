@@ -16,11 +16,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def describe(domain_dir) -> dict:
     """What the domain in `domain_dir` provides: problems, binding, simulator, models, recipe, evaluation."""
     from tailor.errors import TailorError
-    from tailor.refinement.binding import BINDING_FILE, load_domain_binding
+    from tailor.refinement.binding import BINDING_FILE, DOMAIN_FILE, load_domain_binding
+    from tailor.refinement.binding_domain import read_vocabulary
     from tailor.refinement.learning.recipe import recipe_from_binding
 
     problems = sorted(p.stem for p in (domain_dir / "problems").glob("*.pddl"))
-    info = {"name": domain_dir.name, "path": str(domain_dir), "problems": problems, "simulator": None,
+    vocabulary = read_vocabulary(domain_dir / DOMAIN_FILE)  # the PDDL domain's own name (None: unreadable)
+    info = {"name": vocabulary.name if vocabulary is not None and vocabulary.name else domain_dir.name,
+            "folder": domain_dir.name, "path": str(domain_dir), "problems": problems, "simulator": None,
             "can": ["plan"], "models": [], "notes": []}
     if not (domain_dir / BINDING_FILE).is_file():
         info["notes"].append(f"no {BINDING_FILE}: planning only")
@@ -78,8 +81,9 @@ def run(args: argparse.Namespace) -> int:
     out("\nDomains:\n")
     width = max((len(" ".join(d["can"])) for d in domains), default=0)
     for d in domains:
+        folder = "" if d["folder"] == d["name"] else f" (folder {d['path']})"
         out(f"  {d['name']:<10} {' '.join(d['can']):<{width}}  simulator {d['simulator'] or '-'}; "
-            f"problems {', '.join(d['problems'])}\n")
+            f"problems {', '.join(d['problems'])}{folder}\n")
         for note in d["notes"]:
             out(f"             note: {note}\n")
     return 0
