@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from tailor.refinement.optimizers import DEFAULT_OPTIMIZER, OPTIMIZERS
 from tailor.cli.arguments import (
     add_backend_arguments,
     add_filter_arguments,
@@ -64,6 +65,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_filter_arguments(parser)
     add_risk_argument(parser)
     add_neighbourhood_argument(parser)
+    parser.add_argument("--optimizer", choices=sorted(OPTIMIZERS), default=DEFAULT_OPTIMIZER,
+                        help="the optimizer of the refined runs (the GA also runs on the same windows where it did "
+                             f"not, for comparison; default: {DEFAULT_OPTIMIZER}, as `tailor refine`)")
     parser.add_argument("--risk-sweep", type=_lambdas, default=(), metavar="LIST",
                         help="also refine every situation with each of these risk lambdas (comma-separated, e.g. "
                              "0,0.5,1,2) and report them side by side on the same situations, greedy runs and oracle")
@@ -121,12 +125,29 @@ def _print_text(report: dict) -> None:
             f"p {_fmt(s['p_value_zero'], '{:.2g}')}\n")
     out(f"  refined / simulated optimum  {_fmt(s['oracle_ratio'], '{:.3f}')} over {s['oracle_episodes']} episodes "
         f"(greedy / optimum {_fmt(s['greedy_oracle_ratio'], '{:.3f}')}; {', '.join(s['oracle_methods']) or '-'})\n")
-    out(f"  optimizer median time        analytic {_fmt(s['analytic_ms_median'])} ms, ga {_fmt(s['ga_ms_median'])} ms; "
-        f"agree within 1% in {_pct(s['analytic_ga_agree'])}% "
-        f"(analytic fell back to ga {s['analytic_fallbacks']} times)\n")
+    if s.get("stronger_baseline") == "zero":
+        out(f"  over the stronger baseline   zero ({_fmt(s['stronger_baseline_mean'])} s, faster than greedy): refined "
+            f"is {_pct(s['improvement_over_stronger_baseline'])}% faster over the "
+            f"{s['stronger_baseline_episodes']} situations where all three succeeded\n")
+    optimizer = report.get("optimizer", "auto")
+    out(f"  optimizer per sequence       {optimizer} {_fmt(s['analytic_ms_median'])} ms, ga alone "
+        f"{_fmt(s['ga_ms_median'])} ms (medians); their predicted totals agree within 1% in "
+        f"{_pct(s['analytic_ga_agree'])}%\n")
+    for method, row in (s.get("optimizers") or {}).items():
+        gaps = (f"; certified gap median {100 * row['gap_share_median']:.3f}%, max {100 * row['gap_share_max']:.3f}% "
+                f"over {row['certified_windows']} windows" if row["certified_windows"] else "")
+        out(f"  windows by {method:<17} {_pct(row['share'])}% ({row['windows']}), median {_fmt(row['median_ms'])} ms"
+            f"{gaps}\n")
+        if "vs_ga" in row:
+            v = row["vs_ga"]
+            out(f"    against the GA, same windows: predicted {_fmt(v['cost_mean'], '{:.4f}')} s vs "
+                f"{_fmt(v['ga_cost_mean'], '{:.4f}')} s on average; above the GA's by at most "
+                f"{_fmt(100 * v['above_ga_max'], '{:.3f}')}% ({v['above_ga_by_more_than_0.1%']} windows by more than "
+                f"0.1%), below it on {v['below_ga']}; the GA's median {_fmt(v['ga_median_ms'])} ms\n")
     if s.get("window_ms_median") is not None:
         out(f"  optimizer per window (h=2)   median {_fmt(s['window_ms_median'])} ms; all windows of a sequence take "
-            f"{_pct(s['optimizer_share'])}% of its execution time on average\n")
+            f"{_pct(s['optimizer_share'])}% of its execution time on average, execution waits for "
+            f"{_pct(s.get('optimizer_wait_share'))}% (each window refined while the action before it executes)\n")
     if s.get("per_action"):
         out("\nPer action (Table 5.2), mean duration (s) over the situations where both succeeded (how many):\n")
         out("  problem          step  action              greedy (h=1)  refined (h=2)\n")
@@ -136,7 +157,8 @@ def _print_text(report: dict) -> None:
                 f"  {_fmt(row['refined_mean']):>13}\n")
     sweep = report.get("risk_sweep")
     if sweep:
-        out("\nRisk-aware refinement (h=2, analytic) on the same situations: objective = predicted duration + "
+        out(f"\nRisk-aware refinement (h=2, {report.get('optimizer', 'auto')}) on the same situations: objective = "
+            "predicted duration + "
             "lambda * uncertainty\n")
         out("  lambda  failed greedy/refined  improvement  penalized  better/equal/worse  worse  refined/optimum\n")
         for row in sweep:
@@ -231,12 +253,12 @@ def _evaluate(args: argparse.Namespace) -> int:
             resolve_risk(max(args.risk_sweep), models)
     neighbourhood = binding.refinement.neighbourhood if args.neighbourhood is None else args.neighbourhood
     rows = run_in_workers(comparison_episode, [(job, i, objects, i < args.oracle_episodes, binding.refinement.zero_baseline,
-                                                use_filter, risk, args.risk_sweep, neighbourhood)
+                                                use_filter, risk, args.risk_sweep, neighbourhood, args.optimizer)
                                                for job, i, objects in items], args.jobs, "greedy vs refined",
                           getattr(args, "progress", True))
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
               "models": str(source.path), "comparison": plan.comparison, "filter": use_filter, "risk": risk,
-              "neighbourhood": neighbourhood}
+              "neighbourhood": neighbourhood, "optimizer": args.optimizer}
     report.update(summarize_comparison(rows))
     if args.risk_sweep:
         report["risk_sweep"] = summarize_risk_sweep(rows)

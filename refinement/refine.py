@@ -3,7 +3,9 @@
 The sequence is refined h actions at a time (the horizon): at action i the still-free parameters of
 actions i..i+h-1 are optimized for the sum of their predicted durations, then the ones action i uses are
 fixed and the window moves on. h = 1 is the greedy baseline of Sec. 5.5.1: each subgoal is chosen for the
-action that reaches it only.
+action that reaches it only. Each window is one Objective for the optimizers (`auto` by default: analytic,
+certified or the GA, see optimizers); a term carries the enclosure its model's feature space declares
+(FeatureSpace.bounds) over the boxes of action parameters a box of free values gives, for the certified one.
 
 Beyond the dissertation: with a risk lambda > 0 each action's predicted duration is charged lambda times its
 uncertainty (the held-out spread of the leaf it comes from, models.uncertainty), so the optimizer stops
@@ -24,9 +26,11 @@ from typing import TYPE_CHECKING, Mapping
 import numpy as np
 
 from tailor.refinement.action_sequence import ActionSequence, ExecutableAction
-from tailor.errors import ArgumentValueError, ModelFileError
-from tailor.refinement.optimizers import FreeParameter, Objective, OptimizationResult, Term, optimize
+from tailor.errors import ArgumentValueError, DataError, ModelFileError
+from tailor.refinement.models.features import feature_space
+from tailor.refinement.optimizers import DEFAULT_OPTIMIZER, FreeParameter, Objective, OptimizationResult, Term, optimize
 from tailor.progress import progress_bar
+from tailor.sims.protocol import FeatureSpace
 
 # of each free range, kept from every split of the models: 0.031 rad of a full heading range, 4 cm of 8 m (a
 # mobile base's noise: 1 deg, 1 cm)
@@ -52,6 +56,10 @@ class RefinedSequence:
     risk: float = 0.0  # lambda of the objective: expected duration + lambda * uncertainty
     spread: tuple[float, ...] | None = None  # per action, its model's uncertainty (s); None where one has none
     neighbourhood: float = 0.0  # share of each free range whose worst predicted case was minimized (0: the point)
+    window_actions: tuple[int, ...] = ()  # per window, the index of the action whose parameters it fixed
+    # per window, the same objective minimized by the optimizer `refine(compare=...)` names (evaluation: the
+    # choices of two optimizers on the same windows); () where none was asked for
+    compared: tuple[OptimizationResult, ...] = ()
 
     @property
     def predicted_total(self) -> float:
@@ -63,32 +71,66 @@ class LastBatch:
     reuses the rows of the batch before: the genetic algorithm's offspring keep many parents' values of the
     parameters one action reads, and a neighbourhood repeats the point for every free parameter that action
     does not read. Same output as the function itself; worth it where features are costly (a path planned
-    per row)."""
+    per row). Rows are told apart by a 64-bit hash of their bits (sorting numbers is faster than sorting rows
+    of bytes), and every row found alike is checked to be equal, bit for bit, before its value is reused."""
 
     def __init__(self, function):
         self.function = function
-        self.keys = np.empty(0, dtype=np.void(8))  # the last batch's distinct rows (sorted bytes) ...
+        self.keys = np.empty(0, dtype=np.uint64)  # the last batch's distinct rows' hashes (sorted) ...
+        self.params: np.ndarray | None = None  # ... the rows themselves ...
         self.rows: np.ndarray | None = None  # ... and their values
 
     def __call__(self, params: np.ndarray) -> np.ndarray:
         params = np.ascontiguousarray(params, dtype=float)
         if params.ndim != 2 or not len(params):
             return self.function(params)
-        keys = params.view(np.dtype((np.void, params.itemsize * params.shape[1]))).ravel()
-        keys, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+        keys, first, inverse = _distinct(_row_hashes(params))
+        distinct = params[first]
+        if not np.array_equal(distinct[inverse].view(np.uint64), params.view(np.uint64)):  # a hash collision
+            self.keys, self.params, self.rows = np.empty(0, dtype=np.uint64), None, None
+            distinct_rows = np.unique(params.view(np.dtype((np.void, params.itemsize * params.shape[1]))).ravel(),
+                                      return_index=True, return_inverse=True)
+            return np.asarray(self.function(params[distinct_rows[1]]))[distinct_rows[2].ravel()]
         rows = None
-        if self.rows is not None and self.keys.dtype == keys.dtype:
+        if self.rows is not None and self.params.shape[1] == params.shape[1]:
             at = np.minimum(np.searchsorted(self.keys, keys), len(self.keys) - 1)
-            known = self.keys[at] == keys
+            known = (self.keys[at] == keys) & np.all(self.params[at].view(np.uint64) == distinct.view(np.uint64),
+                                                      axis=1)
             if known.any():
                 rows = np.empty((len(keys),) + self.rows.shape[1:], dtype=self.rows.dtype)
                 rows[known] = self.rows[at[known]]
                 if not known.all():
-                    rows[~known] = self.function(params[first[~known]])
+                    rows[~known] = self.function(distinct[~known])
         if rows is None:
-            rows = np.asarray(self.function(params[first]))
-        self.keys, self.rows = keys, rows
-        return rows[inverse.ravel()]
+            rows = np.asarray(self.function(distinct))
+        self.keys, self.params, self.rows = keys, distinct, rows
+        return rows[inverse]
+
+
+def _distinct(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """np.unique(keys, return_index=True, return_inverse=True) without its stable sort: the index of some
+    occurrence of each distinct key, not necessarily the first (rows alike are the same rows)."""
+    order = np.argsort(keys)
+    ordered = keys[order]
+    new = np.empty(len(keys), dtype=bool)
+    new[:1] = True
+    np.not_equal(ordered[1:], ordered[:-1], out=new[1:])
+    inverse = np.empty(len(keys), dtype=np.intp)
+    inverse[order] = np.cumsum(new) - 1
+    return ordered[new], order[new], inverse
+
+
+_HASH_MULTIPLIERS = np.random.default_rng(0x5EED).integers(1, 2**63, size=64, dtype=np.uint64) * 2 + 1  # odd
+
+
+def _row_hashes(params: np.ndarray) -> np.ndarray:
+    """A 64-bit hash of each row's bits: rows differing in one value always differ; otherwise alike by chance
+    (2^-64), which LastBatch checks."""
+    bits = params.view(np.uint64)
+    multipliers = np.resize(_HASH_MULTIPLIERS, bits.shape[1])
+    with np.errstate(over="ignore"):
+        hashes = (bits * multipliers).sum(axis=1, dtype=np.uint64)
+        return hashes ^ (hashes >> np.uint64(29))
 
 
 def action_term(action: ExecutableAction, model: ActionModel, free: tuple[FreeParameter, ...],
@@ -131,8 +173,13 @@ def action_term(action: ExecutableAction, model: ActionModel, free: tuple[FreePa
     def features(theta: np.ndarray) -> np.ndarray:
         return derive(params(theta))
 
+    # the action's parameters over a box of theta: the fixed values, and each free slot's column of the box
+    space_bounds, why = _bounds_of(model)
+    enclosure = None if space_bounds is None else (lambda lo, hi: space_bounds(params(lo), params(hi)))
+    reads = tuple(sorted({j for _, j in free_slots}))
     if success_model is None:
-        return Term(model=duration, features=features, label=action.pddl, inputs=params, derive=derive)
+        return Term(model=duration, features=features, label=action.pddl, inputs=params, derive=derive,
+                    feature_bounds=enclosure, no_bounds=why, reads=reads)
     margin = [0.0] * len(free)
     for _, j in free_slots:
         margin[j] = action.guard_margin * (free[j].high - free[j].low)
@@ -148,9 +195,33 @@ def action_term(action: ExecutableAction, model: ActionModel, free: tuple[FreePa
                 ok &= np.asarray(success_model.predict_success(params(moved)), dtype=bool)
         return ok
 
+    region_bounds, _ = _bounds_of(success_model)
     return Term(model=duration, features=features, label=action.pddl, valid=valid,
                 region=success_model, region_features=lambda theta: success_model.features(params(theta)),
-                region_margin=tuple(margin), inputs=params, derive=derive)
+                region_margin=tuple(margin), inputs=params, derive=derive, feature_bounds=enclosure,
+                region_bounds=None if region_bounds is None else (lambda lo, hi: region_bounds(params(lo), params(hi))),
+                no_bounds=why, reads=reads)
+
+
+def _bounds_of(model) -> tuple[object | None, str]:
+    """The enclosure its feature space declares for a model's features (FeatureSpace.bounds: boxes of action
+    parameters to boxes of features), or None and why not."""
+    try:  # a model's own FeatureSpace where it offers one (a generated space carries its bounds), else its name
+        space = getattr(model, "space", None)
+    except DataError:
+        space = None
+    if not isinstance(space, FeatureSpace):
+        space = getattr(model, "feature_space", None)
+    if isinstance(space, str):
+        try:
+            space = feature_space(space)
+        except DataError:
+            return None, f"feature space {space!r} is not known here"
+    if not isinstance(space, FeatureSpace):
+        return None, f"the model of {getattr(model, 'action', 'the action')} names no feature space"
+    if space.bounds is None:
+        return None, f"feature space {space.name!r} declares no bounds"
+    return space.bounds, ""
 
 
 class _NoDuration:
@@ -173,7 +244,8 @@ def guard_term(action: ExecutableAction, model: ActionModel, free: tuple[FreePar
     """Only the validity of a guarded action beyond the horizon (its duration is not part of this window)."""
     term = action_term(action, model, free, assignment, success_model)
     return replace(term, model=_NO_DURATION, features=lambda theta: np.zeros((len(np.atleast_2d(theta)), 1)),
-                   label=f"guard of {action.pddl}", inputs=None, derive=None)
+                   label=f"guard of {action.pddl}", inputs=None, derive=None, reads=(),
+                   feature_bounds=lambda lo, hi: (np.zeros((len(lo), 1)), np.zeros((len(lo), 1))), no_bounds="")
 
 
 def guard_for(action: ExecutableAction, success_models: Mapping[str, object] | None):
@@ -266,14 +338,17 @@ def predicted_spreads(sequence: ActionSequence, models: Mapping[str, ActionModel
 
 
 def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon: int = 2,
-           method: str = "analytic", seed: int = 0, success_models: Mapping[str, object] | None = None,
-           risk: float = 0.0, margin_share: float = MARGIN_SHARE, neighbourhood: float = 0.0) -> RefinedSequence:
+           method: str = DEFAULT_OPTIMIZER, seed: int = 0, success_models: Mapping[str, object] | None = None,
+           risk: float = 0.0, margin_share: float = MARGIN_SHARE, neighbourhood: float = 0.0,
+           compare: str | None = None) -> RefinedSequence:
     """Bind every free parameter of `sequence`, h actions at a time, minimizing summed predicted duration
     (plus `risk` times the summed uncertainty), each choice `margin_share` of its range from the models' splits;
     with `neighbourhood` > 0, the worst of that sum within that share of each free range around a choice.
 
     Guarded actions (subgoal assertion) take their success classifier from `success_models` by name: the
-    optimizers consider only parameterizations it predicts to succeed (Alg. 6).
+    optimizers consider only parameterizations it predicts to succeed (Alg. 6). With `compare` (an optimizer's
+    name), each window's objective is also minimized by that optimizer (`RefinedSequence.compared`; the windows
+    still take `method`'s choices): two optimizers judged on the same windows.
     """
     if horizon < 1:
         raise ValueError("the horizon must be at least 1")
@@ -287,6 +362,8 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
             model_for(action, models).require_uncertainty()
     assignment: dict[str, float] = {}
     windows: list[OptimizationResult] = []
+    acted: list[int] = []
+    compared: list[OptimizationResult] = []
     steps = progress_bar(iterable=range(len(actions)), desc=f"refining (h={horizon})", unit="action", leave=False)
     for i in steps:
         window = actions[i:i + horizon]
@@ -316,9 +393,12 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
                        for a in beyond)
         margin = tuple(margin_share * (p.high - p.low) for p in free_t)
         radius = tuple(neighbourhood * (p.high - p.low) for p in free_t) if neighbourhood else ()
-        result = optimize(Objective(free=free_t, terms=terms, margin=margin, neighbourhood=radius),
-                          method=method, seed=seed + i)
+        objective = Objective(free=free_t, terms=terms, margin=margin, neighbourhood=radius)
+        result = optimize(objective, method=method, seed=seed + i)
         windows.append(result)
+        acted.append(i)
+        if compare is not None:
+            compared.append(result if result.method == compare else optimize(objective, method=compare, seed=seed + i))
         chosen = dict(zip((p.id for p in free_t), result.values))
         for p in actions[i].params:  # fix what action i uses; later subgoals are optimized again
             if p.id in chosen:
@@ -326,4 +406,4 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
     bound = sequence.bind(assignment)
     return RefinedSequence(sequence=bound, predicted=predicted_durations(bound, models), windows=tuple(windows),
                            horizon=horizon, risk=float(risk), spread=predicted_spreads(bound, models),
-                           neighbourhood=float(neighbourhood))
+                           neighbourhood=float(neighbourhood), window_actions=tuple(acted), compared=tuple(compared))

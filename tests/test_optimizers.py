@@ -9,12 +9,13 @@ from tailor.refinement.optimizers.synthetic import random_objective, pose_chain
 
 
 def test_registry_names():
-    assert list(OPTIMIZERS) == ["analytic", "ga", "sample"]
+    assert list(OPTIMIZERS) == ["auto", "analytic", "certified", "ga", "sample"]
 
 
 def test_unknown_method_and_empty_range_are_clear_errors():
     objective = random_objective(np.random.default_rng(0), 1, 1)
-    with pytest.raises(TailorError, match="unknown optimizer 'newton'; choose one of analytic, ga, sample"):
+    with pytest.raises(TailorError, match="unknown optimizer 'newton'; choose one of auto, analytic, certified, ga, "
+                                          "sample"):
         optimize(objective, "newton")
     empty = Objective((FreeParameter("ball.v", 0.3, 0.0),), objective.terms)
     message = r"free parameter ball.v has an empty or unbounded range \[0.3, 0.0\]"

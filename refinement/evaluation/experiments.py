@@ -27,6 +27,7 @@ import numpy as np
 
 from tailor.refinement.action_sequence import ActionSequence
 from tailor.refinement.dispatch import dispatch
+from tailor.refinement.optimizers import DEFAULT_OPTIMIZER
 from tailor.refinement.pipeline import Options, refine_stage
 from tailor.refinement.refine import refine
 from tailor.refinement.models.meta_model import EQUAL_BAND  # "equal" within 1% (Table 5.4), as the meta model's
@@ -49,23 +50,29 @@ def situation_seed(seed: int, index: int) -> int:
 
 
 def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: bool, meta: bool = False,
-                       risk: float = 0.0, sweep: tuple[float, ...] = (), neighbourhood: float = 0.0) -> dict:
-    """One situation: greedy, refined (analytic and ga; with the risk lambda `risk`), optionally the zero
-    baseline, the oracle, and the refined sequence with each risk lambda of `sweep` (analytic), all dispatched
-    with the same simulator seed. With `meta`, the refined execution is the greedy one where the meta model
-    (models/meta.json) does not predict that refinement makes it better (Sec. 5.5.4); the optimizer statistics
-    still describe the refinement."""
+                       risk: float = 0.0, sweep: tuple[float, ...] = (), neighbourhood: float = 0.0,
+                       optimizer: str = DEFAULT_OPTIMIZER) -> dict:
+    """One situation: greedy, refined (with `optimizer`, auto by default, and the GA; with the risk lambda
+    `risk`), optionally the zero baseline, the oracle, and the refined sequence with each risk lambda of `sweep`,
+    all dispatched with the same simulator seed. With `meta`, the refined execution is the greedy one where the
+    meta model (models/meta.json) does not predict that refinement makes it better (Sec. 5.5.4); the optimizer
+    statistics still describe the refinement. Every window records which optimizer's choice it took, its time
+    and gap, and where that optimizer was not the GA, the GA's cost on the same window."""
     seed = situation_seed(job.seed, index)
     sequence, success = asserted_situation(job, objects)
     models = job_models(job, sequence)
-    options = Options(horizon=2, optimizer="analytic", seed=seed, risk=risk, neighbourhood=neighbourhood, filter=meta,
+    options = Options(horizon=2, optimizer=optimizer, seed=seed, risk=risk, neighbourhood=neighbourhood, filter=meta,
                       zero=zero, simulate=True)
     stage = refine_stage(sequence, models, success, options, job_meta_model(job) if meta else None)
     greedy, refined, optimized, decision = stage.greedy.refined, stage.refined.refined, stage.optimized, stage.decision
-    # where the analytic minimization fell back to the GA everywhere, the GA run is that same run
+    # where every window took the GA's choice, the GA run is that same run; else the GA refines on its own, and
+    # each window is minimized by both (the same seed and inputs: the same windows and choices again)
     fell_back = optimized.windows and all(w.method == "ga" for w in optimized.windows)
     genetic = optimized if fell_back else refine(sequence, models, horizon=2, method="ga", seed=seed,
                                                  success_models=success, risk=risk, neighbourhood=neighbourhood)
+    both = optimized if fell_back or not optimized.windows else refine(
+        sequence, models, horizon=2, method=optimizer, seed=seed, success_models=success, risk=risk,
+        neighbourhood=neighbourhood, compare="ga")
     g, r = stage.greedy.simulated, stage.refined.simulated
     out = {"index": index, "seed": seed, "problem": job.plan.problem,
            "greedy": g.duration, "refined": r.duration, "greedy_ok": g.succeeded, "refined_ok": r.succeeded,
@@ -76,6 +83,9 @@ def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: 
            "analytic_method": ",".join(w.method for w in optimized.windows),
            "ga_seconds": sum(w.seconds for w in genetic.windows),
            "analytic_cost": optimized.predicted_total, "ga_cost": genetic.predicted_total,
+           "windows": [_window_row(w, optimized.window_actions[k] if k < len(optimized.window_actions) else k,
+                                   both.compared[k] if k < len(both.compared) else None)
+                       for k, w in enumerate(optimized.windows)],
            "greedy_actions": [[a.action, a.duration] for a in g.results],
            "refined_actions": [[a.action, a.duration] for a in r.results]}
     if decision is not None:
@@ -83,7 +93,7 @@ def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: 
     if sweep:  # each lambda's refinement, as refined (unfiltered: the sweep compares objectives)
         out["sweep"] = {}
         for lam in sweep:
-            at = optimized if lam == risk else refine(sequence, models, horizon=2, method="analytic", seed=seed,
+            at = optimized if lam == risk else refine(sequence, models, horizon=2, method=optimizer, seed=seed,
                                                       success_models=success, risk=lam, neighbourhood=neighbourhood)
             result = dispatch(at.sequence, seed=seed) if at is not refined else r
             out["sweep"][repr(float(lam))] = {"refined": result.duration, "refined_ok": result.succeeded,
@@ -96,6 +106,16 @@ def comparison_episode(job: Job, index: int, objects: dict, oracle: bool, zero: 
         start = {p.id: p.value for a in refined.sequence.actions for p in a.params}
         out["oracle"], out["oracle_method"] = _oracle(sequence, seed, start)
     return out
+
+
+def _window_row(window, action: int, ga) -> dict:
+    """One window of the refined run: the optimizer whose choice it took, its time, cost and gap, and (where that
+    optimizer was not the GA) the GA's cost and time on the same window."""
+    row = {"method": window.method, "seconds": window.seconds, "cost": window.cost, "gap": window.gap,
+           "action": action}
+    if ga is not None and window.method != "ga":
+        row.update(ga_cost=ga.cost, ga_seconds=ga.seconds)
+    return row
 
 
 def outcome_of(result) -> str:
@@ -245,6 +265,10 @@ def summarize_comparison(rows: list[dict]) -> dict:
         "ga_ms_median": float(np.median(ga_ms)) if len(rows) else None,
         "analytic_fallbacks": sum("analytic" not in r["analytic_method"] for r in rows),
         "analytic_ga_agree": float(np.mean(agree)) if rows else None,
+        # refining the next window while the current action executes: the time execution waits for it
+        "optimizer_wait_share": (_mean([_wait_share(r) for r in both if r["refined"] > 0 and "windows" in r])
+                                 if any("windows" in r for r in both) else None),
+        "optimizers": optimizer_summary(rows),
     }
     out["per_action"] = _per_action(both)
     if any("filter" in r for r in rows):
@@ -254,7 +278,69 @@ def summarize_comparison(rows: list[dict]) -> dict:
                          "not_judged": sum(d["prediction"] is None for d in decisions)}
     if rows and "zero" in rows[0]:
         out.update(_zero_summary(rows))
+    out.update(_stronger_baseline(rows))
     return out
+
+
+def optimizer_summary(rows: list[dict]) -> dict:
+    """Per optimizer whose choices the refined windows took: its share of the windows, median time per window,
+    its certified gaps, and where it was not the GA, its cost against the GA's on the same windows."""
+    windows = [w for r in rows for w in r.get("windows", ())]
+    out = {}
+    for method in sorted({w["method"] for w in windows}):
+        mine = [w for w in windows if w["method"] == method]
+        shares = [w["gap"] / abs(w["cost"]) for w in mine if w.get("gap") is not None and w["cost"]]
+        entry = {"windows": len(mine), "share": len(mine) / len(windows),
+                 "median_ms": float(1000 * np.median([w["seconds"] for w in mine])),
+                 "certified_windows": len(shares),
+                 "gap_share_median": float(np.median(shares)) if shares else None,
+                 "gap_share_max": float(np.max(shares)) if shares else None}
+        paired = [(w["cost"], w["ga_cost"]) for w in mine if "ga_cost" in w]
+        if paired:
+            cost, ga = np.array(paired).T
+            above = (cost - ga) / np.abs(ga)
+            entry["vs_ga"] = {"windows": len(paired), "cost_mean": float(cost.mean()), "ga_cost_mean": float(ga.mean()),
+                              "above_ga_max": float(above.max()), "above_ga_by_more_than_0.1%": int((above > 1e-3).sum()),
+                              "below_ga": int((cost < ga - 1e-9 * np.abs(ga)).sum()),
+                              "ga_median_ms": float(1000 * np.median([w["ga_seconds"] for w in mine if "ga_cost" in w]))}
+        out[method] = entry
+    return out
+
+
+def _wait_share(row: dict) -> float:
+    """How long execution waits for the optimizer, as a share of the executed duration, where each window is
+    refined while the action before it executes (the first before execution starts): action a starts when
+    action a - 1 has ended and its own window (begun when action a - 1 began) is done."""
+    durations = [d for _, d in row["refined_actions"]]
+    if not durations or not sum(durations):
+        return 0.0
+    seconds = [0.0] * len(durations)
+    for w in row["windows"]:
+        if w["action"] < len(seconds):
+            seconds[w["action"]] += w["seconds"]
+    start = end = wait = 0.0
+    for a, d in enumerate(durations):
+        ready = start + seconds[a] if a else seconds[0]
+        begin = max(end, ready)
+        wait += begin - end
+        start, end = begin, begin + d
+    return wait / sum(durations)
+
+
+def _stronger_baseline(rows: list[dict]) -> dict:
+    """Refined against the better of greedy and the zero baseline (where the binding runs it): the one with the
+    lower mean over the situations where all of them succeeded, and the mean improvement over it there (greedy
+    can be slower than stopping at every way-point, and an improvement over greedy then overstates refinement)."""
+    has_zero = bool(rows) and "zero" in rows[0]
+    ok = [r for r in rows if r["greedy_ok"] and r["refined_ok"] and (not has_zero or r["zero_ok"])]
+    if not ok:
+        return {"stronger_baseline": None, "improvement_over_stronger_baseline": None}
+    means = {"greedy": float(np.mean([r["greedy"] for r in ok]))}
+    if has_zero:
+        means["zero"] = float(np.mean([r["zero"] for r in ok]))
+    name = min(means, key=means.get)
+    return {"stronger_baseline": name, "stronger_baseline_mean": means[name], "stronger_baseline_episodes": len(ok),
+            "improvement_over_stronger_baseline": float(np.mean([1.0 - r["refined"] / r[name] for r in ok]))}
 
 
 SWEEP_KEYS = ("episodes", "failure_rate_greedy", "failure_rate_refined", "penalized_improvement", "improvement",

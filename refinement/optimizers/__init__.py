@@ -1,8 +1,11 @@
 """Optimizers of the free parameters of an action sequence (Sec. 5.4), looked up by name in OPTIMIZERS.
 
-`optimize(objective, method, seed)` runs one; "analytic" minimizes the merged model trees exactly (App. C.3)
-and falls back to the genetic algorithm, saying why in the result's note, where the free parameters do not
-enter the features piecewise affinely (C.3.4).
+`optimize(objective, method, seed)` runs one. "auto", the default, runs the fastest that applies and says in
+the result's note why each other did not: the analytic minimization of the merged model trees (App. C.3) where
+every feature is piecewise affine in one free parameter (C.3.4); else the certified branch and bound over the
+features' bounds (certified.py) within a budget of boxes; else, or where that budget ends before the gap is
+within its tolerance, the genetic algorithm (the better choice kept, the certified lower bound still given).
+"analytic" and "certified" alone fall back to the genetic algorithm where they do not apply.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ from typing import Callable
 import numpy as np
 
 from tailor.errors import EmptyRangeError, TailorError
-from tailor.refinement.optimizers import analytic, genetic, sampling
+from tailor.refinement.optimizers import analytic, certified, genetic, sampling
 from tailor.refinement.optimizers.objective import (
     FreeParameter,
     Objective,
@@ -28,6 +31,7 @@ from tailor.refinement.optimizers.structure import NotApplicable
 log = logging.getLogger(__name__)
 
 __all__ = [
+    "DEFAULT_OPTIMIZER",
     "OPTIMIZERS",
     "FreeParameter",
     "Objective",
@@ -38,6 +42,15 @@ __all__ = [
 ]
 
 
+AUTO_BUDGET = 20_000  # boxes the certified optimizer may bound in `auto` before the genetic algorithm runs
+
+
+def _with_ga(objective: Objective, seed: int, start: float, notes: list[str]) -> OptimizationResult:
+    """The genetic algorithm's result, its note after `notes` (why the others did not run)."""
+    result = genetic.minimize(objective, seed)
+    return replace(result, seconds=time.perf_counter() - start, note="; ".join(notes + [result.note]))
+
+
 def _analytic_or_ga(objective: Objective, seed: int = 0) -> OptimizationResult:
     """Analytic minimization where the models are mergeable, the genetic algorithm otherwise."""
     start = time.perf_counter()
@@ -45,19 +58,56 @@ def _analytic_or_ga(objective: Objective, seed: int = 0) -> OptimizationResult:
         return analytic.minimize(objective, seed)
     except NotApplicable as why:
         log.debug("analytic minimization not applicable (%s): the genetic algorithm instead", why)
-        result = genetic.minimize(objective, seed)
-        return replace(result, seconds=time.perf_counter() - start,
-                       note=f"analytic not applicable: {why}" + (f"; {result.note}" if result.note else ""))
+        return _with_ga(objective, seed, start, [f"analytic not applicable: {why}"])
+
+
+def _certified_or_ga(objective: Objective, seed: int = 0) -> OptimizationResult:
+    """The certified branch and bound where every term can be bounded, the genetic algorithm otherwise."""
+    start = time.perf_counter()
+    try:
+        return certified.minimize(objective, seed)
+    except NotApplicable as why:
+        log.debug("certified optimizer not applicable (%s): the genetic algorithm instead", why)
+        return _with_ga(objective, seed, start, [f"certified not applicable: {why}"])
+
+
+def auto(objective: Objective, seed: int = 0) -> OptimizationResult:
+    """Analytic where it applies, else certified within AUTO_BUDGET boxes, else (or where the gap is still above
+    the tolerance) the genetic algorithm; the note says which ran and why each other did not."""
+    start = time.perf_counter()
+    notes = []
+    try:
+        return analytic.minimize(objective, seed)
+    except NotApplicable as why:
+        notes.append(f"analytic not applicable: {why}")
+    try:
+        bounded = certified.minimize(objective, seed, budget=AUTO_BUDGET)
+    except NotApplicable as why:
+        notes.append(f"certified not applicable: {why}")
+        log.debug("%s: the genetic algorithm instead", "; ".join(notes))
+        return _with_ga(objective, seed, start, notes)
+    if bounded.gap is not None and bounded.gap <= certified.tolerance_of(bounded.cost):
+        return replace(bounded, seconds=time.perf_counter() - start, note="; ".join(notes + [bounded.note]))
+    notes.append(f"certified: {bounded.note}: the genetic algorithm too")
+    log.debug("%s", "; ".join(notes))
+    result = genetic.minimize(objective, seed)
+    chosen = result if result.cost < bounded.cost else bounded
+    which = "the genetic algorithm's" if chosen is result else "the certified optimizer's"
+    return replace(chosen, lower_bound=bounded.lower_bound, seconds=time.perf_counter() - start,
+                   note="; ".join(notes + [result.note, f"{which} choice kept"]))
 
 
 OPTIMIZERS: dict[str, Callable[[Objective, int], OptimizationResult]] = {
+    "auto": auto,
     "analytic": _analytic_or_ga,
+    "certified": _certified_or_ga,
     "ga": genetic.minimize,
     "sample": sampling.minimize,
 }
+DEFAULT_OPTIMIZER = "auto"
 
 
-def optimize(objective: Objective, method: str = "analytic", seed: int = 0) -> OptimizationResult:
+def optimize(objective: Objective, method: str = DEFAULT_OPTIMIZER, seed: int = 0) -> OptimizationResult:
     """Choose the free parameters of `objective` minimizing its summed predicted duration."""
     if method not in OPTIMIZERS:
         raise TailorError(f"unknown optimizer {method!r}; choose one of {', '.join(OPTIMIZERS)}")
@@ -69,5 +119,6 @@ def optimize(objective: Objective, method: str = "analytic", seed: int = 0) -> O
     if not objective.free:  # everything bound: nothing to choose
         start = time.perf_counter()
         cost = float(objective.cost(np.zeros((1, 0)))[0])
-        return OptimizationResult((), cost, method, 1, time.perf_counter() - start, "no free parameters")
+        return OptimizationResult((), cost, method, 1, time.perf_counter() - start, "no free parameters",
+                                  lower_bound=cost)
     return OPTIMIZERS[method](objective, seed)

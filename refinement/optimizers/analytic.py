@@ -16,6 +16,10 @@ values then lie at least the margin from every split, and a leaf thinner than tw
 A term with a predicted-success region (Alg. 6: a success classifier's leaves, axis-aligned boxes in its
 feature space) contributes those leaves as rules with a zero linear model: merged like any rule set, they cut
 every box down to where success is predicted, so the minimum is the minimum within the region.
+
+The result's lower bound is the minimum over the merged boxes without margins and with every success leaf
+unshrunk: no valid choice costs less (and a worst case over a neighbourhood never less than the point), exact
+over the affine pieces `structure.detect` finds. The gap then shows what the margin and the neighbourhood cost.
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from tailor.refinement.models.rules import Rule
 from tailor.refinement.optimizers.objective import Objective, OptimizationResult, neighbourhood_offsets
 from tailor.refinement.optimizers.structure import LOCATE_TOL, NotApplicable, TermStructure, detect
 
@@ -160,22 +165,77 @@ def merge(first, second):
     return lo[i, k], hi[i, k], g1[i] + g2[k], c1[i] + c2[k]
 
 
-def _merged_boxes(objective: Objective, structures, margin: tuple[float, ...]):
-    """The terms' rule sets (and success regions) merged into one set of boxes; how many regions took part."""
+class _SuccessLeaves:
+    """Every leaf where a success classifier predicts success, grown by a float32 step each way (it compares
+    features as float32), as a rule set: a superset of where it predicts success, for the lower bound."""
+
+    def __init__(self, region) -> None:
+        self.region = region
+
+    def rules(self):
+        if not hasattr(self.region, "regions"):
+            return self.region.success_rules()
+        out = []
+        for box in self.region.regions():
+            if box.success:
+                with np.errstate(over="ignore"):
+                    lower = np.nextafter(box.lower.astype(np.float32), np.float32(-np.inf)).astype(float)
+                    upper = np.nextafter(box.upper.astype(np.float32), np.float32(np.inf)).astype(float)
+                out.append(Rule(np.minimum(lower, box.lower), np.maximum(upper, box.upper),
+                                np.zeros(len(box.lower)), 0.0))
+        return out
+
+
+_leaves_cache: "weakref.WeakKeyDictionary[object, _SuccessLeaves]" = weakref.WeakKeyDictionary()
+
+
+def _region_structures(objective: Objective) -> list:
+    """Per term, the structure of its success region's features (None where it has no region)."""
     low, high = objective.low, objective.high
     names = tuple(p.id for p in objective.free)
+    return [detect(replace(term, features=term.region_features), low, high, names) if term.region is not None
+            else None for term in objective.terms]
+
+
+def _merged_boxes(objective: Objective, structures, regions, margin: tuple[float, ...], bound: bool = False):
+    """The terms' rule sets (and success regions) merged into one set of boxes; how many regions took part.
+    With `bound`, every success leaf unshrunk (no region margin): the boxes then cover every valid choice."""
+    low, high = objective.low, objective.high
     merged = None
-    regions = 0
-    for term, structure in zip(objective.terms, structures):
+    taking = 0
+    for term, structure, region in zip(objective.terms, structures, regions):
         boxes = term_boxes(structure, term.model, margin)
         merged = boxes if merged is None else merge(merged, boxes)
-        if term.region is not None:
-            region_term = replace(term, features=term.region_features)
-            rules = region_rules(term.region)
-            merged = merge(merged, _inside(term_boxes(detect(region_term, low, high, names), rules),
-                                           term.region_margin, low, high))
-            regions += 1
-    return merged, regions
+        if region is not None:
+            if bound:
+                leaves = _leaves_cache.get(term.region) if _cacheable(term.region) else None
+                if leaves is None:
+                    leaves = _SuccessLeaves(term.region)
+                    if _cacheable(term.region):
+                        _leaves_cache[term.region] = leaves
+                merged = merge(merged, term_boxes(region, leaves))
+            else:
+                merged = merge(merged, _inside(term_boxes(region, region_rules(term.region)), term.region_margin,
+                                               low, high))
+            taking += 1
+    return merged, taking
+
+
+def _cacheable(region) -> bool:
+    try:
+        weakref.ref(region)
+        return True
+    except TypeError:
+        return False
+
+
+def lower_bound(objective: Objective, structures, regions) -> float:
+    """The minimum of the merged rules over every choice the success regions may allow, without margins: below
+    every valid choice's cost, and below its worst case over a neighbourhood (never under the point's cost)."""
+    (lo, hi, grad, const), _ = _merged_boxes(objective, structures, regions, (), bound=True)
+    if not len(lo):
+        return np.inf
+    return float(np.min(const + np.einsum("nd,nd->n", grad, np.where(grad > 0, lo, hi))))
 
 
 def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
@@ -185,11 +245,12 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
     low, high = objective.low, objective.high
     names = tuple(p.id for p in objective.free)
     structures = [detect(term, low, high, names) for term in objective.terms]
+    regions_of = _region_structures(objective)
     margin_note = ""
-    merged, regions = _merged_boxes(objective, structures, objective.margin)
+    merged, regions = _merged_boxes(objective, structures, regions_of, objective.margin)
     if len(merged[0]) == 0 and any(objective.margin):
         # every combination of leaves is thinner than twice the margin somewhere: choose without it
-        merged, regions = _merged_boxes(objective, structures, ())
+        merged, regions = _merged_boxes(objective, structures, regions_of, ())
         margin_note = ", no leaf box wider than twice the margin: chosen without it"
     elif any(objective.margin):
         margin_note = ", a margin inside every leaf box"
@@ -199,6 +260,7 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
         raise NotApplicable(f"no rule combination covers the free-parameter ranges{where}")
     corner = np.where(grad > 0, lo, hi)
     predicted = const + np.einsum("nd,nd->n", grad, corner)
+    bound = lower_bound(objective, structures, regions_of)
     # an open bound inside the range is approached from inside its box; the range bounds are closed
     inward = np.where(grad > 0, 1.0, -1.0) * NUDGE * np.maximum(1.0, high - low)
     interior = (corner > low) & (corner < high)
@@ -207,7 +269,8 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
     order = np.argsort(predicted, kind="stable")
     note = f"{len(lo)} merged rules" + (f", within {regions} success region(s)" if regions else "") + margin_note
     if any(objective.neighbourhood):
-        return _robust(objective, order, predicted, (lo, hi, corner, nudged), start, note)
+        result = _robust(objective, order, predicted, (lo, hi, corner, nudged), start, note)
+        return replace(result, lower_bound=min(bound, result.cost))
     evaluations = 0
     for chunk in range(0, len(order), CANDIDATES):
         pick = order[chunk : chunk + CANDIDATES]
@@ -224,6 +287,7 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
                 evaluations=evaluations,
                 seconds=time.perf_counter() - start,
                 note=note,
+                lower_bound=min(bound, float(cost[best])),
             )
     raise NotApplicable("every corner of the merged rule set is marked invalid")
 

@@ -5,8 +5,8 @@ within the ranges; each generation the best 2% (at least one) pass unchanged, th
 `tools.selRoulette` on the fitness t_max + t_min - t (t over the current population; a parameterization a
 model marks invalid gets fitness 0, the lowest; `sel_roulette` is selRoulette with a binary search),
 mated pairwise with `tools.cxTwoPoint` on 65% of them
-(`tools.cxBlend` with a single gene, which has no inner cut point) and mutated with `tools.mutGaussian`,
-clipped to the ranges. The loop stops when the best cost has not improved for 50 generations, or after 500
+(`tools.cxBlend` with a single gene, which has no inner cut point) and mutated with `tools.mutGaussian`
+(`mut_gaussian`: the same draws, the generator looked up once per individual), clipped to the ranges. The loop stops when the best cost has not improved for 50 generations, or after 500
 (a progress bar over the generations where the caller shows progress: tailor.progress).
 
 DEAP's operators draw from their modules' `random`: that name is bound, once, to a stand-in that draws from the
@@ -15,7 +15,9 @@ in a context variable), and from the global generator outside a run. So refineme
 only, runs in several threads at once reproduce the serial results draw for draw, other threads drawing from
 the global generator meanwhile (a Dask worker's event loop does) change nothing, and the caller's state is
 untouched. The fitness and individual types are plain classes defined once here, not written into
-`deap.creator`. A generation is evaluated with one vectorized call of the objective.
+`deap.creator`. A generation is evaluated with one vectorized call of the objective, for the individuals the
+generation before did not hold already (the elite and the offspring neither mated nor mutated keep their cost:
+with a neighbourhood each individual costs dozens of feature rows).
 """
 
 from __future__ import annotations
@@ -50,6 +52,10 @@ MAX_GENERATIONS = 500
 class Fitness(base.Fitness):
     weights = (1.0,)  # maximized: t_max + t_min - t
 
+    def __init__(self, values=()):  # DEAP's, without re-checking the weights for each of thousands of fitnesses
+        if values:
+            self.values = values
+
 
 class Individual(list):
     """A chromosome: one float gene per free parameter, with its DEAP fitness."""
@@ -80,7 +86,17 @@ def rng():
 
 
 class _RunRandom:
-    """Stands in for the `random` module inside DEAP's operator modules: its functions are the run's (rng())."""
+    """Stands in for the `random` module inside DEAP's operator modules: its functions are the run's (rng()).
+    The ones DEAP's operators call are methods (a generation calls them thousands of times), the rest looked up."""
+
+    def random(self) -> float:
+        return (_RUN.get() or random).random()
+
+    def randint(self, a: int, b: int) -> int:
+        return (_RUN.get() or random).randint(a, b)
+
+    def gauss(self, mu: float = 0.0, sigma: float = 1.0) -> float:
+        return (_RUN.get() or random).gauss(mu, sigma)
 
     def __getattr__(self, name: str):
         return getattr(rng(), name)
@@ -105,15 +121,29 @@ def seeded_random(seed: int):
 def sel_roulette(individuals: list, k: int) -> list:
     """DEAP's `tools.selRoulette`, draw for draw (the same `random.random()` calls pick the same individuals),
     with a binary search over the cumulative fitness instead of DEAP's linear scan per spin."""
-    ranked = sorted(individuals, key=attrgetter("fitness"), reverse=True)
-    cumulative = list(accumulate(ind.fitness.values[0] for ind in ranked))
-    total = sum(ind.fitness.values[0] for ind in individuals)
+    ranked = sorted(individuals, key=_weighted, reverse=True)  # (DEAP compares fitnesses by these tuples)
+    cumulative = list(accumulate(ind.fitness.wvalues[0] for ind in ranked))  # (weight 1: the values themselves)
+    total = sum(ind.fitness.wvalues[0] for ind in individuals)
     chosen = []
     for _ in range(k):
         i = bisect_right(cumulative, rng().random() * total)
         if i < len(ranked):  # DEAP appends nothing when rounding puts the spin past the last slot
             chosen.append(ranked[i])
     return chosen
+
+
+_weighted = attrgetter("fitness.wvalues")
+
+
+def mut_gaussian(individual: list, mu: float, sigma: list[float], indpb: float) -> tuple[list]:
+    """DEAP's `tools.mutGaussian` with one mean and a standard deviation per gene, draw for draw (the same
+    `random()` and `gauss()` calls change the same genes alike), the run's generator looked up once a call."""
+    draw = rng()
+    uniform, gauss = draw.random, draw.gauss
+    for i, s in enumerate(sigma[:len(individual)]):
+        if uniform() < indpb:
+            individual[i] += gauss(mu, s)
+    return (individual,)
 
 
 def toolbox(low: np.ndarray, high: np.ndarray) -> base.Toolbox:
@@ -127,7 +157,7 @@ def toolbox(low: np.ndarray, high: np.ndarray) -> base.Toolbox:
         box.register("mate", tools.cxTwoPoint)
     else:
         box.register("mate", tools.cxBlend, alpha=BLEND_ALPHA)
-    box.register("mutate", tools.mutGaussian, mu=0.0, sigma=[float(s) for s in MUTATION_SIGMA * (high - low)],
+    box.register("mutate", mut_gaussian, mu=0.0, sigma=[float(s) for s in MUTATION_SIGMA * (high - low)],
                  indpb=1.0 / n_free)
     return box
 
@@ -146,6 +176,23 @@ def _next_generation(box: base.Toolbox, population: list, order: np.ndarray, n_e
     return elite + offspring
 
 
+def _judge(objective: Objective, genes: np.ndarray, judged: dict[bytes, tuple[float, bool]]
+           ) -> tuple[np.ndarray, np.ndarray, dict[bytes, tuple[float, bool]]]:
+    """Cost and validity of each individual, in one vectorized call for those the previous generation did not
+    hold already (its elite, and the offspring neither mated nor mutated): the same values, fewer evaluations
+    of a costly objective (a worst case over a neighbourhood plans dozens of paths per individual)."""
+    keys = [row.tobytes() for row in genes]
+    fresh = [i for i, key in enumerate(keys) if key not in judged]
+    cost, valid = np.empty(len(genes)), np.empty(len(genes), dtype=bool)
+    if fresh:
+        cost[fresh] = objective.robust_cost(genes[fresh])
+        valid[fresh] = objective.valid(genes[fresh])
+    for i, key in enumerate(keys):
+        if key in judged:
+            cost[i], valid[i] = judged[key]
+    return cost, valid, {key: (float(c), bool(v)) for key, c, v in zip(keys, cost, valid)}
+
+
 def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
     """Run the GA; seeded by `seed` only, one vectorized objective call per generation."""
     start = time.perf_counter()
@@ -158,10 +205,10 @@ def minimize(objective: Objective, seed: int = 0) -> OptimizationResult:
     with seeded_random(seed), progress_bar(total=MAX_GENERATIONS, desc="genetic algorithm", unit="gen",
                                            leave=False) as bar:
         population = [box.individual() for _ in range(size)]
+        judged: dict[bytes, tuple[float, bool]] = {}
         while generation < MAX_GENERATIONS and stall < STALL_GENERATIONS:
             genes = np.array(population, dtype=float)
-            cost = objective.robust_cost(genes)
-            valid = objective.valid(genes)
+            cost, valid, judged = _judge(objective, genes, judged)
             evaluations += size
             generation += 1
             for ind, f in zip(population, fitness(cost, valid)):

@@ -2,7 +2,10 @@
 
 A free parameter is one continuous value left open by instantiation (e.g. the heading at a subgoal, shared by
 the action that reaches it and the one that leaves it). A term is one action's model called on the features
-that the free values induce; the objective sums the terms. Every optimizer returns an OptimizationResult.
+that the free values induce; the objective sums the terms. Every optimizer returns an OptimizationResult: the
+choice, its cost, which optimizer made it and, where one is known, a lower bound of the objective (the gap).
+A term may carry an enclosure of its features over boxes of free values (`feature_bounds`): the certified
+optimizer needs it for every term.
 """
 
 from __future__ import annotations
@@ -21,6 +24,9 @@ class FreeParameter:
     id: str
     low: float
     high: float
+
+
+Bounds = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
 @dataclass(frozen=True, eq=False)
@@ -42,6 +48,15 @@ class Term:
     # (Objective.cost), so costly features (a planned path per row) pay numpy's per-call cost once per batch
     inputs: Callable[[np.ndarray], np.ndarray] | None = None
     derive: Callable[[np.ndarray], np.ndarray] | None = None
+    # optional, for the certified optimizer: a guaranteed enclosure of `features` over boxes of theta, (low, high)
+    # each (k, n_free) -> (feature_low, feature_high) each (k, n_features); likewise of `region_features`;
+    # `no_bounds` says why a term has none (e.g. its feature space declares none), for the optimizers' notes
+    feature_bounds: Bounds | None = None
+    region_bounds: Bounds | None = None
+    no_bounds: str = ""
+    # optional: the columns of theta the term depends on (None: any); a neighbourhood's offsets along other
+    # columns leave its prediction unchanged, so `robust_cost` evaluates it on fewer points
+    reads: tuple[int, ...] | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -69,17 +84,24 @@ class Objective:
     def cost(self, theta: np.ndarray) -> np.ndarray:
         """Summed predicted duration (s) of each row of theta (batch, n_free)."""
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        total = np.zeros(len(theta))
+        for values in self.term_values([theta] * len(self.terms)):  # summed in the terms' order
+            total += values
+        return total
+
+    def term_values(self, points: list[np.ndarray]) -> list[np.ndarray]:
+        """Each term's prediction at rows of theta of its own (`points[i]` for term i); terms with the same
+        `derive` and `model` in one call of each."""
         predicted: dict[int, np.ndarray] = {}
         for group in self._shared_batches:
             model, derive = self.terms[group[0]].model, self.terms[group[0]].derive
-            rows = np.concatenate([self.terms[i].inputs(theta) for i in group])
-            for i, part in zip(group, np.split(np.asarray(model.predict(derive(rows)), dtype=float), len(group))):
+            rows = np.concatenate([self.terms[i].inputs(points[i]) for i in group])
+            ends = np.cumsum([len(points[i]) for i in group])[:-1]
+            for i, part in zip(group, np.split(np.asarray(model.predict(derive(rows)), dtype=float), ends)):
                 predicted[i] = part
-        total = np.zeros(len(theta))
-        for i, term in enumerate(self.terms):  # summed in the terms' order, shared or not
-            total += predicted[i] if i in predicted else np.asarray(term.model.predict(term.features(theta)),
-                                                                    dtype=float)
-        return total
+        return [predicted[i] if i in predicted else
+                np.asarray(term.model.predict(term.features(points[i])), dtype=float)
+                for i, term in enumerate(self.terms)]
 
     @cached_property
     def _shared_batches(self) -> list[list[int]]:
@@ -91,17 +113,47 @@ class Objective:
                 shared.setdefault((id(term.model), id(term.derive)), []).append(i)
         return list(shared.values())
 
+    @cached_property
+    def offsets(self) -> np.ndarray:
+        """The neighbourhood's stencil (neighbourhood_offsets): (1 + 4 n, n_free), row 0 the point itself."""
+        return neighbourhood_offsets(np.asarray(self.neighbourhood, dtype=float))
+
+    @cached_property
+    def stencils(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Per term: the stencil rows that can change its prediction (the point, and the offsets along the
+        columns it reads), and for every stencil row the position among them of the row giving its value."""
+        offsets = self.offsets
+        column = np.abs(offsets).argmax(axis=1)  # the column each offset moves (row 0: none)
+        out = []
+        for term in self.terms:
+            if term.reads is None:
+                out.append((np.arange(len(offsets)), np.arange(len(offsets))))
+                continue
+            use = np.flatnonzero(np.isin(column, term.reads) & (np.arange(len(offsets)) > 0))
+            use = np.concatenate([[0], use])
+            position = np.zeros(len(offsets), dtype=int)
+            position[use] = np.arange(len(use))
+            out.append((use, position))
+        return out
+
     def robust_cost(self, theta: np.ndarray) -> np.ndarray:
         """The worst summed predicted duration (s) within the neighbourhood of each row of theta: over the
         point and, per free parameter, half and all the radius to either side (kept within the ranges). The
         point where the models predict a dip narrower than the execution noise is not a subgoal the robot can
-        hit: this is what the optimizers minimize when the objective has a neighbourhood."""
+        hit: this is what the optimizers minimize when the objective has a neighbourhood. Each term is
+        evaluated only where it can change (`Term.reads`): the same sums as over the whole stencil."""
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         if not any(self.neighbourhood):
             return self.cost(theta)
-        offsets = neighbourhood_offsets(np.asarray(self.neighbourhood, dtype=float))
-        moved = np.clip(theta[:, None, :] + offsets[None], self.low, self.high).reshape(-1, theta.shape[1])
-        return self.cost(moved).reshape(len(theta), len(offsets)).max(axis=1)
+        offsets = self.offsets
+        moved = np.clip(theta[:, None, :] + offsets[None], self.low, self.high)  # (m, S, n)
+        m, n = theta.shape
+        stencils = self.stencils
+        values = self.term_values([moved[:, use].reshape(-1, n) for use, _ in stencils])
+        total = np.zeros((m, len(offsets)))
+        for (use, position), v in zip(stencils, values):  # summed in the terms' order
+            total += v.reshape(m, len(use))[:, position]
+        return total.max(axis=1)
 
     def valid(self, theta: np.ndarray) -> np.ndarray:
         """True where no term's model marks the parameterization invalid (e.g. a predicted failure)."""
@@ -131,10 +183,28 @@ class OptimizationResult:
 
     values: tuple[float, ...]
     cost: float
-    method: str  # the optimizer actually used (analytic may fall back to "ga")
+    method: str  # the optimizer whose choice this is (analytic and auto may fall back to "ga")
     evaluations: int  # parameterizations whose cost was evaluated
     seconds: float
     note: str = ""  # e.g. why analytic fell back to the genetic algorithm
+    # a lower bound of the objective over every valid parameterization (the certified optimizer's bound, or the
+    # analytic minimum over the merged rules); None: unknown (the genetic algorithm and sampling give none)
+    lower_bound: float | None = None
+
+    @property
+    def gap(self) -> float | None:
+        """How far the choice may be above the optimum of the models (s): cost - lower bound; None if unknown."""
+        if self.lower_bound is None or not np.isfinite(self.cost):
+            return None
+        return max(0.0, float(self.cost - self.lower_bound))
+
+    @property
+    def gap_share(self) -> float | None:
+        """The gap as a share of the cost; None if unknown."""
+        gap = self.gap
+        if gap is None:
+            return None
+        return gap / abs(self.cost) if self.cost else (0.0 if gap == 0 else float("inf"))
 
 
 def brute_force(objective: Objective, points_per_dim: int) -> OptimizationResult:

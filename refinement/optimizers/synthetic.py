@@ -122,6 +122,76 @@ class FeatureMap:
         raise ValueError(f"unknown feature kind {self.kind!r}")
 
 
+PAD = 1e-15  # relative, outward, of the enclosure of hypot (the other maps are monotone in each rounding step)
+
+
+def _wrap_interval(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Enclosure of wrap(x) for x in [lo, hi]: its values at the ends where no jump lies between them (wrap
+    rises by hi - lo there; each rounding step of wrap is monotone), else [-pi, pi]; a point gives its value."""
+    w_lo, w_hi = wrap(lo), wrap(hi)
+    steady = (hi - lo < np.pi) & (np.abs((w_hi - w_lo) - (hi - lo)) <= 1e-6)
+    return np.where(steady, w_lo, -np.pi), np.where(steady, w_hi, np.pi)
+
+
+def _abs_wrap_interval(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Enclosure of |wrap(x)| for x in [lo, hi] (continuous: the angle to the nearest multiple of 2 pi): 0 where a
+    multiple of 2 pi lies inside, pi where an odd multiple of pi does, else its values at the ends."""
+    v_lo, v_hi = np.abs(wrap(lo)), np.abs(wrap(hi))
+    near = 1e-9
+    zero = np.floor(hi / (2 * np.pi) + near) >= np.ceil(lo / (2 * np.pi) - near)
+    half = np.floor((hi - np.pi) / (2 * np.pi) + near) >= np.ceil((lo - np.pi) / (2 * np.pi) - near)
+    return np.where(zero, 0.0, np.minimum(v_lo, v_hi)), np.where(half, np.pi, np.maximum(v_lo, v_hi))
+
+
+def _abs_interval(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return (np.where(lo > 0, lo, np.where(hi < 0, -hi, 0.0)), np.maximum(np.abs(lo), np.abs(hi)))
+
+
+def _map_bounds(m: FeatureMap, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Enclosure of feature map `m` over the boxes [lo, hi] (k, n_free): interval arithmetic on the same
+    floating-point steps as the map (rounding is monotone, so the ends' values bound the values between)."""
+    k = len(lo)
+    t_lo, t_hi = (lo[:, m.var], hi[:, m.var]) if m.var >= 0 else (np.zeros(k), np.zeros(k))
+    if m.kind == "bound":
+        return np.full(k, m.b), np.full(k, m.b)
+    if m.kind == "affine":
+        a, b = m.a * t_lo + m.b, m.a * t_hi + m.b
+        return np.minimum(a, b), np.maximum(a, b)
+    if m.kind in ("abs", "sign"):
+        if m.kind == "abs":
+            return _abs_wrap_interval(m.a - t_hi, m.a - t_lo)
+        w_lo, w_hi = _wrap_interval(m.a - t_hi, m.a - t_lo)
+        sign_lo = np.where(w_lo >= 0, 1.0, -1.0)
+        sign_hi = np.where(w_hi >= 0, 1.0, -1.0)
+        a, b = sign_lo * m.b, sign_hi * m.b
+        return np.minimum(a, b), np.maximum(a, b)
+    if m.kind == "wrap":
+        return _wrap_interval(t_lo - m.a, t_hi - m.a)
+    if m.kind == "curved":
+        d_lo, d_hi = _abs_interval(t_lo - m.a, t_hi - m.a)
+        return np.hypot(d_lo, m.b) * (1 - PAD), np.hypot(d_hi, m.b) * (1 + PAD)
+    if m.kind == "mixed":
+        o_lo, o_hi = lo[:, m.other], hi[:, m.other]
+        a, b = m.a * o_lo, m.a * o_hi
+        return t_lo + np.minimum(a, b), t_hi + np.maximum(a, b)
+    raise ValueError(f"unknown feature kind {m.kind!r}")
+
+
+def feature_bounds(maps: list[FeatureMap]):
+    """The enclosure of `feature_function(maps)` over boxes of the free parameters (Term.feature_bounds)."""
+    def bounds(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = np.atleast_2d(lo), np.atleast_2d(hi)
+        pairs = [_map_bounds(m, lo, hi) for m in maps]
+        return np.stack([p[0] for p in pairs], axis=1), np.stack([p[1] for p in pairs], axis=1)
+
+    return bounds
+
+
+def reads(maps: list[FeatureMap]) -> tuple[int, ...]:
+    """The free parameters the maps depend on (Term.reads)."""
+    return tuple(sorted({j for m in maps for j in (m.var, m.other) if j >= 0 and m.kind != "bound"}))
+
+
 def feature_function(maps: list[FeatureMap]):
     def features(theta: np.ndarray) -> np.ndarray:
         theta = np.atleast_2d(theta)
@@ -169,7 +239,7 @@ def _term(maps, n_leaves, free, rng, label) -> Term:
     high = np.array([p.high for p in free])
     sample = features(rng.uniform(low, high, size=(RANGE_SAMPLES, len(free))))
     tree = RandomModelTree(sample.min(axis=0), sample.max(axis=0), n_leaves, rng)
-    return Term(model=tree, features=features, label=label)
+    return Term(model=tree, features=features, label=label, feature_bounds=feature_bounds(maps), reads=reads(maps))
 
 
 def pose_chain(rng: np.random.Generator, n_leaves: int = 100) -> Objective:

@@ -1,0 +1,330 @@
+"""A certified global minimum of the merged model trees over any bounded feature map: branch and bound.
+
+Where App. C.3's conditions fail (a feature curved in a free parameter, or mixing two), the sum of the terms'
+predictions is still a sum of model trees over features of the free parameters. Over a box of free values each
+term's features lie in a box its `feature_bounds` encloses, and over that box the tree's prediction is at least
+the smallest leaf minimum the box meets (intervals.minimum): a lower bound of the term, summed over the terms
+a lower bound of the objective. The search splits the boxes with the lowest bounds in two, along the widest
+free parameter (relative to its range) while a box is wide, else along the one whose halves gain most bound
+(a jump of a feature, whose enclosure stays wide however small the box, is cut off across its parameter; the
+halves share no float, so a jump between two floats is cut too); it bounds both halves, evaluates their
+middles (and the point of each nearest the best so far) with the true objective for a better choice, and stops
+when the best choice is within the tolerance of the lowest bound still open: the returned gap is then a proof
+that no valid choice is more than that below it (under the enclosures). An enclosure that does not shrink to
+the features' values at a single point could never close the gap: such a term is refused at once.
+
+Robust objective (a neighbourhood): the worst case at x is the largest cost over the stencil x + o (clipped to
+the ranges), so over a box B it is at least, for every offset o, the cost's bound over the box B + o; the
+largest of these is the bound. Validity (Alg. 6): a box whose region features (`region_bounds`) meet no leaf
+where the success classifier predicts success holds no valid choice and is dropped; every other box stays, so
+a bound is never raised by a validity the bounds cannot prove.
+
+Deterministic: no random step, and the work is bounded by a number of boxes (`budget`), not by a clock, so the
+same problem gives the same answer on any machine.
+"""
+
+from __future__ import annotations
+
+import heapq
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from tailor.refinement.optimizers import intervals
+from tailor.refinement.optimizers.intervals import Candidates, LeafTable
+from tailor.refinement.optimizers.objective import Objective, OptimizationResult
+from tailor.refinement.optimizers.structure import NotApplicable
+
+TOLERANCE = 5e-4  # the gap allowed, as a share of the best cost ...
+ABSOLUTE_TOLERANCE = 1e-6  # ... and in the objective's unit (s) where the cost is near 0
+BUDGET = 200_000  # boxes bounded at most by a call of `minimize` (the `certified` optimizer)
+BATCH = 64  # boxes split per step
+STRONG_WIDTH = 1 / 16  # boxes narrower than this share of every range are split where it helps most
+ACTIVE_WIDTH = 2.0  # a neighbourhood's offset along a free parameter bounds boxes at most this many radii wide
+POINT_CHECKS = (0.5, 0.25, 0.8)  # where along the diagonal of the ranges an enclosure is checked at a point
+POINT_TOLERANCE = 1e-6  # relative: how wide an enclosure of a single point may be
+TIE = 1e-9  # relative: bounds of halves this close count as equal (the widest parameter is split then)
+
+
+@dataclass(frozen=True, eq=False)
+class _Bounded:
+    """One term as the search bounds it."""
+
+    table: LeafTable
+    features: object  # (low, high) -> (feature_low, feature_high)
+    region: LeafTable | None
+    region_features: object | None
+    use: np.ndarray  # the stencil rows that can change the term (Objective.stencils)
+    position: np.ndarray
+
+
+def _check_tight(term, objective: Objective) -> None:
+    """NotApplicable unless the term's enclosure shrinks to its features' values at single points (a few,
+    fixed): the search splits boxes down to points, and an enclosure wide even there bounds nothing closer."""
+    low, high = objective.low, objective.high
+    points = low + (high - low) * np.array(POINT_CHECKS)[:, None]
+    f_lo, f_hi = _enclosure(term.feature_bounds, points, points)
+    values = np.asarray(term.features(points), dtype=float)
+    slack = POINT_TOLERANCE * (1.0 + np.abs(values))
+    wrong = (f_lo > values + slack) | (f_hi < values - slack)
+    loose = f_hi - f_lo > slack
+    for bad, what in ((wrong, "its enclosure misses"), (loose, "cannot be bounded closely:")):
+        if bad.any():
+            row, feature = np.argwhere(bad)[0]
+            raise NotApplicable(f"term {term.label!r} {what} its feature {feature} is enclosed in "
+                                f"[{f_lo[row, feature]:.4g}, {f_hi[row, feature]:.4g}] at a single point where it "
+                                f"is {values[row, feature]:.4g}")
+
+
+def bounded_terms(objective: Objective) -> list[_Bounded]:
+    """The terms with their leaf tables and enclosures, or NotApplicable naming the first that has none or whose
+    enclosure does not shrink to the features at a point."""
+    out = []
+    stencils = objective.stencils if any(objective.neighbourhood) else [(np.zeros(1, int), np.zeros(1, int))] * len(
+        objective.terms)
+    for term, (use, position) in zip(objective.terms, stencils):
+        if term.feature_bounds is None:
+            why = term.no_bounds or "its features declare no bounds"
+            raise NotApplicable(f"term {term.label!r} cannot be bounded: {why}")
+        _check_tight(term, objective)
+        region = None
+        if term.region is not None and term.region_bounds is not None:
+            region = intervals.success_table(term.region)
+        out.append(_Bounded(intervals.leaf_table(term.model), term.feature_bounds, region, term.region_bounds,
+                            use, position))
+    return out
+
+
+class _Search:
+    """The open boxes: rows of growing arrays, a heap of (bound, row) to take the lowest first, and per term the
+    leaves each box may still meet."""
+
+    def __init__(self, objective: Objective, terms: list[_Bounded]):
+        self.objective, self.terms = objective, terms
+        self.low, self.high = objective.low, objective.high
+        self.scale = np.where(self.high > self.low, self.high - self.low, np.inf)  # fixed parameters never split
+        self.radius = (np.asarray(objective.neighbourhood, dtype=float) if any(objective.neighbourhood)
+                       else np.zeros(len(self.low)))
+        self.offsets = objective.offsets if any(objective.neighbourhood) else np.zeros((1, len(self.low)))
+        self.column = np.abs(self.offsets).argmax(axis=1)  # the free parameter each offset moves (row 0: none)
+        self.lo = np.empty((1024, len(self.low)))
+        self.hi = np.empty((1024, len(self.low)))
+        self.bound = np.empty(1024)
+        self.rows = 0
+        self.heap: list[tuple[float, int]] = []
+        self.leaves: list[list[np.ndarray | None]] = [[] for _ in terms]  # per term, per row
+        self.boxes = 0  # boxes bounded so far
+        self.widths: list[np.ndarray] = []  # per term: its features' enclosure widths over the whole range
+        self.spread = np.empty(0)  # of the last boxes evaluated: their enclosures' widths, summed relative
+
+    def evaluate(self, lo: np.ndarray, hi: np.ndarray, parents: list[list[np.ndarray]] | None
+                 ) -> tuple[np.ndarray, np.ndarray, list[list[np.ndarray]]]:
+        """Bounds of the boxes [lo, hi] (k, n), whether each may hold a valid choice, and the leaves each may
+        meet per term (`parents`: per term, the leaves of each box's parent; None: every leaf)."""
+        k = len(lo)
+        if k == 0:
+            return np.empty(0), np.empty(0, dtype=bool), [[] for _ in self.terms]
+        self.boxes += k
+        grown_lo = np.clip(lo - self.radius, self.low, self.high)
+        grown_hi = np.clip(hi + self.radius, self.low, self.high)
+        total = np.zeros((len(self.offsets), k))
+        # an offset counts where the box is at most ACTIVE_WIDTH radii wide along it: over a wider box the moved
+        # box bounds little more than the box itself (leaving an offset out keeps the bound a bound)
+        active = np.ones((len(self.offsets), k), dtype=bool)
+        if self.radius.any():
+            column = self.column[1:]
+            active[1:] = (hi - lo)[:, column].T <= ACTIVE_WIDTH * self.radius[column][:, None]
+        spread = np.zeros(k)
+        possible = np.ones(k, dtype=bool)
+        leaves = []
+        for t, term in enumerate(self.terms):
+            if parents is None:
+                pairs = Candidates.every(term.table, k)
+            else:
+                counts = np.array([len(a) for a in parents[t]])
+                pairs = Candidates(np.repeat(np.arange(k), counts), np.concatenate(parents[t]))
+            f_lo, f_hi = _enclosure(term.features, grown_lo, grown_hi)
+            hit = intervals.meets(term.table, pairs, f_lo, f_hi)
+            pairs = Candidates(pairs.box[hit], pairs.leaf[hit])
+            ends = np.cumsum(np.bincount(pairs.box, minlength=k)).tolist()
+            leaves.append([pairs.leaf[a:b] for a, b in zip([0] + ends[:-1], ends)])
+            # the term's bound over the box moved by each stencil offset that can change it
+            shift = self.offsets[term.use]  # (U, n)
+            s_lo = np.clip(lo[None] + shift[:, None], self.low, self.high).reshape(-1, lo.shape[1])
+            s_hi = np.clip(hi[None] + shift[:, None], self.low, self.high).reshape(-1, lo.shape[1])
+            f_lo, f_hi = _enclosure(term.features, s_lo, s_hi)
+            width = np.minimum(f_hi[:k] - f_lo[:k], 1e300)  # the box itself: the first rows (offset 0)
+            if len(self.widths) <= t:  # the root's enclosure: the scale of each feature's width
+                self.widths.append(np.where(width[0] > 0, width[0], 1.0))
+            spread += (width / self.widths[t]).sum(axis=1)
+            u = len(term.use)
+            box = (np.arange(u)[:, None] * k + pairs.box[None]).ravel()
+            on = active[term.use][:, pairs.box].ravel()
+            moved = Candidates(box[on], np.tile(pairs.leaf, u)[on])
+            value = intervals.minimum(term.table, moved, f_lo, f_hi, u * k).reshape(u, k)
+            total += value[term.position]
+            if term.region is not None:
+                r_lo, r_hi = intervals.float32_hull(*_enclosure(term.region_features, lo, hi))
+                success = Candidates.every(term.region, k)
+                hit = intervals.meets(term.region, success, r_lo, r_hi)
+                possible &= np.bincount(success.box[hit], minlength=k) > 0
+        self.spread = spread
+        return np.where(active, total, -np.inf).max(axis=0), possible, leaves
+
+    def add(self, lo: np.ndarray, hi: np.ndarray, bound: np.ndarray, leaves: list[list[np.ndarray]]) -> None:
+        k = len(lo)
+        if self.rows + k > len(self.bound):
+            size = max(2 * len(self.bound), self.rows + k)
+            for name in ("lo", "hi", "bound"):
+                old = getattr(self, name)
+                new = np.empty((size,) + old.shape[1:])
+                new[:self.rows] = old[:self.rows]
+                setattr(self, name, new)
+        rows = np.arange(self.rows, self.rows + k)
+        self.lo[rows], self.hi[rows], self.bound[rows] = lo, hi, bound
+        self.rows += k
+        for t in range(len(self.terms)):
+            self.leaves[t].extend(leaves[t])
+        for b, row in zip(bound.tolist(), rows.tolist()):
+            heapq.heappush(self.heap, (b, row))
+
+    def take(self, count: int) -> np.ndarray:
+        """The rows of the `count` open boxes with the lowest bounds, closed: their leaves are handed over."""
+        rows = np.array([heapq.heappop(self.heap)[1] for _ in range(min(count, len(self.heap)))], dtype=int)
+        return rows
+
+    def leaves_of(self, rows: np.ndarray) -> list[list[np.ndarray]]:
+        out = []
+        for per_row in self.leaves:
+            out.append([per_row[r] for r in rows])
+            for r in rows:
+                per_row[r] = None  # closed: its halves hold their own
+        return out
+
+    def lowest(self) -> float:
+        return self.heap[0][0] if self.heap else np.inf
+
+
+def _halves(lo: np.ndarray, hi: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The boxes halved along `axis` (one per box; wider than one float there): the lower halves, then the
+    upper ones."""
+    rows = np.arange(len(lo))
+    a, b = lo[rows, axis], hi[rows, axis]
+    middle = np.minimum(a + (b - a) / 2, np.nextafter(b, -np.inf))  # below b: two adjacent floats part
+    left_hi, right_lo = hi.copy(), lo.copy()
+    left_hi[rows, axis] = middle
+    right_lo[rows, axis] = np.nextafter(middle, np.inf)  # the halves share no float: a jump between is cut
+    return np.concatenate([lo, right_lo]), np.concatenate([left_hi, hi])
+
+
+def _split(search: _Search, lo, hi, parent_bound, parent_leaves, cap: float):
+    """Each box halved, bounded and checked (the lower halves, then the upper ones): along its widest free
+    parameter (relative to its range) while it is wider than STRONG_WIDTH of it, else along the parameter
+    whose halves gain most bound over it, up to `cap` (strong branching: a jump of a feature, whose enclosure
+    stays wide however small the box, is cut off along the parameter it lies across)."""
+    k, n = lo.shape
+    relative = (hi - lo) / search.scale
+    axis = np.argmax(relative, axis=1)
+    strong = (relative[np.arange(k), axis] <= STRONG_WIDTH) & (n > 1)
+    plain = np.flatnonzero(~strong)
+    c_lo, c_hi = _halves(lo[plain], hi[plain], axis[plain])
+    bound, possible, leaves = search.evaluate(c_lo, c_hi, [[part[r] for r in plain] * 2 for part in parent_leaves])
+    half = np.concatenate([plain, plain])
+    if strong.any():
+        rows = np.flatnonzero(strong)
+        m = len(rows)
+        axes = np.tile(np.arange(n), m)
+        s_lo, s_hi = _halves(np.repeat(lo[rows], n, axis=0), np.repeat(hi[rows], n, axis=0), axes)
+        s_bound, s_possible, s_leaves = search.evaluate(
+            s_lo, s_hi, [[part[r] for r in rows for _ in range(n)] * 2 for part in parent_leaves])
+        halves = np.maximum(np.where(s_possible, s_bound, np.inf).reshape(2, m, n), parent_bound[rows, None])
+        # what the halves gain over the box, each at most up to the best cost (beyond, a half is closed anyway)
+        gain = np.minimum(halves, np.maximum(cap, parent_bound[rows, None])) - parent_bound[rows, None]
+        score = np.where(relative[rows] > 0, gain.sum(axis=0), -np.inf)
+        spread = search.spread.reshape(2, m, n).sum(axis=0)  # how wide the halves' feature enclosures stay
+        top = score.max(axis=1, keepdims=True)
+        tie = score >= top - TIE * (1.0 + np.abs(np.where(np.isfinite(top), top, 0.0)))
+        # of the best, the one whose halves enclose their features most tightly (a jump cut off), then the widest
+        choice = np.argmin(np.where(tie, spread - 1e-12 * relative[rows], np.inf), axis=1)
+        pick = np.concatenate([np.arange(m) * n + choice, m * n + np.arange(m) * n + choice])
+        c_lo, c_hi = np.concatenate([c_lo, s_lo[pick]]), np.concatenate([c_hi, s_hi[pick]])
+        bound, possible = np.concatenate([bound, s_bound[pick]]), np.concatenate([possible, s_possible[pick]])
+        leaves = [a + [b[i] for i in pick] for a, b in zip(leaves, s_leaves)]
+        half = np.concatenate([half, rows, rows])
+    return c_lo, c_hi, np.maximum(bound, parent_bound[half]), possible, leaves
+
+
+def _enclosure(bounds, lo, hi) -> tuple[np.ndarray, np.ndarray]:
+    f_lo, f_hi = bounds(lo, hi)
+    f_lo, f_hi = np.asarray(f_lo, dtype=float), np.asarray(f_hi, dtype=float)
+    if f_lo.shape != f_hi.shape or f_lo.ndim != 2 or len(f_lo) != len(lo):
+        raise NotApplicable(f"feature bounds gave shapes {f_lo.shape}, {f_hi.shape} for {len(lo)} boxes")
+    return f_lo, f_hi
+
+
+def tolerance_of(cost: float, tolerance: float = TOLERANCE) -> float:
+    """The gap (s) within which a choice of cost `cost` counts as certified."""
+    return max(ABSOLUTE_TOLERANCE, tolerance * abs(cost))
+
+
+def minimize(objective: Objective, seed: int = 0, budget: int = BUDGET, tolerance: float = TOLERANCE
+             ) -> OptimizationResult:
+    """Branch and bound to within `tolerance` of the optimum, or until `budget` boxes are bounded (the gap then
+    says how far it got); NotApplicable where a term cannot be bounded or no valid choice is found."""
+    del seed  # deterministic; the argument keeps the optimizers interchangeable
+    start = time.perf_counter()
+    search = _Search(objective, bounded_terms(objective))
+    low, high = objective.low, objective.high
+    root_bound, possible, leaves = search.evaluate(low[None], high[None], None)
+    best_cost, best_point, evaluations, pruned = np.inf, None, 0, np.inf
+
+    def consider(points: np.ndarray) -> None:
+        nonlocal best_cost, best_point, evaluations
+        valid = objective.valid(points)
+        if not valid.any():
+            return
+        cost = np.full(len(points), np.inf)
+        cost[valid] = objective.robust_cost(points[valid])
+        evaluations += int(valid.sum())
+        i = int(np.argmin(cost))
+        if cost[i] < best_cost:
+            best_cost, best_point = float(cost[i]), points[i].copy()
+
+    def tol() -> float:
+        return tolerance_of(best_cost, tolerance) if np.isfinite(best_cost) else 0.0
+
+    if possible[0]:
+        search.add(low[None], high[None], root_bound, leaves)
+        consider((low + high)[None] / 2)
+    while True:
+        lowest = min(search.lowest(), pruned)
+        if lowest == np.inf or (np.isfinite(best_cost) and best_cost - lowest <= tol()) or search.boxes >= budget:
+            break
+        slots = search.take(BATCH)
+        lo, hi, parent_bound = search.lo[slots], search.hi[slots], search.bound[slots]
+        parent_leaves = search.leaves_of(slots)
+        c_lo, c_hi, bound, possible, leaves = _split(search, lo, hi, parent_bound, parent_leaves,
+                                                      best_cost if np.isfinite(best_cost) else np.inf)
+        candidates = [((c_lo + c_hi) / 2)[possible]]
+        if best_point is not None:  # and the point of each half nearest the best so far (optima sit on edges)
+            candidates.append(np.clip(best_point, c_lo, c_hi)[possible])
+        consider(np.concatenate(candidates))
+        keep = possible & (bound < best_cost - tol()) if np.isfinite(best_cost) else possible
+        if np.any(possible & ~keep):
+            pruned = min(pruned, float(bound[possible & ~keep].min()))
+        keep &= np.any(c_hi > c_lo, axis=1)  # a single point is its middle, evaluated above
+        index = np.flatnonzero(keep)
+        search.add(c_lo[index], c_hi[index], bound[index], [[part[i] for i in index] for part in leaves])
+    if best_point is None:
+        raise NotApplicable("no valid choice found" + (" (every box is predicted to fail)" if lowest == np.inf
+                                                       else f" within {budget} boxes"))
+    lower = min(search.lowest(), pruned, best_cost)
+    gap = best_cost - lower
+    certified = gap <= tol()
+    note = (f"branch and bound: {search.boxes} boxes, gap {gap:.3g} s"
+            + (f" ({100 * gap / abs(best_cost):.3g}%)" if best_cost else "")
+            + ("" if certified else f", budget of {budget} boxes spent before the tolerance {tolerance:g}")
+            + ("; worst case over the neighbourhood" if any(objective.neighbourhood) else ""))
+    return OptimizationResult(values=tuple(float(v) for v in best_point), cost=best_cost, method="certified",
+                              evaluations=evaluations, seconds=time.perf_counter() - start, note=note,
+                              lower_bound=float(lower))
