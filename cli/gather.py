@@ -36,6 +36,18 @@ def seed_range(text: str) -> tuple[int, int]:
 seed_range.__name__ = "episode range"
 
 
+def _export(out: Path, simulator: str, scenario: str, seed: int, first: int, stop: int, episodes, kind: str) -> Path:
+    """Write the episodes as a log of executed actions (refinement.learning.logs)."""
+    from tailor.refinement.learning.logs import episode_rows, write_log
+    from tailor.sims import registry
+
+    path = Path(out) / f"{scenario}.seed{seed}.{first}-{stop}.{kind}"
+    columns, rows = episode_rows(episodes, registry.get(simulator), run=f"{scenario}.seed{seed}",
+                                 source=f"simulator {simulator}, scenario {scenario}")
+    write_log(path, columns, rows, kind)
+    return path
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("domain", metavar="DOMAIN", help="bundled domain name, a domain folder, or its domain.pddl")
     parser.add_argument("--seeds", type=seed_range, required=True, metavar="A:B",
@@ -48,6 +60,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=Path, default=None, metavar="DIR",
                         help="the experience folder (default: <user data>/tailor/<domain>/experience, where "
                              "`tailor train` without --out looks; the installed domain folder is never written)")
+    parser.add_argument("--format", dest="log_format", choices=("csv", "parquet"), default=None,
+                        help="also export the episodes as a log of executed actions, one file per scenario beside "
+                             "the shards (<scenario>.seed<S>.<A>-<B>.csv or .parquet, format tailor.action_log/1, "
+                             "docs/logs.md), which `tailor train --log` learns from; parquet needs "
+                             "pip install 'tailor[logs]'")
     parser.add_argument("--jobs", type=worker_count, default=1, metavar="J",
                         help="worker processes (default 1; at most the number of CPUs)")
     add_backend_arguments(parser)
@@ -58,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
     from tailor.planner_bridge import resolve_domain_dir
     from tailor.refinement.learning.recipe import load_recipe
     from tailor.outputs import check_output_dir
-    from tailor.sims.shards import stored_gather
+    from tailor.sims.shards import experience_lock, stored_gather
 
     recipe = load_recipe(resolve_domain_dir(args.domain))
     used = list(dict.fromkeys(s for m in (*recipe.models, *recipe.classifiers) for s in m.scenarios))
@@ -71,7 +88,7 @@ def run(args: argparse.Namespace) -> int:
     out = default_training_out(recipe.domain_dir) / "experience" if args.out is None else args.out
     check_output_dir(out)
     first, stop = args.seeds
-    with backend_session(args):
+    with backend_session(args), experience_lock(out):  # one run at a time gathers into a folder
         for name in scenarios:
             started = time.perf_counter()
             episodes = stored_gather(out, recipe.simulator, name, stop - first, args.seed, jobs=args.jobs,
@@ -79,6 +96,9 @@ def run(args: argparse.Namespace) -> int:
             seconds = time.perf_counter() - started
             print(f"{name}: episodes {first}:{stop} of seed {args.seed}, {len(episodes)} episodes "
                   f"({sum(e.succeeded for e in episodes)} succeeded) in {seconds:.1f} s")
+            if args.log_format:
+                path = _export(out, recipe.simulator, name, args.seed, first, stop, episodes, args.log_format)
+                print(f"{name}: log of the executed actions in {path}")
     print(f"experience in {out}")
     sys.stdout.flush()
     return 0

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import functools
 import logging
 import sys
@@ -39,6 +40,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="learn only these models of the recipe (comma-separated actions), e.g. a model new to "
                              "the domain, leaving the others alone (use with --out: the report covers only them)")
     parser.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+    parser.add_argument("--log", type=Path, nargs="+", default=None, metavar="FILE",
+                        help="learn the duration models from recorded executions instead of the simulator: logs in "
+                             "the format tailor.action_log/1 (CSV, or Parquet with pip install 'tailor[logs]'; see "
+                             "docs/logs.md), e.g. a real robot's or `tailor gather --format csv`; every row is "
+                             "checked before anything is trained (no classifiers or subgoal experience then)")
+    parser.add_argument("--no-compare", dest="compare", action="store_false",
+                        help="skip Fig. 4.3's comparison of feature spaces (raw, generic row, expert, auto) per "
+                             "duration model")
     parser.add_argument("--experience", type=Path, default=None, metavar="DIR",
                         help="keep the gathered episodes as shards in DIR and reuse the ones already there (`tailor "
                              "gather` writes them too): only missing episodes are simulated (default: OUT/experience)")
@@ -104,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
     from tailor.refinement.learning.report import summary_lines
     from tailor.refinement.learning.training import REPORT_FILES, train_domain
     from tailor.outputs import check_output_dir, json_text
-    from tailor.sims.shards import stored_gather
+    from tailor.sims.shards import experience_lock, stored_gather
 
     recipe = load_recipe(resolve_domain_dir(args.domain))
     if args.only:
@@ -119,12 +128,20 @@ def run(args: argparse.Namespace) -> int:
     check_output_dir(out)  # before gathering anything: minutes of work must not end in an unwritable folder
     experience = out / "experience" if args.experience is None else args.experience
     check_output_dir(experience)
-    with backend_session(args):
+    recorded = None
+    if args.log:
+        from tailor.refinement.learning.logs import read_logs
+        from tailor.sims import registry
+
+        recorded = read_logs(args.log, registry.get(recipe.simulator), recipe.duration_actions)
+    gathering = experience_lock(experience) if recorded is None else contextlib.nullcontext()
+    with backend_session(args), gathering:  # one run at a time gathers into an experience folder
         report = train_domain(recipe, episodes, args.seed, out, jobs=args.jobs, fresh_episodes=args.fresh_episodes,
                               n_i_candidates=args.n_i or N_I_CANDIDATES, progress=getattr(args, "progress", True),
                               own_episodes=args.episodes is None,
                               gather=functools.partial(stored_gather, experience),
-                              companions=_companions(recipe, out) if args.only else None)
+                              companions=_companions(recipe, out) if args.only and not args.log else None,
+                              compare=args.compare, recorded=recorded)
     log = logging.getLogger(__name__)
     written = [Path(out) / name for name in report.get("files", ())]
     try:

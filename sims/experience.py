@@ -8,7 +8,9 @@ is spawned into one child per episode, so the data is identical whatever the num
 
 from __future__ import annotations
 
+import math
 import os
+import stat
 import sys
 import tempfile
 import zipfile
@@ -25,6 +27,7 @@ from tailor.sims.protocol import Scenario
 
 SCHEMA = 3  # version of the .npz episode file (2: named state columns; 3: the origin, optional)
 EPISODES_PER_TASK = 10  # episodes one worker runs per joblib task
+MAX_EPISODES = 1_000_000  # the most episodes a command or a binding asks of one scenario (a bound, not a hang)
 MAX_SEED = 2**63 - 1  # the largest seed (or episode index) an episode file stores: as a 64-bit integer
 
 
@@ -89,6 +92,9 @@ def gather(simulator: str, name: str, episodes: int, seed: int, jobs: int = 1, p
 _KEYS = ("schema", "action", "params", "outcome", "duration", "seed", "offsets", "t", "state", "columns")
 _ORIGIN_KEYS = ("simulator", "scenario", "stream_seed", "first", "stop")
 READABLE_SCHEMAS = (2, 3)  # 2 had no origin; both hold the same episode arrays
+# no episode file may declare more bytes than the machine has memory (unknown: no bound)
+_MEMORY_BYTES = (os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+                 if hasattr(os, "sysconf") and "SC_PHYS_PAGES" in os.sysconf_names else math.inf)
 
 
 @dataclass(frozen=True)
@@ -151,9 +157,13 @@ def save_episodes(path: str | os.PathLike, episodes: list[Episode], origin: Orig
 
 
 def _open(path: str | os.PathLike):
-    """np.load of an episode file whose schema is readable; DataError naming the file otherwise."""
+    """np.load of an episode file whose schema is readable; DataError naming the file otherwise. Only a
+    regular file is opened (a named pipe would block), and the sizes its arrays declare are checked before any
+    is read."""
     name = str(path)
     try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            raise DataError("not an episode file (not a regular file)", file=name)
         data = np.load(path, allow_pickle=False)
     except (ValueError, EOFError, zipfile.BadZipFile):  # numpy takes bytes that are no .npz / .npy for pickled data
         raise DataError("not an episode file (not an .npz archive)", file=name) from None
@@ -162,6 +172,7 @@ def _open(path: str | os.PathLike):
     if not hasattr(data, "files"):
         raise DataError("not an episode file (one array, not an .npz archive)", file=name)
     try:
+        _check_declared_sizes(data, name)
         missing = [k for k in _KEYS if k not in data.files]
         if missing:
             raise DataError(f"not an episode file (missing {', '.join(missing)})", file=name)
@@ -172,6 +183,31 @@ def _open(path: str | os.PathLike):
         data.close()
         raise
     return data
+
+
+def _check_declared_sizes(data, name: str) -> None:
+    """A DataError, before numpy allocates anything, for an array whose header declares more values than its
+    member of the archive holds (a header claiming 10**10 values would have numpy allocate 75 GiB first), or
+    for arrays declaring more bytes together than this machine's memory."""
+    total = 0
+    for info in data.zip.infolist():
+        try:
+            with data.zip.open(info) as member:
+                version = np.lib.format.read_magic(member)
+                read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else \
+                    np.lib.format.read_array_header_2_0
+                shape, _, dtype = read_header(member)
+                header = member.tell()
+        except (ValueError, OSError, EOFError, zipfile.BadZipFile, zlib.error):
+            raise DataError(f"not an episode file (its {info.filename} is not an array)", file=name) from None
+        declared = math.prod(shape) * dtype.itemsize
+        if declared != info.file_size - header:
+            raise DataError(f"its {info.filename} declares {math.prod(shape)} values of {dtype.itemsize} bytes, "
+                            f"but holds {max(0, info.file_size - header)} bytes", file=name)
+        total += declared
+    if total > _MEMORY_BYTES:
+        raise DataError(f"its arrays declare {total / 2**30:.1f} GiB, more than this machine's memory",
+                        file=name)
 
 
 def read_origin(path: str | os.PathLike) -> Origin | None:

@@ -71,3 +71,25 @@ def test_a_bad_own_episode_count_is_one_line(tmp_path):
     toml.write_text(toml.read_text().replace("episodes = 24000", "episodes = 0"))
     with pytest.raises(BindingError, match=r"models\.approachBall episodes must be a positive integer, not 0"):
         load_recipe(domain)
+
+
+def _recipe_with(training_table: dict):
+    from tailor.refinement.binding import load_domain_binding
+    from tailor.refinement.learning.recipe import recipe_from_binding
+
+    binding = load_domain_binding(SOCCER)
+    return recipe_from_binding(replace(binding, training=training_table), SOCCER)
+
+
+def test_a_model_that_names_no_feature_space_learns_on_generated_features():
+    recipe = _recipe_with({"models": {"goToPose": {"scenario": "goToPose"}, "dribbleBall": {"feature_space": "auto"},
+                                      "approachBall": {"feature_space": "approach"}}})
+    assert {m.action: m.feature_space for m in recipe.models} == {"goToPose": "auto", "dribbleBall": "auto",
+                                                                   "approachBall": "approach"}
+
+
+def test_a_classifier_still_names_its_feature_space():
+    with pytest.raises(BindingError, match=r"classifiers.goToPose feature_space = 'auto' is not a feature space"):
+        _recipe_with({"models": {"goToPose": {}}, "classifiers": {"goToPose": {"feature_space": "auto"}}})
+    with pytest.raises(BindingError, match=r"feature_space = 'posee' is not a feature space \(known: .*auto"):
+        _recipe_with({"models": {"goToPose": {"feature_space": "posee"}}})

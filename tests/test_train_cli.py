@@ -25,7 +25,7 @@ EXPECTED_FILES = {
     "models/goToPose.json", "models/approachBall.json", "models/dribbleBall.json", "models/goToPose.collision.json",
     "models/goToPosition.json",
     "training/report.json", "training/report.txt", "training/report.html", "training/mae_vs_n_i.png",
-    "training/mae_vs_episodes.png",
+    "training/mae_vs_episodes.png", "training/feature_spaces.png",
     "training/angle_at_polar.png", "training/goToPose.success_region.png",
 }
 
@@ -69,14 +69,27 @@ def check_outputs(out, report: dict, episodes: int, fresh: int) -> None:
     for action in models:
         assert f"Rules of {action}" in text
     assert "predicted Success" in text and "observed Fail" in text
-    for png in ("mae_vs_n_i", "mae_vs_episodes", "angle_at_polar", "goToPose.success_region"):
+    for png in ("mae_vs_n_i", "mae_vs_episodes", "feature_spaces", "angle_at_polar", "goToPose.success_region"):
         assert (out / "training" / f"{png}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # Fig. 4.3 per action: the raw parameters, Table 4.1's pose row, the binding's expert space and the generated
+    # one, beside gradient boosting on the raw parameters; in the report's text and HTML tables
+    for action, row in report["models"].items():
+        comparison = row["space_comparison"]
+        assert [r["space"] for r in comparison["rows"]] == ["raw", "generic", "expert", "auto"]
+        assert all(r["mae"] > 0 for r in comparison["rows"]) and comparison["mae_hgb_raw"] > 0
+        assert row["feature_selection"]["selected"] and row["feature_selection"]["chosen"] in ("auto", "goto",
+                                                                                                "approach", "dribble",
+                                                                                                "position", "pose",
+                                                                                                "pose_delta",
+                                                                                                "pose_walls")
+    assert "Feature spaces (Fig. 4.3)" in text
     # the HTML report: one file, nothing external, every action's row, every figure embedded, rules collapsible
     page = assert_self_contained((out / "training" / "report.html").read_text(encoding="utf-8"))
     assert {row[0] for row in page.rows if row} >= set(report["models"])
     images = [base64.b64decode(attrs["src"].split(",", 1)[1]) for tag, attrs in page.tags if tag == "img"]
     assert images == [(out / "training" / f"{png}.png").read_bytes() for png in
-                      ("mae_vs_n_i", "mae_vs_episodes", "angle_at_polar", "goToPose.success_region")]
+                      ("mae_vs_n_i", "mae_vs_episodes", "feature_spaces", "angle_at_polar",
+                       "goToPose.success_region")]
     assert page.details == len(models) + 1
     assert sorted(report["files"]) == sorted(EXPECTED_FILES)
     for name in EXPECTED_FILES:  # a new file's permissions (the tests run under umask 022), not mkstemp's 0600

@@ -26,7 +26,9 @@ from threadpoolctl import threadpool_limits
 
 from tailor.refinement.models.action_models import ActionModel
 from tailor.errors import DataError
-from tailor.refinement.models.features import compute_features, feature_names, first_examples, intermediate_examples
+from tailor.refinement.models.expression_space import ExpressionSpace
+from tailor.refinement.models.features import compute_features, first_examples, intermediate_examples, resolve
+from tailor.sims.protocol import FeatureSpace
 from tailor.refinement.models.model_tree import ModelTree
 from tailor.refinement.models.uncertainty import FOLDS, LeafUncertainty
 from tailor.sims.episode import Episode
@@ -72,7 +74,7 @@ def split_episodes(n: int, seed: int) -> Split:
     return Split(order[:half], order[half:three_quarters], order[three_quarters:])
 
 
-def fit_on_episodes(episodes: list[Episode], feature_space: str, n_i: int, regressor: RegressorMixin,
+def fit_on_episodes(episodes: list[Episode], feature_space: str | FeatureSpace, n_i: int, regressor: RegressorMixin,
                     observed: tuple[str, ...]) -> RegressorMixin:
     """Fit `regressor` on the first n_i examples of each episode, in the features of `feature_space`; `observed`
     names the action's observed parameters (read from each episode's log for the later examples)."""
@@ -80,7 +82,7 @@ def fit_on_episodes(episodes: list[Episode], feature_space: str, n_i: int, regre
     return regressor.fit(compute_features(feature_space, params), targets)
 
 
-def held_out_mae(regressor: RegressorMixin, episodes: list[Episode], feature_space: str) -> float:
+def held_out_mae(regressor: RegressorMixin, episodes: list[Episode], feature_space: str | FeatureSpace) -> float:
     """Mean absolute error (s) on the first example of each episode."""
     params, durations = first_examples(episodes)
     predicted = regressor.predict(compute_features(feature_space, params))
@@ -101,7 +103,7 @@ def train_duration_model(
     action: str,
     episodes: list[Episode],
     seed: int,
-    feature_space: str,
+    feature_space: str | FeatureSpace | ExpressionSpace,
     observed: tuple[str, ...],
     n_i_candidates: tuple[int, ...] = N_I_CANDIDATES,
     leaf_candidates: tuple[int, ...] = MIN_SAMPLES_LEAF,
@@ -115,7 +117,10 @@ def train_duration_model(
 
     Fits that do not depend on one another (the n_i candidates, the leaf sizes, the points of the learning
     curve) run in `jobs` workers of the backend in force (tailor.sims.parallel), with the serial result: each
-    fit is deterministic and the results are taken in order. The factories must then be picklable."""
+    fit is deterministic and the results are taken in order. The factories must then be picklable.
+    `feature_space`: a registered space's name, a FeatureSpace, or generated expressions (stored in the model)."""
+    expressions = feature_space if isinstance(feature_space, ExpressionSpace) else None
+    feature_space = expressions.feature_space() if expressions is not None else resolve(feature_space)
     used = [e for e in episodes if e.succeeded]
     if len(used) < MIN_EPISODES:
         raise DataError(f"{action}: {len(used)} successful episodes of {len(episodes)}; need at least {MIN_EPISODES}")
@@ -231,12 +236,13 @@ def train_duration_model(
     }
     if uncertainty is not None:
         report["uncertainty_overall"] = uncertainty.overall  # the cross-fitted held-out MAE of all episodes
-    model = ActionModel(action, feature_space, feature_names(feature_space), final, n_i, report,
-                        uncertainty=uncertainty)
+    model = ActionModel(action, feature_space.name, feature_space.names, final, n_i, report, uncertainty=uncertainty,
+                        expressions=expressions)
     return DurationTraining(model, report)
 
 
-def _leaf_uncertainty(final: RegressorMixin, used: list[Episode], seed: int, leaf: int, n_i: int, feature_space: str,
+def _leaf_uncertainty(final: RegressorMixin, used: list[Episode], seed: int, leaf: int, n_i: int,
+                      feature_space: str | FeatureSpace,
                       observed: tuple[str, ...], make_model: RegressorFactory, step: Callable[[str], None],
                       action: str, jobs: int) -> LeafUncertainty | None:
     """Cross-fitted held-out errors of every episode, averaged per leaf of `final` (None if it has no leaves)."""
@@ -266,7 +272,8 @@ def _fit_and_residuals(factory: RegressorFactory, seed: int, leaf: int, features
         return test_durations - regressor.predict(test_features)
 
 
-def _first_example_features(episodes: list[Episode], feature_space: str) -> tuple[np.ndarray, np.ndarray]:
+def _first_example_features(episodes: list[Episode], feature_space: str | FeatureSpace
+                            ) -> tuple[np.ndarray, np.ndarray]:
     """Features and durations of the first example of each episode (the held-out examples)."""
     params, durations = first_examples(episodes)
     return compute_features(feature_space, params), durations

@@ -33,6 +33,9 @@ CAPTIONS = {
     "mae_vs_episodes.png": "Test MAE against the number of training episodes, model tree and gradient boosting "
                            "(Fig. 4.6)",
 }
+SPACES_FILE = "feature_spaces.png"
+CAPTIONS[SPACES_FILE] = ("Held-out MAE on each feature space relative to gradient boosting on the raw parameters "
+                         "(Fig. 4.3)")
 CURVE_SUFFIX = "_polar.png"  # Fig. 4.7's file: <label>_polar.png
 CURVE_CAPTION = "Predicted duration over {meaning} in one situation (Fig. 4.7)"
 REGION_SUFFIX = ".success_region.png"  # Fig. 4.8's file: <action>.success_region.png
@@ -113,7 +116,7 @@ def plot_duration_curve(curve: DurationCurve, models: Mapping[str, ActionModel],
     polar = fig.add_subplot(1, 2, 2, projection="polar")
     largest = 0.0
     for action, model in models.items():
-        predicted = model.predict_duration(curve_params(curve, feature_space(model.feature_space).parameters, angles))
+        predicted = model.predict_duration(curve_params(curve, _parameters_of(model), angles))
         largest = max(largest, float(np.nanmax(predicted)))
         cartesian.plot(np.degrees(angles), predicted, label=action)
         polar.plot(angles, predicted, label=action)
@@ -143,7 +146,7 @@ def plot_success_region(region: SuccessRegion, model: CollisionModel, path: Targ
                         entry: SimulatorEntry | None = None) -> None:
     """Where the classifier predicts that its action fails (e.g. bumps an object lying at its goal), over starts
     round the goal (Fig. 4.8), one panel per turn of the start heading; axes in the units `entry` declares."""
-    names = feature_space(model.feature_space).parameters
+    names = _parameters_of(model)
     units = {q: (entry.quantity(q) if entry is not None else UNDECLARED).unit for q in (region.x, region.y)}
     fig, axes = plt.subplots(1, len(region.turns), figsize=(5.0 * len(region.turns), 4.8), squeeze=False)
     for ax, (turn, label) in zip(axes[0], region.turns):
@@ -173,9 +176,42 @@ def _axis_label(name: str, unit: str) -> str:
     return f"{name} ({unit})" if unit else name
 
 
-def _reads(space: str, parameters: frozenset[str]) -> bool:
-    """Whether a model in feature space `space` reads every action parameter a picture sets."""
-    return parameters <= set(feature_space(space).parameters)
+def _parameters_of(model) -> tuple[str, ...]:
+    """The action parameters a model's features read: its own space's (generated) or the registered one's."""
+    space = getattr(model, "space", None)
+    return tuple(space.parameters if space is not None else feature_space(model.feature_space).parameters)
+
+
+def _reads(model, parameters: frozenset[str]) -> bool:
+    """Whether a model reads every action parameter a picture sets."""
+    return parameters <= set(_parameters_of(model))
+
+
+def plot_feature_spaces(reports: Mapping[str, dict], path: Target) -> None:
+    """Fig. 4.3 for every action: held-out MAE on each feature space, as bars relative to gradient boosting on
+    the raw parameters (the dashed line at 1)."""
+    from tailor.refinement.learning.report import SPACE_LABELS, space_mae
+
+    rows = {a: r["space_comparison"] for a, r in reports.items() if r.get("space_comparison")}
+    fig, ax = plt.subplots(figsize=(max(6.0, 1.6 * len(rows) + 2.0), 4.0))
+    width = 0.8 / len(SPACE_LABELS)
+    for k, label in enumerate(SPACE_LABELS):
+        xs, ys = [], []
+        for i, comparison in enumerate(rows.values()):
+            mae = space_mae(comparison)
+            if label in mae and comparison["mae_hgb_raw"] > 0:
+                xs.append(i + (k - 1.5) * width)
+                ys.append(mae[label] / comparison["mae_hgb_raw"])
+        ax.bar(xs, ys, width, label=label, color=f"C{k}")
+    ax.axhline(1.0, color="0.3", linestyle="--", lw=1, label="gradient boosting, raw")
+    ax.set_xticks(range(len(rows)), list(rows))
+    ax.set(ylabel="held-out MAE / HGB on raw parameters", yscale="log",
+           title="Feature spaces (Fig. 4.3): the model tree on each, relative to gradient boosting on raw "
+                 "parameters")
+    ax.grid(True, axis="y", which="both", alpha=0.3)
+    ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
+    ax.title.set_fontsize("medium")
+    _save(fig, path)
 
 
 def caption(name: str, simulator: str = "") -> str:
@@ -207,14 +243,16 @@ def training_plots(simulator: str, models: Mapping[str, ActionModel],
         "mae_vs_n_i.png": lambda p: plot_mae_vs_n_i(reports, p),
         "mae_vs_episodes.png": lambda p: plot_mae_vs_episodes(reports, p),
     }
+    if any(r.get("space_comparison") for r in reports.values()):
+        plots[SPACES_FILE] = lambda p: plot_feature_spaces(reports, p)
     for curve in _pictures(simulator, DurationCurve):
-        drawn = {action: m for action, m in models.items() if _reads(m.feature_space, curve.parameters)}
+        drawn = {action: m for action, m in models.items() if _reads(m, curve.parameters)}
         if drawn:
             plots[curve.label + CURVE_SUFFIX] = lambda p, c=curve, d=drawn: plot_duration_curve(c, d, p)
     entry = _entry(simulator)
     for region in _pictures(simulator, SuccessRegion):
         for action, classifier in classifiers.items():
-            if _reads(classifier.feature_space, region.parameters):
+            if _reads(classifier, region.parameters):
                 plots[action + REGION_SUFFIX] = lambda p, r=region, c=classifier: plot_success_region(r, c, p, entry)
     return plots
 

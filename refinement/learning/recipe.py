@@ -6,7 +6,9 @@
 
     [training.models.navigate]         # a duration model per executable action ...
     scenario = "navigate"              # ... learned from this experience scenario (or a list of them)
-    feature_space = "pose"             # ... in this feature space (Table 4.1)
+    feature_space = "pose"             # ... in this feature space (Table 4.1); "auto" (the default where none is
+                                       # named): features generated from the action's quantities and selected
+                                       # by cross-validated error (learning.feature_selection)
     episodes = 24000                   # optional: this many of each of its scenarios (default: episodes above)
 
     [training.classifiers.navigate]    # a success classifier (Sec. 4.2.2), optional
@@ -30,7 +32,9 @@ from typing import Any
 from tailor.refinement.binding import Binding, load_domain_binding
 from tailor.refinement.binding_domain import did_you_mean
 from tailor.errors import BindingError
+from tailor.refinement.models.expression_space import AUTO
 from tailor.refinement.models.features import feature_spaces
+from tailor.sims.experience import MAX_EPISODES
 from tailor.sims.protocol import ActionSpec
 
 
@@ -133,6 +137,8 @@ def _keys(table: Mapping[str, Any], allowed: set[str], where: str, fail) -> None
 def _positive_int(value: Any, where: str, fail) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < 1:
         raise fail(f"{where} must be a positive integer, not {value!r}")
+    if "episodes" in where and value > MAX_EPISODES:
+        raise fail(f"{where} = {value} is more than {MAX_EPISODES:,} episodes")
     return value
 
 
@@ -151,9 +157,11 @@ def _models(section: Any, key: str, entry, fail) -> tuple[ModelRecipe, ...]:
         if action not in entry.actions:
             raise fail(f"{where}: {action!r} is not an action of simulator {entry.name!r} "
                        f"(known: {', '.join(entry.actions)})")
-        scenarios = table.get("scenario", action)
+        # without a scenario named, the action's own; none where the simulator has none (a real robot's
+        # binding: its models learn from recorded executions, `tailor train --log`)
+        scenarios = table.get("scenario", action if action in entry.scenarios else [])
         scenarios = [scenarios] if isinstance(scenarios, str) else scenarios
-        if not isinstance(scenarios, list) or not scenarios:
+        if "scenario" in table and (not isinstance(scenarios, list) or not scenarios):
             raise fail(f"{where} scenario must be a scenario name or a non-empty list of them")
         for scenario in scenarios:
             if not isinstance(scenario, str) or scenario not in entry.scenarios:
@@ -161,11 +169,15 @@ def _models(section: Any, key: str, entry, fail) -> tuple[ModelRecipe, ...]:
                            f"{entry.name!r} (known: {', '.join(entry.scenarios)})")
             if entry.scenarios[scenario].action != action:
                 raise fail(f"{where} scenario = {scenario!r} runs {entry.scenarios[scenario].action}, not {action}")
-        space = table.get("feature_space")
+        space = table.get("feature_space", AUTO if key == "models" else None)
         spaces = feature_spaces()
+        if space == AUTO and key == "models":
+            episodes = _positive_int(table["episodes"], f"{where} episodes", fail) if "episodes" in table else None
+            out.append(ModelRecipe(action, tuple(scenarios), AUTO, episodes))
+            continue
         if not isinstance(space, str) or space not in spaces:
-            raise fail(f"{where} feature_space = {space!r} is not a feature space "
-                       f"(known: {', '.join(sorted(spaces))})")
+            known = ", ".join(sorted(spaces) + ([AUTO] if key == "models" else []))
+            raise fail(f"{where} feature_space = {space!r} is not a feature space (known: {known})")
         if len(spaces[space].parameters) != len(entry.actions[action].parameters):
             raise fail(f"{where} feature_space = {space!r} reads {len(spaces[space].parameters)} parameters, "
                        f"{action} has {len(entry.actions[action].parameters)}")

@@ -23,6 +23,46 @@ def false_success_text(c: dict, failing: str = "failing episodes") -> str:
     return f"{percent(c['false_success'])} of the {failing} were predicted to succeed"
 
 
+SPACE_LABELS = ("raw", "generic", "expert", "auto")
+
+
+def space_mae(comparison: dict) -> dict[str, float]:
+    """Fig. 4.3's row of one action: space label -> held-out MAE (s)."""
+    return {row["space"]: row["mae"] for row in comparison.get("rows", ())}
+
+
+def space_table(reports: dict[str, dict]) -> list[str]:
+    """Fig. 4.3 as a table: per action the held-out MAE on each feature space and of gradient boosting on the
+    raw parameters, and the auto space's ratios to both."""
+    rows = {action: r["space_comparison"] for action, r in reports.items() if r.get("space_comparison")}
+    if not rows:
+        return []
+    header = (f"{'action':<14}" + "".join(f"{label:>9}" for label in SPACE_LABELS)
+              + f"{'HGB raw':>9}{'auto/HGB':>9}{'auto/expert':>12}")
+    lines = [header, "-" * len(header)]
+    for action, comparison in rows.items():
+        mae = space_mae(comparison)
+        cells = "".join(f"{mae[label]:>9.3f}" if label in mae else f"{'-':>9}" for label in SPACE_LABELS)
+        hgb = comparison["mae_hgb_raw"]
+        auto = mae.get("auto")
+        over_hgb = "-" if auto is None or not hgb else f"{auto / hgb:.2f}"
+        over_expert = "-" if auto is None or not mae.get("expert") else f"{auto / mae['expert']:.2f}"
+        lines.append(f"{action:<14}{cells}{hgb:>9.3f}{over_hgb:>9}{over_expert:>12}")
+    return lines
+
+
+def feature_lines(action: str, report: dict) -> list[str]:
+    """The features a model uses, each as a formula with its unit (generated ones), or its space's name."""
+    features = report.get("features")
+    if not features:
+        return []
+    lines = [f"  {action} features (generated, Sec. 4.1.1):"]
+    for f in features:
+        unit = f" [{f['unit']}]" if f.get("unit") else ""
+        lines.append(f"    {f['name']} = {f['formula']}{unit}")
+    return lines
+
+
 def duration_table(reports: dict[str, dict]) -> list[str]:
     header = (f"{'action':<14}{'episodes':>9}{'mean t (s)':>11}{'sim. h:mm':>10}{'n_i':>5}{'leaf':>5}{'MAE (s)':>9}"
               f"{'MAE/t':>7}{'HGB MAE (s)':>12}{'MAE/HGB':>8}{'leaves':>7}")
@@ -113,6 +153,17 @@ def format_report(report: dict, models: dict, classifiers: dict, warnings: list[
         *duration_table(report["models"]),
         *_subgoal_lines(report.get("subgoal_experience")),
     ]
+    table = space_table(report["models"])
+    if table:
+        lines += ["", "Feature spaces (Fig. 4.3): held-out MAE (s) of the model tree on the raw parameters, Table",
+                  "4.1's generic row where the action's quantities match one, the simulator's expert space where it",
+                  "brings one and the generated space (auto), each with its leaf size chosen on validation at the",
+                  "model's n_i, beside gradient boosting (HGB) on the raw parameters; the same test episodes for every",
+                  "space.", "", *table]
+    for action, r in report["models"].items():
+        chosen = feature_lines(action, r)
+        if chosen:
+            lines += ["", *chosen]
     for c in classifier_reports(report).values():
         lines += _classifier_lines(c)
     lines.append("")
@@ -133,4 +184,19 @@ def summary_lines(report: dict) -> list[str]:
     for action, c in classifier_reports(report).items():
         lines.append(f"  success classifier of {action}: {percent(c['accuracy'])} correct on "
                      f"{c['confusion']['episodes']} fresh episodes, {false_success_text(c, 'failing ones')}")
+    for action, r in report["models"].items():
+        lines += feature_lines(action, r)
+    compared = [f"{action} {_auto_against(r['space_comparison'])}" for action, r in report["models"].items()
+                if r.get("space_comparison")]
+    if compared:
+        lines.append("  auto features' held-out MAE (Fig. 4.3, in the report): " + "; ".join(compared))
     return lines
+
+
+def _auto_against(comparison: dict) -> str:
+    """The auto space's MAE against gradient boosting on the raw parameters and the expert space, in a few words."""
+    mae, hgb = space_mae(comparison), comparison["mae_hgb_raw"]
+    if "auto" not in mae:
+        return "-"
+    text = f"{mae['auto']:.3f} s ({mae['auto'] / hgb:.2f}x HGB raw" if hgb else f"{mae['auto']:.3f} s ("
+    return text + (f", {mae['auto'] / mae['expert']:.2f}x expert)" if mae.get("expert") else ")")

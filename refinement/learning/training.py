@@ -15,6 +15,7 @@ import signal
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
 from tqdm import tqdm
@@ -27,11 +28,16 @@ from tailor.refinement.learning.duration_protocol import (
     N_I_CANDIDATES,
     train_duration_model,
 )
+from tailor.refinement.learning.feature_selection import brought_spaces, generic_space, select_features
 from tailor.refinement.learning.recipe import SubgoalExperience, TrainingRecipe
+from tailor.refinement.learning.space_comparison import compare_spaces, learning_episodes
 from tailor.refinement.learning.html_report import html_report
 from tailor.refinement.learning.report import format_report, rules_sections
 from tailor.refinement.learning.trust import trust_warnings
 from tailor.refinement.models.action_models import COLLISION_SUFFIX
+from tailor.refinement.models.expression_space import AUTO
+from tailor.refinement.models.features import resolve
+from tailor.sims import registry
 from tailor.refinement.models.uncertainty import FOLDS
 from tailor.outputs import check_output_dir, json_text, staged_file, write_error
 from tailor.sims.episode import Episode
@@ -56,6 +62,8 @@ def train_domain(
     episode_fractions: tuple[float, ...] = EPISODE_FRACTIONS,
     own_episodes: bool = False,
     companions: dict | None = None,
+    compare: bool = False,
+    recorded: dict[str, list[Episode]] | None = None,
 ) -> dict:
     """Gather, train and write `out/models/*.json` and `out/training/` (report and plots); return the report.
 
@@ -63,7 +71,11 @@ def train_domain(
     that many of each of its scenarios instead (the first ones of the seed stream: a scenario is gathered once,
     as many as the most any model needs). `gather(simulator, scenario, episodes, seed, jobs, progress)` defaults
     to tailor.sims.experience.gather. `companions` (action -> ActionModel) are models this run does not learn
-    that its subgoal experience refines with (`--only`: the domain's others); they are not written."""
+    that its subgoal experience refines with (`--only`: the domain's others); they are not written. With
+    `compare`, each duration model's report holds Fig. 4.3's comparison of feature spaces (space_comparison).
+    `recorded` (action -> episodes, e.g. read from logs, learning.logs) replaces gathering: the duration models
+    learn from those executions only; success classifiers and subgoal experience, which need the simulator, are
+    not learned then."""
     if gather is None:
         from tailor.sims.experience import gather
     if episodes < 1:
@@ -75,9 +87,21 @@ def train_domain(
     def count(m) -> int:
         return m.episodes if own_episodes and m.episodes is not None else episodes
 
+    if recorded is not None:
+        skipped = [c.action for c in recipe.classifiers] + [c.action for c in recipe.subgoal_experience]
+        if skipped:
+            log.info("learning from recorded executions: no success classifier or subgoal experience (%s), "
+                     "they need the simulator", ", ".join(dict.fromkeys(skipped)))
+        recipe = replace(recipe, classifiers=(), subgoal_experience=())
+    else:
+        for m in recipe.models:
+            if not m.scenarios:
+                raise DataError(f"{m.action}: its [training.models.{m.action}] names no experience scenario and "
+                                f"simulator {recipe.simulator!r} has none of that name: learn it from recorded "
+                                "executions (`tailor train --log FILE`)")
     needed: dict[str, int] = {}
     for m in (*recipe.models, *recipe.classifiers):
-        for scenario in m.scenarios:
+        for scenario in m.scenarios if recorded is None else ():
             needed[scenario] = max(needed.get(scenario, 0), count(m))
     gathered_by_scenario: dict[str, list[Episode]] = {}
     for scenario, n in needed.items():
@@ -85,6 +109,8 @@ def train_domain(
                                                 progress=progress)
 
     def experience_of(m) -> list[Episode]:
+        if recorded is not None:
+            return list(recorded.get(m.action, ()))
         return [e for scenario in m.scenarios for e in gathered_by_scenario[scenario][:count(m)]]
 
     fresh = {}
@@ -98,6 +124,7 @@ def train_domain(
     gathered = time.perf_counter()
     log.debug("gathered the experience of %s in %.1f s", ", ".join(gathered_by_scenario), gathered - started)
 
+    timings: dict[str, dict] = {}
     fits = len(recipe.models) * _fits_per_model(n_i_candidates, episode_fractions) + 2 * len(recipe.classifiers)
     with tqdm(total=fits, desc="training", unit="fit", disable=None if progress else True) as bar:
         def step(label: str) -> None:
@@ -106,9 +133,9 @@ def train_domain(
 
         models = {}
         for m in recipe.models:
-            models[m.action] = train_duration_model(
-                m.action, experience_of(m), seed, m.feature_space, recipe.specs[m.action].observed, step=step,
-                n_i_candidates=n_i_candidates, episode_fractions=episode_fractions, jobs=jobs).model
+            models[m.action] = train_action(recipe, m.action, m.feature_space, experience_of(m), seed, step=step,
+                                            n_i_candidates=n_i_candidates, episode_fractions=episode_fractions,
+                                            jobs=jobs, compare=compare, timings=timings)
         classifiers = {c.action: train_collision_model(c.action, experience_of(c), fresh[c.action], seed,
                                                        c.feature_space, step=step).model
                        for c in recipe.classifiers}
@@ -128,17 +155,66 @@ def train_domain(
         "simulator": recipe.simulator,
         "seed": seed,
         "episodes_per_scenario": episodes,
+        "experience": "simulator" if recorded is None else "recorded executions",
         "models": {action: model.report for action, model in models.items()},
         "classifiers": {action: model.report for action, model in classifiers.items()},
         "subgoal_experience": [row for row in subgoal if row is not None],
         "gather_seconds": gathered - started,
         "train_seconds": time.perf_counter() - gathered,
+        "model_seconds": timings,  # per duration model: feature selection, the protocol, Fig. 4.3's comparison
     }
     log.debug("trained %s in %.1f s", ", ".join([*models, *(f"{a} classifier" for a in classifiers)]),
               report["train_seconds"])
     report["warnings"] = trust_warnings(report)
     write_outputs(out, recipe, models, classifiers, report)
     return report
+
+
+def train_action(recipe: TrainingRecipe, action: str, feature_space: str, episodes: list[Episode], seed: int,
+                 compare: bool = True, jobs: int = 1, timings: dict | None = None, **protocol):
+    """One duration model: its features chosen automatically where the recipe says "auto" (on the learning
+    episodes only), the protocol of Fig. 4.9, and, with `compare`, Fig. 4.3's comparison of feature spaces;
+    the report records the chosen features (formulas and units) and the selection; `timings[action]` the seconds
+    the selection, the protocol and the comparison took."""
+    entry = registry.get(recipe.simulator)
+    spec = recipe.specs[action]
+    selection = None
+    if feature_space == AUTO or compare:
+        selection = select_features(spec, entry, learning_episodes(episodes, seed), seed, jobs=jobs)
+    space = feature_space
+    if feature_space == AUTO:
+        space = selection.space if selection.space is not None else selection.named
+    selected = time.perf_counter()  # the selection's own time is its report's "seconds"
+    model = train_duration_model(action, episodes, seed, space, spec.observed, jobs=jobs, **protocol).model
+    trained = time.perf_counter()
+    report = getattr(model, "report", {})  # (a stand-in model without a report records nothing)
+    if selection is not None:
+        report["feature_selection"] = {k: v for k, v in selection.report.items() if k != "seconds"}
+    if getattr(model, "expressions", None) is not None:
+        report["features"] = model.expressions.describe()
+    if timings is not None:  # beside the models, not in them: a model file is the same for the same seed
+        timings[action] = {"selection": selection.report["seconds"] if selection is not None else 0.0,
+                           "selection_for": feature_space if feature_space == AUTO else "comparison",
+                           "protocol": trained - selected}
+    if compare:
+        spaces = {}
+        generic = generic_space(spec, entry)
+        if generic is not None:
+            spaces["generic"] = generic.feature_space("generic row")
+        expert = None if feature_space == AUTO else resolve(feature_space)
+        if expert is None:
+            brought = brought_spaces(entry, spec)
+            sets = selection.report["candidate_sets"]
+            best = min((name for name in sets if name in brought), key=sets.get, default=None)
+            expert = brought[best] if best is not None else None
+        if expert is not None:
+            spaces["expert"] = expert
+        spaces["auto"] = selection.generated.feature_space()  # the generated set, whichever set the model uses
+        comparison = compare_spaces(episodes, seed, spec.observed, model.n_i, spaces, tuple(spec.parameters), jobs)
+        if timings is not None:
+            timings[action]["comparison"] = comparison["seconds"]
+        report["space_comparison"] = {k: v for k, v in comparison.items() if k != "seconds"}
+    return model
 
 
 def _learn_at_subgoals(recipe: TrainingRecipe, chain: SubgoalExperience, models: dict, experience: dict,
@@ -164,10 +240,16 @@ def _learn_at_subgoals(recipe: TrainingRecipe, chain: SubgoalExperience, models:
                                            first=bounds[k], planned=planned)
         label = f"retraining {chain.action} ({k + 1}/{rounds})"
         with tqdm(total=fits, desc=label, unit="fit", disable=None if progress else True) as bar:
-            models[chain.action] = train_duration_model(
-                chain.action, experience[chain.action] + extra, seed, model_recipe.feature_space,
-                recipe.specs[chain.action].observed, step=lambda _: bar.update(1), n_i_candidates=n_i_candidates,
-                episode_fractions=episode_fractions, jobs=jobs).model
+            before = getattr(models[chain.action], "report", None) or {}
+            models[chain.action] = train_action(
+                recipe, chain.action, model_recipe.feature_space, experience[chain.action] + extra, seed,
+                compare=False, step=lambda _: bar.update(1), n_i_candidates=n_i_candidates,
+                episode_fractions=episode_fractions, jobs=jobs)
+            after = getattr(models[chain.action], "report", None)
+            if after is not None and "space_comparison" in before:  # Fig. 4.3 of the scenarios' experience, as first trained
+                after["space_comparison"] = {**before["space_comparison"], "experience": "scenarios"}
+            if "feature_selection" in before and "feature_selection" not in after:
+                after["feature_selection"] = before["feature_selection"]
             bar.n = bar.total
             bar.refresh()
     return {"generator": chain.situations, "action": chain.action, "situations": situations, "episodes": len(extra),

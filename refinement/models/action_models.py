@@ -17,8 +17,11 @@ from pathlib import Path
 import numpy as np
 
 from tailor.refinement.models.decision_tree import DecisionTree, LeafBox
-from tailor.errors import ModelFileError, check_path_argument
-from tailor.refinement.models.features import compute_features, feature_spaces
+from tailor.errors import DataError, ModelFileError, check_path_argument
+from tailor.refinement.models.expression_space import AUTO, ExpressionSpace
+from tailor.refinement.models.expressions import ExpressionError
+from tailor.refinement.models.features import compute_features, feature_space as registered_space, feature_spaces
+from tailor.sims.protocol import FeatureSpace
 from tailor.refinement.models.model_tree import ModelTree
 from tailor.refinement.models.rules import Rule
 from tailor.refinement.models.uncertainty import LeafUncertainty, risk_adjusted
@@ -35,6 +38,7 @@ RANGE_MARGIN = 1.0
 OLD_FILE_SPAN = 2.0
 NO_REPORT_BOUND = 86400.0  # s: plausible for a file that states neither (one day either side)
 FEATURE_SPACE_KEY = "feature_space"  # a model file's feature space (Table 4.1), as the binding names it
+EXPRESSIONS_KEY = "expressions"  # a generated space's features as expression trees (models.expression_space)
 OLD_FEATURE_SPACE_KEY = "feature_set"  # the same in files written before: still read, never written
 
 
@@ -51,10 +55,34 @@ class ActionModel:
     source: str | None = field(default=None, compare=False)  # the file it was read from, for error messages
     # per-leaf held-out spread (models.uncertainty); None in files trained before it existed
     uncertainty: LeafUncertainty | None = None
+    # the features as expressions where they were generated (feature_space "auto"); None: a registered space
+    expressions: ExpressionSpace | None = None
+
+    def __post_init__(self) -> None:
+        if self.expressions is not None and tuple(self.feature_names) != self.expressions.names:
+            raise ValueError(f"feature names {self.feature_names} are not its expressions' {self.expressions.names}")
+
+    @property
+    def space(self) -> FeatureSpace:
+        """Its feature space as a FeatureSpace: the generated one (with `bounds`, a guaranteed enclosure of the
+        features over boxes of parameters, for the certified optimizer) or the registered one it names."""
+        if self.expressions is not None:
+            cached = self.__dict__.get("_space")
+            if cached is None:
+                cached = self.expressions.feature_space(self.feature_space)
+                object.__setattr__(self, "_space", cached)
+            return cached
+        return registered_space(self.feature_space)
 
     def features(self, params: np.ndarray) -> np.ndarray:
-        """(n, p) action parameters -> (n, f) features."""
-        return compute_features(self.feature_space, params)
+        """(n, p) action parameters -> (n, f) features; parameters of another shape than the space reads are a
+        ModelFileError naming the file (a model of another action's parameters)."""
+        try:
+            if self.expressions is not None:
+                return self.space(params)
+            return compute_features(self.feature_space, params)
+        except ValueError as exc:
+            raise ModelFileError(str(exc), file=self.source) from None
 
     def predict_duration(self, params: np.ndarray) -> np.ndarray:
         """Predicted duration (s) for each row of (n, p) action parameters."""
@@ -102,6 +130,10 @@ class ActionModel:
             raise ModelFileError(f"{where}: the model predicts a duration of {value} s: its coefficients are "
                                  "broken (retrain with `tailor train`)", file=self.source)
         if not bounds[0] <= value <= bounds[1]:
+            if self.source is None:  # a model still in training, not read from a file: it learned too little
+                raise DataError(f"{where}: the {self.action} model being trained predicts {value:.4g} s here, outside "
+                                f"the plausible [{bounds[0]:.3g}, {bounds[1]:.3g}] s (the durations seen in training, "
+                                "with a margin): too few episodes to learn it from (train with more --episodes)")
             raise ModelFileError(f"{where}: the model predicts {value:.4g} s, outside the plausible "
                                  f"[{bounds[0]:.3g}, {bounds[1]:.3g}] s (the durations seen in training, with a "
                                  "margin): the file is inconsistent (retrain with `tailor train`)", file=self.source)
@@ -116,6 +148,7 @@ class ActionModel:
             "action": self.action,
             FEATURE_SPACE_KEY: self.feature_space,
             "feature_names": list(self.feature_names),
+            **({} if self.expressions is None else {EXPRESSIONS_KEY: self.expressions.to_json()}),
             "n_i": self.n_i,
             "rules": self.rules_text().splitlines(),
             "duration": self.duration.to_json(),
@@ -127,7 +160,8 @@ class ActionModel:
     def from_json(cls, data: dict, source: str) -> ActionModel:
         """Build from parsed JSON; anything malformed raises ModelFileError naming `source`."""
         _check_schema(data, ACTION_MODEL_SCHEMA, source)
-        action, space, names = _common_fields(data, source)
+        expressions = _expressions(data, source)
+        action, space, names = _common_fields(data, source, expressions)
         n_i = data.get("n_i")
         if not isinstance(n_i, int) or isinstance(n_i, bool) or n_i < 1:
             raise ModelFileError(f"'n_i' must be a positive integer, got {n_i!r}", file=source)
@@ -146,7 +180,7 @@ class ActionModel:
         uncertainty = None
         if "uncertainty" in data:  # optional: files written before it existed load without it
             uncertainty = LeafUncertainty.from_json(data["uncertainty"], tree.n_leaves_, source)
-        return cls(action, space, names, tree, n_i, _report(data, source), source, uncertainty)
+        return cls(action, space, names, tree, n_i, _report(data, source), source, uncertainty, expressions)
 
 
 @dataclass(frozen=True, eq=False)
@@ -263,7 +297,8 @@ def read_json(path: Path) -> dict:
     except UnicodeDecodeError as exc:
         raise ModelFileError(f"not JSON: not UTF-8 text (byte {exc.start})", file=str(path)) from None
     try:
-        data = json.loads(text, parse_constant=_reject_constant)
+        data = json.loads(text, parse_constant=_reject_constant,
+                          parse_int=lambda digits: int(digits) if len(digits) <= 20 else float(digits))
     except json.JSONDecodeError as exc:
         raise ModelFileError(f"not JSON: {exc.msg}", file=str(path), line=exc.lineno, col=exc.colno) from None
     except ValueError as exc:  # NaN / Infinity, which JSON does not have; or numbers too deeply nested
@@ -288,7 +323,12 @@ def write_json_atomic(path: Path, data: dict) -> None:
 
 
 def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:  # an integer beyond any float (10**400)
+        return False
 
 
 def _check_schema(data: dict, schema: str, source: str) -> None:
@@ -296,13 +336,36 @@ def _check_schema(data: dict, schema: str, source: str) -> None:
         raise ModelFileError(f"schema is {data.get('schema')!r}, expected {schema!r}", file=source)
 
 
-def _common_fields(data: dict, source: str) -> tuple[str, str, tuple[str, ...]]:
+def _expressions(data: dict, source: str) -> ExpressionSpace | None:
+    """The generated features a model file stores (None where it names a registered space); anything malformed
+    or hostile is one ModelFileError naming the file, before anything is computed."""
+    if EXPRESSIONS_KEY not in data:
+        return None
+    try:
+        return ExpressionSpace.from_json(data[EXPRESSIONS_KEY])
+    except ExpressionError as exc:
+        raise ModelFileError(f"'{EXPRESSIONS_KEY}': {exc}", file=source) from None
+
+
+def _common_fields(data: dict, source: str, expressions: ExpressionSpace | None = None
+                   ) -> tuple[str, str, tuple[str, ...]]:
     """(action, feature space, feature names) of a model file; the space under FEATURE_SPACE_KEY, or under the
-    older key `feature_set` in files written before it was named so (the bundled models among them)."""
+    older key `feature_set` in files written before it was named so (the bundled models among them); a file
+    with expressions names its space "auto" and its features are the expressions' names."""
     action, names = data.get("action"), data.get("feature_names")
     space = data.get(FEATURE_SPACE_KEY, data.get(OLD_FEATURE_SPACE_KEY))
     if not isinstance(action, str) or not action:
         raise ModelFileError("'action' must be a non-empty string", file=source)
+    if expressions is not None or space == AUTO:
+        if expressions is None:
+            raise ModelFileError(f"feature space {AUTO!r} without its '{EXPRESSIONS_KEY}'", file=source)
+        if space != AUTO:
+            raise ModelFileError(f"a file with '{EXPRESSIONS_KEY}' names its feature space {AUTO!r}, not {space!r}",
+                                 file=source)
+        if not isinstance(names, list) or tuple(names) != expressions.names:
+            raise ModelFileError(f"feature_names {names!r} do not match its expressions {list(expressions.names)}",
+                                 file=source)
+        return action, space, expressions.names
     spaces = feature_spaces()
     if not isinstance(space, str) or space not in spaces:
         raise ModelFileError(f"unknown feature space {space!r} (known: {', '.join(sorted(spaces))})", file=source)

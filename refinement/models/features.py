@@ -36,6 +36,25 @@ def _line(params: np.ndarray) -> np.ndarray:
     return np.column_stack([np.abs(xg - x), v * s, vg * s])
 
 
+def _line_bounds(low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A guaranteed enclosure of `_line` over boxes of parameters (FeatureSpace.bounds): the distance from the
+    difference's interval (each subtraction rounds monotonically), a speed times the sign where the sign is
+    one, the hull of both signs where the goal may lie on either side."""
+    x_lo, v_lo, xg_lo, vg_lo = np.atleast_2d(low).T
+    x_hi, v_hi, xg_hi, vg_hi = np.atleast_2d(high).T
+    d_lo, d_hi = xg_lo - x_hi, xg_hi - x_lo  # xg - x over the box
+    dist_lo = np.where(d_lo > 0, d_lo, np.where(d_hi < 0, -d_hi, 0.0))
+    dist_hi = np.maximum(np.abs(d_lo), np.abs(d_hi))
+    ahead, behind = d_lo >= 0, d_hi < 0  # the sign is +1 (also at 0), or -1, over the whole box
+
+    def signed(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return (np.where(ahead, lo, np.where(behind, -hi, np.minimum(lo, -hi))),
+                np.where(ahead, hi, np.where(behind, -lo, np.maximum(hi, -lo))))
+
+    (sv_lo, sv_hi), (svg_lo, svg_hi) = signed(v_lo, v_hi), signed(vg_lo, vg_hi)
+    return np.column_stack([dist_lo, sv_lo, svg_lo]), np.column_stack([dist_hi, sv_hi, svg_hi])
+
+
 def _line_shift_mirror(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return shift_mirror_axes(params, rng, ((0, 1),), goal_offset=2, shift=5.0)
 
@@ -53,7 +72,7 @@ def register_feature_space(space: FeatureSpace, replace: bool = False) -> Featur
 
 
 register_feature_space(FeatureSpace("line", ("x", "v", "xg", "vg"), ("dist", "v", "vg"), _line,
-                                    "translation and mirroring of the axis", _line_shift_mirror))
+                                    "translation and mirroring of the axis", _line_shift_mirror, _line_bounds))
 
 
 def feature_spaces() -> dict[str, FeatureSpace]:
@@ -77,13 +96,27 @@ def feature_space(name: str) -> FeatureSpace:
     return space
 
 
-def feature_names(name: str) -> tuple[str, ...]:
-    return feature_space(name).names
+def resolve(space: str | FeatureSpace) -> FeatureSpace:
+    """A feature space given by name (registered, or brought by a simulator) or as itself (a generated one)."""
+    return space if isinstance(space, FeatureSpace) else feature_space(space)
 
 
-def compute_features(name: str, params: np.ndarray) -> np.ndarray:
-    """Map action parameters (n, p) (or one row (p,)) to the features (n, f) of feature space `name`."""
-    return feature_space(name)(params)
+def feature_names(name: str | FeatureSpace) -> tuple[str, ...]:
+    return resolve(name).names
+
+
+def compute_features(name: str | FeatureSpace, params: np.ndarray) -> np.ndarray:
+    """Map action parameters (n, p) (or one row (p,)) to the features (n, f) of feature space `name` (a name or
+    the space itself)."""
+    return resolve(name)(params)
+
+
+def raw_space(parameters: Sequence[str]) -> FeatureSpace:
+    """The action's parameters themselves as features (what a learner without features sees; Fig. 4.3's first
+    column)."""
+    return FeatureSpace("raw", tuple(parameters), tuple(parameters), lambda params: np.asarray(params, dtype=float),
+                        "nothing", None,
+                        lambda low, high: (np.asarray(low, dtype=float), np.asarray(high, dtype=float)))
 
 
 def intermediate_examples(episodes: list[Episode], n_i: int, observed: Sequence[str]

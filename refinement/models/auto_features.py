@@ -1,0 +1,482 @@
+"""Candidate features of an action generated from its declared quantities (Sec. 4.1.1), for any robot.
+
+An action declares its parameters in two groups, observed (the start) and internal (the goal), each with a
+quantity that the simulator declares as a unit and whether it is an angle. From that alone, with operators of
+the kind the dissertation names, we build candidates that exploit the invariances the quantities imply:
+
+- axes: a quantity both groups have (x and xg): the difference of like quantities (wrapped for angles), its
+  absolute value and square root (translation and mirror invariance); where the goal group's quantities are
+  not the start's, each goal quantity is paired with the start's of the same unit in declaration order;
+- planes: two adjacent length axes of one unit (x, y): Euclidean distance and bearing; with a start angle
+  (heading) the angle to the goal, the goal in the start's frame (along, |across|), and with the goal's angle
+  of the same quantity the angle at the goal (normalised, signed as Table 4.1's), |its value|, their sum (the
+  turning) and the relative heading (rotation and mirror invariance);
+- speeds: a quantity in unit/s beside an axis of that unit (v beside x, or beside a plane's distance): the
+  speeds signed toward the goal, their squares and product, and the transfer time of a double integrator
+  (expression_maths.transfer) whose limits are constants discovered from the data; the largest transfer time
+  of several axes (a move is as slow as its slowest part); maxima of like differences.
+Which of them a model uses is chosen by cross-validated model-tree error (learning.feature_selection). The
+rows of Table 4.1 that such a structure matches (the pose row, the reach row in a space of angles, a move along
+one axis) are built the same way: `generic_row`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from fractions import Fraction
+
+import numpy as np
+from scipy.optimize import minimize
+
+from tailor.refinement.models.expression_maths import evaluate, transfer
+from tailor.refinement.models.model_tree import ModelTree
+from tailor.refinement.models.expressions import (CONSTANT_ARGUMENTS, MAX_DEPTH, MAX_NODES, Expr, const, node, param,
+                                                  parse_unit)
+from tailor.sims.protocol import ActionSpec, Quantity
+
+MAX_CANDIDATES = 160
+DISCOVERY_ROWS = 1500  # examples the transfer limits are fitted on
+SECOND = (("s", Fraction(1)),)
+
+
+@dataclass(frozen=True)
+class Parameter:
+    name: str
+    group: str  # "observed" or "internal"
+    quantity: str
+    unit: tuple
+    angle: bool
+
+    @property
+    def speed_of(self) -> tuple | None:
+        """The unit this is a speed of (m for m/s), or None."""
+        exponents = dict(self.unit)
+        if exponents.get("s", 0) != -1:
+            return None
+        return tuple((s, e) for s, e in self.unit if s != "s")
+
+
+@dataclass(frozen=True)
+class Candidate:
+    name: str
+    expression: Expr
+    family: str  # what kind of operator built it (for the report)
+
+
+@dataclass(frozen=True)
+class Axis:
+    """A like pair: the goal's value minus the start's (wrapped where the quantity is an angle)."""
+
+    start: Parameter
+    goal: Parameter
+    difference: Expr
+    label: str
+
+
+def parameters_of(spec: ActionSpec, quantity: Callable[[str], Quantity]) -> list[Parameter]:
+    out = []
+    for group in ("observed", "internal"):
+        names, quantities = spec.group(group)
+        for name, q in zip(names, quantities):
+            declared = quantity(q)
+            out.append(Parameter(name, group, q, parse_unit(declared.unit), declared.angle))
+    return out
+
+
+FULL_TURN_SHARE = 0.9  # an angle whose values cover less of the circle is a bounded coordinate: not wrapped
+
+
+def axes_of(params: list[Parameter], values: dict[str, np.ndarray] | None = None) -> list[Axis]:
+    """Like pairs of start and goal parameters (not speeds): by quantity, else by unit in declaration order.
+    The difference of two angles is wrapped, unless `values` (parameter columns of the experience) show the
+    angle covering less than FULL_TURN_SHARE of the circle (a joint within its limits never goes round)."""
+    start = [p for p in params if p.group == "observed" and p.speed_of is None]
+    goal = [p for p in params if p.group == "internal" and p.speed_of is None]
+    pairs, used = [], set()
+    for g in goal:
+        match = next((s for s in start if s.quantity == g.quantity and s.name not in used), None)
+        if match is None:
+            match = next((s for s in start if s.unit == g.unit and s.angle == g.angle and s.name not in used), None)
+        if match is not None:
+            used.add(match.name)
+            pairs.append((match, g))
+    axes = []
+    for s, g in pairs:
+        diff = node("sub", param(g.name), param(s.name))
+        round_ = s.angle and (values is None or _span(values, s.name, g.name) >= FULL_TURN_SHARE * 2.0 * np.pi)
+        axes.append(Axis(s, g, node("wrap", diff) if round_ else diff, s.name))
+    return axes
+
+
+def _span(values: dict[str, np.ndarray], *names: str) -> float:
+    both = np.concatenate([values[n] for n in names])
+    return float(np.ptp(both)) if both.size else 0.0
+
+
+def speed_pairs(params: list[Parameter]) -> list[tuple[Parameter, Parameter | None]]:
+    """(start speed, goal speed or None) per speed quantity of the start group."""
+    start = [p for p in params if p.group == "observed" and p.speed_of is not None]
+    goal = [p for p in params if p.group == "internal" and p.speed_of is not None]
+    pairs, used = [], set()
+    for s in start:
+        g = next((g for g in goal if g.quantity == s.quantity and g.name not in used), None)
+        used.add(g.name if g is not None else None)
+        pairs.append((s, g))
+    return pairs
+
+
+def planes_of(axes: list[Axis]) -> list[tuple[Axis, Axis]]:
+    """Adjacent (in declaration order) length axes of one unit: the coordinates of a point in a plane."""
+    lengths = [a for a in axes if not a.start.angle and a.start.unit]
+    return [(a, b) for a, b in zip(lengths, lengths[1:]) if a.start.unit == b.start.unit]
+
+
+def _toward(speed: Expr, direction: Expr) -> Expr:
+    """A speed signed toward the goal along `direction` (mirror invariance)."""
+    return node("mul", speed, node("sgn", direction))
+
+
+def generate(spec: ActionSpec, quantity: Callable[[str], Quantity], params: np.ndarray | None = None,
+             durations: np.ndarray | None = None) -> list[Candidate]:
+    """Every candidate feature of `spec`'s action (deduplicated where `params`, rows of the action's parameters,
+    are given; transfer limits discovered from them and their `durations`)."""
+    ps = parameters_of(spec, quantity)
+    values = None if params is None else {name: params[:, k] for k, name in enumerate(spec.parameters)}
+    axes = axes_of(ps, values)
+    speeds = speed_pairs(ps)
+    out: list[Candidate] = []
+
+    def add(name: str, e: Expr, family: str) -> None:
+        out.append(Candidate(name, e, family))
+
+    for p in ps:  # the raw parameters, as the black box knows them
+        add(p.name, param(p.name), "parameter")
+    for a in axes:
+        add(f"d_{a.label}", a.difference, "difference")
+        add(f"abs_d_{a.label}", node("abs", a.difference), "absolute difference")
+        add(f"sqrt_d_{a.label}", node("sqrt", node("abs", a.difference)), "square root")
+    for a, b in zip(axes, axes[1:]):
+        if a.start.unit == b.start.unit and a.start.angle == b.start.angle:
+            add(f"max_d_{a.label}_{b.label}", node("max", node("abs", a.difference), node("abs", b.difference)),
+                "maximum")
+    for s, g in speeds:
+        add(f"abs_{s.name}", node("abs", param(s.name)), "absolute value")
+        add(f"sq_{s.name}", node("square", param(s.name)), "product")
+        if g is not None:
+            add(f"abs_{g.name}", node("abs", param(g.name)), "absolute value")
+            add(f"sq_{g.name}", node("square", param(g.name)), "product")
+            add(f"{s.name}_{g.name}", node("mul", param(s.name), param(g.name)), "product")
+    planes = planes_of(axes)
+    headings = [p for p in ps if p.group == "observed" and p.angle]
+    for a, b in planes:
+        dx, dy = a.difference, b.difference
+        tag = f"{a.label}_{b.label}"
+        dist = node("hypot", dx, dy)
+        bearing = node("atan2", dy, dx)
+        add(f"dist_{tag}", dist, "Euclidean distance")
+        add(f"bearing_{tag}", bearing, "angle")
+        for h in headings:
+            hx = param(h.name)
+            signed = node("wrap", node("sub", bearing, hx))
+            add(f"to_{tag}_{h.name}", node("abs", signed), "angle to the goal")
+            add(f"signed_to_{tag}_{h.name}", signed, "angle to the goal")
+            along = node("add", node("mul", dx, node("cos", hx)), node("mul", dy, node("sin", hx)))
+            add(f"along_{tag}_{h.name}", along, "goal in the start's frame")
+            add(f"across_{tag}_{h.name}",
+                node("abs", node("sub", node("mul", dy, node("cos", hx)), node("mul", dx, node("sin", hx)))),
+                "goal in the start's frame")
+            for g in (p for p in ps if p.group == "internal" and p.angle and p.quantity == h.quantity):
+                at = node("wrap", node("sub", param(g.name), bearing))
+                add(f"at_{tag}_{g.name}", node("mul", node("sgn", signed), at), "angle at the goal")
+                add(f"abs_at_{tag}_{g.name}", node("abs", at), "angle at the goal")
+                add(f"turn_{tag}_{g.name}", node("add", node("abs", signed), node("abs", at)), "turning")
+                add(f"rel_{h.name}_{g.name}", node("abs", node("wrap", node("sub", param(g.name), hx))),
+                    "relative heading")
+    # moves: a plane's distance (with the speed of its unit where there is one), the turn toward the goal, each
+    # axis outside a plane (with its own speed where each has one): signed speeds, and the transfer time
+    moves: list[tuple[str, Expr, Parameter | None, Parameter | None, tuple]] = []
+    in_plane = {a.label for plane in planes for a in plane}
+    for a, b in planes:
+        fast = [(s, g) for s, g in speeds if s.speed_of == a.start.unit]
+        s, g = fast[0] if len(fast) == 1 else (None, None)
+        moves.append((f"{a.label}_{b.label}", node("hypot", a.difference, b.difference), s, g, a.start.unit))
+        for h in headings[:1]:
+            turn = node("wrap", node("sub", node("atan2", b.difference, a.difference), param(h.name)))
+            moves.append((f"turn_{a.label}_{b.label}_{h.name}", turn, None, None, h.unit))
+    for unit in dict.fromkeys(a.start.unit for a in axes if a.label not in in_plane):
+        mine = [a for a in axes if a.start.unit == unit and a.label not in in_plane]
+        fast = [(s, g) for s, g in speeds if s.speed_of == unit]
+        if len(fast) == len(mine):
+            moves += [(a.label, a.difference, s, g, unit) for a, (s, g) in zip(mine, fast)]
+        else:
+            moves += [(a.label, a.difference, None, None, unit) for a in mine]
+    for label, d, s, g, unit in moves:
+        if s is not None:
+            add(f"{s.name}_toward_{label}", _toward(param(s.name), d), "speed toward the goal")
+            if g is not None:
+                add(f"{g.name}_toward_{label}", _toward(param(g.name), d), "speed toward the goal")
+    if params is not None and durations is not None and len(params) >= 8:
+        out += _transfers(moves, spec, params, durations)
+        out += _composed(ps, spec, params, durations)
+        out += _approaches(planes, ps, spec, params, durations)
+    return _distinct(out, spec, params)
+
+
+def _approaches(planes, ps: list[Parameter], spec: ActionSpec, params: np.ndarray, durations: np.ndarray
+                ) -> list[Candidate]:
+    """Where the goal has a heading in a plane: the point a length r behind the goal along its heading (where a
+    robot that cannot turn on the spot lines up), the distance, angles and turning toward it; r is discovered:
+    of a few lengths in proportion to the typical distance, the one with which a small model tree on distance,
+    turning and angle at it predicts the durations best (2-fold, absolute error)."""
+    out: list[Candidate] = []
+    columns = {name: values[:DISCOVERY_ROWS] for name, values in zip(spec.parameters, params.T)}
+    target = durations[:DISCOVERY_ROWS]
+    headings = [p for p in ps if p.group == "observed" and p.angle]
+    for a, b in planes:
+        for h in headings[:1]:
+            for g in [p for p in ps if p.group == "internal" and p.angle and p.quantity == h.quantity][:1]:
+                typical = float(np.median(_evaluate(node("hypot", a.difference, b.difference), columns))) or 1.0
+                tried = []
+                for share in (0.05, 0.1, 0.2, 0.3, 0.5):
+                    r = float(f"{share * typical:.3g}")
+                    features = _approach(a, b, h, g, r)
+                    X = np.column_stack([_evaluate(features[k].expression, columns) for k in (0, 2, 3)])
+                    tried.append((_two_fold_error(X, target), share, features))
+                for _, _, features in sorted(tried, key=lambda t: t[:2])[:APPROACH_LENGTHS]:
+                    out += features
+    return out
+
+
+def _two_fold_error(X: np.ndarray, y: np.ndarray) -> float:
+    """Mean absolute error of a small model tree, each half predicted by one fitted on the other."""
+    half = len(y) // 2
+    error = 0.0
+    for fit, test in ((slice(0, half), slice(half, None)), (slice(half, None), slice(0, half))):
+        tree = ModelTree(min_samples_leaf=max(20, len(y) // 40)).fit(X[fit], y[fit])
+        error += float(np.sum(np.abs(tree.predict(X[test]) - y[test])))
+    return error / len(y)
+
+
+APPROACH_LENGTHS = 1  # the best lengths r kept (two: measured worse on the bundled robots, selection drifts)
+
+
+def _approach(a: Axis, b: Axis, h: Parameter, g: Parameter, r: float) -> list[Candidate]:
+    goal_heading = param(g.name)
+    dx = node("sub", a.difference, node("mul", const(r), node("cos", goal_heading)))
+    dy = node("sub", b.difference, node("mul", const(r), node("sin", goal_heading)))
+    bearing = node("atan2", dy, dx)
+    signed = node("wrap", node("sub", bearing, param(h.name)))
+    at = node("wrap", node("sub", goal_heading, bearing))
+    tag = f"{a.label}_{b.label}_{g.name}_{r:g}".replace(".", "_")
+    return [Candidate(f"behind_dist_{tag}", node("hypot", dx, dy), "point behind the goal"),
+            Candidate(f"behind_to_{tag}", node("abs", signed), "point behind the goal"),
+            Candidate(f"behind_at_{tag}", node("mul", node("sgn", signed), at), "point behind the goal"),
+            Candidate(f"behind_turn_{tag}", node("add", node("abs", signed), node("abs", at)),
+                      "point behind the goal")]
+
+
+def _frame_point(group: list[Parameter], u: Expr, w: Expr) -> tuple[Expr, Expr]:
+    """The point (u, w) of a group's frame (its first two lengths, turned by its first angle) in the world."""
+    x, y, a = param(group[0].name), param(group[1].name), param(next(p for p in group if p.angle).name)
+    c, s = node("cos", a), node("sin", a)
+    return (node("add", x, node("sub", node("mul", u, c), node("mul", w, s))),
+            node("add", y, node("add", node("mul", u, s), node("mul", w, c))))
+
+
+def _composed(ps: list[Parameter], spec: ActionSpec, params: np.ndarray, durations: np.ndarray) -> list[Candidate]:
+    """Where each group declares a pose (two lengths of one unit and an angle) and two more lengths of that unit
+    (offsets in the pose's frame) and perhaps another angle (a heading offset): the offset point in the world,
+    its distance and bearing from start to goal, the angle to it and at it. How the offsets sit in the frame
+    (which is ahead, which to the side, their signs) is not declared: of the eight ways, the one whose distance
+    fits the durations best by a line is taken."""
+    groups = []
+    for group in ("observed", "internal"):
+        mine = [p for p in ps if p.group == group and p.speed_of is None]
+        lengths = [p for p in mine if not p.angle]
+        angles = [p for p in mine if p.angle]
+        if len(lengths) != 4 or not angles or len({p.unit for p in lengths}) != 1:
+            return []
+        groups.append((mine, lengths, angles))
+    columns = {name: params[:, k] for k, name in enumerate(spec.parameters)}
+    best = None
+    for first, second in ((2, 3), (3, 2)):
+        for su in (1.0, -1.0):
+            for sw in (1.0, -1.0):
+                points = []
+                for mine, lengths, _ in groups:
+                    u, w = param(lengths[first].name), param(lengths[second].name)
+                    u, w = (u if su > 0 else node("neg", u)), (w if sw > 0 else node("neg", w))
+                    points.append(_frame_point(mine, u, w))
+                dist = node("hypot", node("sub", points[1][0], points[0][0]), node("sub", points[1][1], points[0][1]))
+                d = _evaluate(dist, columns)
+                A = np.column_stack([d, np.ones_like(d)])
+                error = float(np.mean(np.abs(A @ np.linalg.lstsq(A, durations, rcond=None)[0] - durations)))
+                if best is None or error < best[0]:
+                    best = (error, points)
+    (start, goal) = best[1]
+    dx, dy = node("sub", goal[0], start[0]), node("sub", goal[1], start[1])
+    headings = [node("add", *(param(p.name) for p in angles[:2])) if len(angles) > 1 else param(angles[0].name)
+                for _, _, angles in groups]
+    bearing = node("atan2", dy, dx)
+    signed = node("wrap", node("sub", bearing, headings[0]))
+    at = node("wrap", node("sub", headings[1], bearing))
+    return [Candidate("offset_dist", node("hypot", dx, dy), "offset point"),
+            Candidate("offset_to", node("abs", signed), "offset point"),
+            Candidate("offset_at", node("mul", node("sgn", signed), at), "offset point"),
+            Candidate("offset_abs_at", node("abs", at), "offset point"),
+            Candidate("offset_turn", node("abs", node("wrap", node("sub", headings[1], headings[0]))), "offset point"),
+            Candidate("offset_start_x", start[0], "offset point"),
+            Candidate("offset_start_y", start[1], "offset point"),
+            Candidate("offset_goal_x", goal[0], "offset point"),
+            Candidate("offset_goal_y", goal[1], "offset point")]
+
+
+def _speed_or_zero(p: Parameter | None) -> Expr:
+    return param(p.name) if p is not None else const(0.0)
+
+
+def _transfers(moves, spec: ActionSpec, params: np.ndarray, durations: np.ndarray) -> list[Candidate]:
+    """Transfer times over each move (one axis, or a plane's distance, with its speeds if it has them), their
+    limits discovered per unit by least squares against the durations; and the largest of them."""
+    columns = {name: params[:, k] for k, name in enumerate(spec.parameters)}
+
+    def values(e: Expr) -> np.ndarray:
+        return _evaluate(e, columns)
+
+    rows = slice(0, DISCOVERY_ROWS)  # the limits are fitted on the first rows: a few constants need few
+    columns = {name: values_[rows] for name, values_ in columns.items()}
+    durations = durations[rows]
+    limits: dict = {}
+    by_unit: dict = {}
+    for label, d, s, g, unit in moves:
+        by_unit.setdefault(unit, []).append((label, d, s, g))
+    for unit, group in by_unit.items():
+        ds = [values(d) for _, d, _, _ in group]
+        v0s = [values(_speed_or_zero(s)) for _, _, s, _ in group]
+        vgs = [values(_speed_or_zero(g)) for _, _, _, g in group]
+        limits[unit] = _discover(ds, v0s, vgs, durations)
+    out, times = [], []
+    for unit, group in by_unit.items():
+        vmax, amax = limits[unit]
+        for label, d, s, g in group:
+            e = node("transfer", d, _speed_or_zero(s), _speed_or_zero(g), const(vmax), const(amax))
+            out.append(Candidate(f"transfer_{label}", e, "transfer time"))
+            times.append(e)
+    if len(times) >= 2:
+        largest = times[0]
+        for e in times[1:]:
+            largest = node("max", largest, e)
+        out.append(Candidate("transfer_max", largest, "maximum"))
+    return out
+
+
+def _discover(ds, v0s, vgs, durations) -> tuple[float, float]:
+    """Speed and acceleration limits (shared by the axes of one unit) under which the largest transfer time
+    fits the durations best by a line (least absolute error), on a coarse grid and then a fine one."""
+    speeds = np.abs(np.concatenate([*v0s, *vgs]))
+    distance = float(np.median(np.abs(np.concatenate(ds)))) or 1.0
+    if speeds.size and speeds.max() > 0:
+        scale_v = float(speeds.max())
+    else:  # no speed declared: the distance covered per second of a typical execution
+        scale_v = distance / max(float(np.median(durations)), 1e-9)
+    scale_a = scale_v * scale_v / distance
+
+    def error(vmax: float, amax: float) -> float:
+        t = np.max([transfer(d, a, b, vmax, amax) for d, a, b in zip(ds, v0s, vgs)], axis=0)
+        if not np.all(np.isfinite(t)):
+            return np.inf
+        A = np.column_stack([t, np.ones_like(t)])
+        coef = np.linalg.lstsq(A, durations, rcond=None)[0]
+        return float(np.mean(np.abs(A @ coef - durations)))
+
+    best = min(((error(scale_v * fv, scale_a * fa), scale_v * fv, scale_a * fa)
+                for fv in (0.5, 0.7, 0.85, 1.0, 1.15, 1.3, 1.6) for fa in (0.25, 0.5, 0.7, 1.0, 1.4, 2.0, 2.8, 4.0)))
+    _, v, a = best
+    found = minimize(lambda z: error(v * np.exp(z[0]), a * np.exp(z[1])), np.zeros(2), method="Nelder-Mead",
+                     options={"xatol": 1e-3, "fatol": 1e-6, "maxfev": 80})
+    v, a = (v, a) if not found.fun < best[0] else (v * np.exp(found.x[0]), a * np.exp(found.x[1]))
+    return float(f"{v:.4g}"), float(f"{a:.4g}")  # short constants in the model file
+
+
+def candidate_columns(candidates: list[Candidate], parameters: tuple[str, ...], params: np.ndarray) -> np.ndarray:
+    """(n, len(candidates)) the candidates' values on rows of the action's parameters."""
+    columns = {name: params[:, k] for k, name in enumerate(parameters)}
+    return np.column_stack([_evaluate(c.expression, columns) for c in candidates]) if candidates else \
+        np.empty((len(params), 0))
+
+
+def _evaluate(e: Expr, columns: dict[str, np.ndarray]) -> np.ndarray:
+    if e.op == "param":
+        return columns[e.name]
+    if e.op == "const":
+        return np.full(len(next(iter(columns.values()))), e.value)
+    fixed = CONSTANT_ARGUMENTS.get(e.op, ())
+    args = [_evaluate(a, columns) for k, a in enumerate(e.args) if k not in fixed]
+    return evaluate(e.op, args, tuple(e.args[k].value for k in fixed))
+
+
+def _distinct(candidates: list[Candidate], spec: ActionSpec, params: np.ndarray | None) -> list[Candidate]:
+    """Unique names; where data is given, no constant, non-finite or duplicate column (the simpler one kept)."""
+    seen_names, out = set(), []
+    for c in candidates:  # (a model file must read back: within the limits of a stored expression)
+        if c.expression.depth > MAX_DEPTH or c.expression.size > MAX_NODES:
+            continue
+        if c.name not in seen_names:
+            seen_names.add(c.name)
+            out.append(c)
+    if params is None:
+        return out[:MAX_CANDIDATES]
+    columns = {name: params[:, k] for k, name in enumerate(spec.parameters)}
+    kept, keys = [], {}
+    for c in sorted(out, key=lambda c: c.expression.size):
+        v = _evaluate(c.expression, columns)
+        if not np.all(np.isfinite(v)) or np.ptp(v) <= 1e-12 * (1.0 + np.abs(v).max()):
+            continue
+        key = (np.round(v, 9) + 0.0).tobytes()  # (+ 0.0: -0.0 and 0.0 are one value)
+        if key in keys:
+            continue
+        keys[key] = c.name
+        kept.append(c)
+    order = {c.name: k for k, c in enumerate(out)}
+    return sorted(kept, key=lambda c: order[c.name])[:MAX_CANDIDATES]
+
+
+def generic_row(spec: ActionSpec, quantity: Callable[[str], Quantity]) -> list[Candidate] | None:
+    """Table 4.1's generic row that the action's structure matches, or None: the pose row (v, vg, dist,
+    angle_to, angle_at) for a plane with start and goal headings; the reach row (dist, angle1, angle2, v, vg) for
+    two angle axes with their speeds; a move along one axis (|d|, v and vg signed toward the goal)."""
+    ps = parameters_of(spec, quantity)
+    axes, speeds = axes_of(ps), speed_pairs(ps)
+    planes = planes_of(axes)
+    headings = [a for a in axes if a.start.angle]
+    if planes and headings:
+        (a, b), h = planes[0], headings[0]
+        dx, dy = a.difference, b.difference
+        bearing = node("atan2", dy, dx)
+        signed = node("wrap", node("sub", bearing, param(h.start.name)))
+        row = [Candidate("dist", node("hypot", dx, dy), "row"),
+               Candidate("angle_to", node("abs", signed), "row"),
+               Candidate("angle_at", node("mul", node("sgn", signed),
+                                          node("wrap", node("sub", param(h.goal.name), bearing))), "row")]
+        for s, g in speeds[:1]:
+            row = [Candidate("v", param(s.name), "row")] + ([Candidate("vg", param(g.name), "row")] if g else []) + row
+        return row
+    angular = [a for a in axes if a.start.angle]
+    fast = [(s, g) for s, g in speeds if g is not None]
+    if len(angular) == 2 and len(fast) == 2 and len(axes) == 2:
+        (a, b), ((sa, ga), (sb, gb)) = angular, fast
+        direction = node("atan2", b.difference, a.difference)
+        return [Candidate("dist", node("hypot", a.difference, b.difference), "row"),
+                Candidate("angle1", node("wrap", node("sub", direction, node("atan2", param(sb.name), param(sa.name)))),
+                          "row"),
+                Candidate("angle2", node("wrap", node("sub", node("atan2", param(gb.name), param(ga.name)), direction)),
+                          "row"),
+                Candidate("v", node("hypot", param(sa.name), param(sb.name)), "row"),
+                Candidate("vg", node("hypot", param(ga.name), param(gb.name)), "row")]
+    if len(axes) == 1 and len(fast) == 1:
+        a, (s, g) = axes[0], fast[0]
+        return [Candidate("dist", node("abs", a.difference), "row"),
+                Candidate("v", _toward(param(s.name), a.difference), "row"),
+                Candidate("vg", _toward(param(g.name), a.difference), "row")]
+    return None

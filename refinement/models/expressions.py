@@ -1,0 +1,244 @@
+"""Features as data (Sec. 4.1.1): small expression trees over an action's parameter names.
+
+A generated feature is stored in its model file as JSON, never as code: a parameter name ("xg"), a finite
+number (0.5), or a list [operator, argument, ...], e.g. ["hypot", ["sub", "xg", "x"], ["sub", "yg", "y"]].
+Reading one checks everything (known operators and their arities, names the action has, finite constants,
+bounded depth and size) before anything is computed; what fails is an ExpressionError (a ValueError) that the
+model loader turns into one line naming the file. Evaluation and interval bounds live in expression_maths:
+each operator has both, so a space of expressions gives the certified optimizer a guaranteed enclosure.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+
+MAX_DEPTH = 12  # levels of one expression (a parameter alone is depth 1)
+MAX_NODES = 96  # nodes of one expression
+MAX_CONSTANT = 1e9  # |constant| in a stored expression
+MAX_FEATURES = 32  # expressions of one space
+
+# operator -> arity; what each computes is documented in expression_maths (one place for values and bounds)
+ARITY: dict[str, int] = {
+    "add": 2, "sub": 2, "mul": 2, "div": 2, "min": 2, "max": 2, "hypot": 2, "atan2": 2,
+    "neg": 1, "abs": 1, "sqrt": 1, "square": 1, "wrap": 1, "sgn": 1, "sin": 1, "cos": 1,
+    "transfer": 5,  # (displacement, start speed, goal speed, speed limit, acceleration limit): a time
+}
+CONSTANT_ARGUMENTS = {"transfer": (3, 4)}  # arguments that must be positive constants
+INFIX = {"add": ("+", 1), "sub": ("-", 1), "mul": ("*", 2), "div": ("/", 2)}
+
+
+class ExpressionError(ValueError):
+    """A stored expression that is not one this module reads; the message says where and why."""
+
+
+@dataclass(frozen=True)
+class Expr:
+    """A node: a parameter (op "param", `name`), a constant (op "const", `value`) or an operator on `args`."""
+
+    op: str
+    args: tuple[Expr, ...] = ()
+    name: str = ""
+    value: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.op not in ("param", "const") and len(self.args) != ARITY.get(self.op, -1):
+            raise ExpressionError(f"operator {self.op!r} takes {ARITY.get(self.op, '?')} arguments, "
+                                  f"got {len(self.args)}")
+
+    @property
+    def depth(self) -> int:
+        return 1 + max((a.depth for a in self.args), default=0)
+
+    @property
+    def size(self) -> int:
+        return 1 + sum(a.size for a in self.args)
+
+    def parameters(self) -> set[str]:
+        """The parameter names it reads."""
+        if self.op == "param":
+            return {self.name}
+        return set().union(*(a.parameters() for a in self.args)) if self.args else set()
+
+    def to_json(self):
+        if self.op == "param":
+            return self.name
+        if self.op == "const":
+            return self.value
+        return [self.op, *(a.to_json() for a in self.args)]
+
+    def formula(self) -> str:
+        """A person's reading: infix arithmetic, |x| for abs, function calls for the rest."""
+        return _text(self, 0)
+
+
+def param(name: str) -> Expr:
+    return Expr("param", name=name)
+
+
+def const(value: float) -> Expr:
+    return Expr("const", value=float(value))
+
+
+def node(op: str, *args: Expr) -> Expr:
+    return Expr(op, tuple(args))
+
+
+def from_json(data, parameters: Sequence[str], depth: int = 1, budget: list[int] | None = None) -> Expr:
+    """An expression from its JSON form, every part checked against `parameters` and the limits; an
+    ExpressionError says what is wrong (checked top-down: a deep or large tree is refused before it is read
+    whole, so a hostile file costs no more than MAX_NODES nodes)."""
+    budget = [MAX_NODES] if budget is None else budget
+    budget[0] -= 1
+    if budget[0] < 0:
+        raise ExpressionError(f"more than {MAX_NODES} nodes")
+    if depth > MAX_DEPTH:
+        raise ExpressionError(f"nested deeper than {MAX_DEPTH} levels")
+    if isinstance(data, str):
+        if data not in parameters:
+            raise ExpressionError(f"{data[:40]!r} is not a parameter of the action ({', '.join(parameters)})")
+        return param(data)
+    if isinstance(data, (int, float)) and not isinstance(data, bool):
+        if not math.isfinite(data) or abs(data) > MAX_CONSTANT:
+            raise ExpressionError(f"constant {data!r} is not a finite number within {MAX_CONSTANT:g}")
+        return const(data)
+    if not isinstance(data, list) or not data or not isinstance(data[0], str):
+        raise ExpressionError(f"expected a parameter name, a number or [operator, arguments...], got "
+                              f"{type(data).__name__}")
+    op, raw = data[0], data[1:]
+    if op not in ARITY:
+        raise ExpressionError(f"unknown operator {op[:40]!r} (known: {', '.join(sorted(ARITY))})")
+    if len(raw) != ARITY[op]:
+        raise ExpressionError(f"operator {op!r} takes {ARITY[op]} arguments, got {len(raw)}")
+    args = tuple(from_json(a, parameters, depth + 1, budget) for a in raw)
+    for k in CONSTANT_ARGUMENTS.get(op, ()):
+        if args[k].op != "const" or not args[k].value > 0:
+            raise ExpressionError(f"argument {k + 1} of {op!r} must be a positive constant")
+    return Expr(op, args)
+
+
+# --- text ---------------------------------------------------------------------------------------------------
+def _number(value: float) -> str:
+    return format(value, ".6g")
+
+
+def _text(e: Expr, context: int) -> str:
+    """`e` as text; `context` is the binding strength around it (parenthesized if weaker)."""
+    if e.op == "param":
+        return e.name
+    if e.op == "const":
+        text = _number(e.value)
+        return f"({text})" if e.value < 0 and context > 0 else text
+    if e.op in INFIX:
+        symbol, strength = INFIX[e.op]
+        left = _text(e.args[0], strength)
+        right = _text(e.args[1], strength + 1)  # a - (b - c), a / (b * c)
+        text = f"{left} {symbol} {right}"
+        return f"({text})" if strength < context else text
+    if e.op == "neg":
+        text = f"-{_text(e.args[0], 3)}"
+        return f"({text})" if context > 0 else text
+    if e.op == "abs":
+        return f"|{_text(e.args[0], 0)}|"
+    if e.op == "square":
+        return f"{_text(e.args[0], 4)}^2"
+    if e.op == "transfer":
+        d, v0, vg, vmax, amax = (_text(a, 0) for a in e.args)
+        return f"transfer({d}, {v0}, {vg}; vmax={vmax}, amax={amax})"
+    return f"{e.op}({', '.join(_text(a, 0) for a in e.args)})"
+
+
+# --- units ----------------------------------------------------------------------------------------------
+Unit = tuple[tuple[str, Fraction], ...]  # base symbol -> exponent, in order of first appearance; () = none
+UNKNOWN_UNIT = "?"
+
+
+def parse_unit(text: str) -> Unit:
+    """'m/s^2' -> (('m', 1), ('s', -2)); '' -> (); a factor that does not parse is a symbol of its own."""
+    out: dict[str, Fraction] = {}
+    text = text.replace("·", "*").replace(" ", "*").strip()
+    if not text:
+        return ()
+    parts = text.split("/")
+    for k, part in enumerate(parts):
+        sign = 1 if k == 0 else -1
+        for factor in filter(None, part.split("*")):
+            symbol, _, power = factor.partition("^")
+            try:
+                exponent = Fraction(power) if power else Fraction(1)
+            except (ValueError, ZeroDivisionError):
+                symbol, exponent = factor, Fraction(1)
+            if symbol == "1":
+                continue
+            out[symbol] = out.get(symbol, Fraction(0)) + sign * exponent
+    return tuple((s, e) for s, e in out.items() if e != 0)
+
+
+def format_unit(unit: Unit | None) -> str:
+    """The unit as text ('m/s^2'; '' where dimensionless; '?' where unknown)."""
+    if unit is None:
+        return UNKNOWN_UNIT
+
+    def power(symbol: str, exponent: Fraction) -> str:
+        value = abs(exponent)
+        text = str(value.numerator) if value.denominator == 1 else format(float(value), "g")
+        return symbol if value == 1 else f"{symbol}^{text}"
+
+    top = [power(s, e) for s, e in unit if e > 0]
+    bottom = [power(s, e) for s, e in unit if e < 0]
+    if not bottom:
+        return "*".join(top)
+    return f"{'*'.join(top) or '1'}/{'*'.join(bottom)}"
+
+
+def _combine(a: Unit, b: Unit, sign: int) -> Unit:
+    out = dict(a)
+    for s, e in b:
+        out[s] = out.get(s, Fraction(0)) + sign * e
+    return tuple((s, e) for s, e in out.items() if e != 0)
+
+
+def _scale(a: Unit, factor: Fraction) -> Unit:
+    return tuple((s, e * factor) for s, e in a)
+
+
+RADIANS: Unit = (("rad", Fraction(1)),)
+SECONDS: Unit = (("s", Fraction(1)),)
+
+
+def unit_of(e: Expr, unit: Callable[[str], Unit]) -> Unit | None:
+    """The unit of `e` given each parameter's (None where it cannot be told, e.g. metres plus seconds)."""
+    if e.op == "param":
+        return unit(e.name)
+    if e.op == "const":
+        return ()
+    args = [unit_of(a, unit) for a in e.args]
+    if e.op in ("atan2", "wrap"):
+        return RADIANS
+    if e.op in ("sgn", "sin", "cos"):
+        return ()
+    if e.op == "transfer":
+        return SECONDS
+    if any(a is None for a in args):
+        return None
+    if e.op in ("add", "sub", "min", "max", "hypot"):
+        return args[0] if dict(args[0]) == dict(args[1]) else None
+    if e.op in ("neg", "abs"):
+        return args[0]
+    if e.op == "mul":
+        return _combine(args[0], args[1], 1)
+    if e.op == "div":
+        return _combine(args[0], args[1], -1)
+    if e.op == "sqrt":
+        return _scale(args[0], Fraction(1, 2))
+    if e.op == "square":
+        return _scale(args[0], Fraction(2))
+    return None
+
+
+def units_of(parameter_units: Mapping[str, str]) -> Callable[[str], Unit]:
+    """A parameter -> Unit lookup from declared unit texts (a parameter not declared has none)."""
+    parsed = {name: parse_unit(text) for name, text in parameter_units.items()}
+    return lambda name: parsed.get(name, ())

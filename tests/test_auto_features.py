@@ -1,0 +1,189 @@
+"""Automatic feature generation and selection (Sec. 4.1.1): candidates built from an action's declared
+quantities for any robot, invariant where the quantities say so; Table 4.1's generic rows rebuilt from the
+structure; forward selection that finds the features a duration depends on; and models learned on generated
+features far more accurate than on the raw parameters (these tests fail where the generation is switched off)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tailor.refinement.learning.duration_protocol import train_duration_model
+from tailor.refinement.learning.feature_selection import generic_space, select_features
+from tailor.refinement.models.auto_features import candidate_columns, generate, generic_row
+from tailor.refinement.models.expression_space import ExpressionSpace
+from tailor.refinement.models.expressions import from_json
+from tailor.refinement.models.features import raw_space
+from tailor.sims.episode import Episode
+from tailor.sims.protocol import ActionSpec, Quantity, SimulatorEntry
+
+UNITS = {"x": Quantity("m"), "y": Quantity("m"), "phi": Quantity("rad", angle=True), "v": Quantity("m/s"),
+         "q": Quantity("rad", angle=True), "w": Quantity("rad/s"), "pos": Quantity("cm"), "vel": Quantity("cm/s")}
+PLANAR = ActionSpec("drive", "toy", ("x", "y", "phi", "v"), ("xg", "yg", "phig", "vg"), ("x", "y", "phi", "v"),
+                    ("x", "y", "phi", "v"))
+JOINTS = ActionSpec("bend", "toy", ("qa", "wa", "qb", "wb"), ("qga", "wga", "qgb", "wgb"), ("q", "w", "q", "w"),
+                    ("q", "w", "q", "w"))
+RAIL = ActionSpec("slide", "toy", ("pos", "vel"), ("target", "target_vel"), ("pos", "vel"), ("pos", "vel"))
+# a goal that is a point in the start's units, not the start's quantities (paired by unit in order)
+POINT = ActionSpec("touch", "toy", ("x", "y", "phi"), ("px", "py"), ("x", "y", "phi"), ("px", "py"))
+UNITS.update(px=Quantity("m"), py=Quantity("m"))
+
+
+def quantity(name: str) -> Quantity:
+    return UNITS.get(name, Quantity())
+
+
+def entry(spec: ActionSpec) -> SimulatorEntry:
+    return SimulatorEntry("toy", {spec.name: spec}, create=lambda seed, noise=None: None, units=UNITS)
+
+
+def names(spec: ActionSpec, params=None, durations=None) -> set[str]:
+    return {c.name for c in generate(spec, quantity, params, durations)}
+
+
+def test_candidates_come_from_the_quantities_not_the_names():
+    planar = names(PLANAR)
+    assert {"d_x", "dist_x_y", "to_x_y_phi", "at_x_y_phig", "rel_phi_phig", "across_x_y_phi",
+            "v_toward_x_y", "vg_toward_x_y"} <= planar
+    assert {"d_qa", "abs_d_qb", "max_d_qa_qb", "wa_toward_qa", "wgb_toward_qb"} <= names(JOINTS)
+    assert {"d_pos", "vel_toward_pos", "target_vel_toward_pos"} <= names(RAIL)
+    assert {"dist_x_y", "to_x_y_phi", "along_x_y_phi"} <= names(POINT)  # px with x, py with y: by unit, in order
+
+
+def test_the_generic_rows_of_table_4_1():
+    assert [c.name for c in generic_row(PLANAR, quantity)] == ["v", "vg", "dist", "angle_to", "angle_at"]
+    assert [c.name for c in generic_row(JOINTS, quantity)] == ["dist", "angle1", "angle2", "v", "vg"]
+    assert [c.name for c in generic_row(RAIL, quantity)] == ["dist", "v", "vg"]
+    assert generic_row(ActionSpec("odd", "toy", ("a",), ("b",), ("a",), ("b",)), quantity) is None
+
+
+def test_the_planar_row_equals_the_hand_written_one():
+    """The pose row generated from the quantities computes what Table 4.1 writes by hand."""
+    rng = np.random.default_rng(0)
+    p = np.column_stack([rng.uniform(-4, 4, (50, 2)), rng.uniform(-np.pi, np.pi, 50), rng.uniform(0, 1, 50),
+                         rng.uniform(-4, 4, (50, 2)), rng.uniform(-np.pi, np.pi, 50), rng.uniform(0, 1, 50)])
+    row = generic_space(PLANAR, entry(PLANAR)).compute(p)
+    x, y, phi, v, xg, yg, phig, vg = p.T
+    bearing = np.arctan2(yg - y, xg - x)
+    signed = np.mod(bearing - phi + np.pi, 2 * np.pi) - np.pi
+    at = np.where(signed < 0, -1, 1) * (np.mod(phig - bearing + np.pi, 2 * np.pi) - np.pi)
+    assert np.allclose(row, np.column_stack([v, vg, np.hypot(xg - x, yg - y), np.abs(signed), at]))
+
+
+def _rigid(p: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    a, (sx, sy) = rng.uniform(-np.pi, np.pi), rng.uniform(-5, 5, 2)
+    out = p.copy()
+    for ix, iy, iphi in ((0, 1, 2), (4, 5, 6)):
+        out[:, ix] = np.cos(a) * p[:, ix] - np.sin(a) * p[:, iy] + sx
+        out[:, iy] = np.sin(a) * p[:, ix] + np.cos(a) * p[:, iy] + sy
+        out[:, iphi] = p[:, iphi] + a
+    return out
+
+
+def test_geometric_candidates_are_invariant_to_moving_the_scene():
+    rng = np.random.default_rng(1)
+    p = np.column_stack([rng.uniform(-4, 4, (80, 2)), rng.uniform(-np.pi, np.pi, 80), rng.uniform(0, 1, 80),
+                         rng.uniform(-4, 4, (80, 2)), rng.uniform(-np.pi, np.pi, 80), rng.uniform(0, 1, 80)])
+    invariant = [c for c in generate(PLANAR, quantity)
+                 if c.name.startswith(("dist_", "to_", "at_", "abs_at_", "turn_", "rel_", "across_", "along_"))]
+    assert len(invariant) >= 8
+    before = candidate_columns(invariant, PLANAR.parameters, p)
+    after = candidate_columns(invariant, PLANAR.parameters, _rigid(p, rng))
+    assert np.allclose(before, after, atol=1e-9)
+
+
+def _rail_episodes(n: int, seed: int, scale: float = 100.0) -> list[Episode]:
+    """Synthetic moves on a rail (cm): the duration is the double integrator's least time plus noise."""
+    from tailor.refinement.models.expression_maths import transfer
+
+    rng = np.random.default_rng(seed)
+    x, xg = rng.uniform(-300, 300, (2, n))
+    v, vg = rng.uniform(-50, 50, (2, n))
+    t = transfer((xg - x) / scale, v / scale, vg / scale, 1.0, 0.5) + rng.normal(0, 0.02, n)
+    return [Episode("slide", np.array([x[k], v[k], xg[k], vg[k]]), np.array([0.0]),
+                    np.array([[x[k], v[k]]]), ("pos", "vel"), "success", float(t[k]), k) for k in range(n)]
+
+
+def test_selection_finds_the_time_of_a_move_and_its_limits():
+    episodes = _rail_episodes(600, 0)
+    selection = select_features(RAIL, entry(RAIL), episodes, seed=0)
+    assert selection.space is not None and selection.report["chosen"] == "auto"
+    formulas = [f["formula"] for f in selection.report["selected"]]
+    assert formulas[0].startswith("transfer(target - pos, vel, target_vel; vmax=")
+    vmax = float(formulas[0].split("vmax=")[1].split(",")[0])
+    assert 90 <= vmax <= 110  # 1 m/s in the action's own unit, cm/s, found from the data alone
+    assert selection.report["selected"][0]["unit"] == "s"
+    assert len(selection.space.names) <= 4
+
+
+def test_generated_features_beat_the_raw_parameters_by_far():
+    """With generation switched off (the raw parameters), this fails: the move's time is no function a model
+    tree fits from x, v, xg, vg in 600 episodes."""
+    episodes = _rail_episodes(600, 1)
+    selection = select_features(RAIL, entry(RAIL), episodes[:450], seed=1)
+    auto = train_duration_model("slide", episodes, 1, selection.space, ("pos", "vel"), n_i_candidates=(1,),
+                                episode_fractions=(1.0,)).report
+    raw = train_duration_model("slide", episodes, 1, raw_space(RAIL.parameters), ("pos", "vel"),
+                               n_i_candidates=(1,), episode_fractions=(1.0,)).report
+    assert auto["mae"] < 0.25 * raw["mae"]
+    assert auto["mae"] < 0.06
+
+
+def test_a_simulators_own_space_is_one_candidate_set_among_others():
+    from tailor.sims.protocol import FeatureSpace
+
+    episodes = _rail_episodes(300, 2)
+    useless = FeatureSpace("useless", RAIL.parameters, ("one",), lambda p: p[:, :1] * 0 + 1.0, "everything")
+    selection = select_features(RAIL, entry(RAIL), episodes, seed=2, others={"useless": useless})
+    assert set(selection.report["candidate_sets"]) == {"generated", "useless"}
+    assert selection.space is not None  # the generated set wins
+    exact = FeatureSpace("exact", RAIL.parameters, ("t",), lambda p: np.column_stack(
+        [np.array([e.duration for e in episodes])[:len(p)]]) if len(p) == len(episodes) else p[:, :1], "nothing")
+    chosen = select_features(RAIL, entry(RAIL), episodes, seed=2, others={"exact": exact})
+    assert chosen.named == "exact" and chosen.space is None
+
+
+def test_generation_needs_no_data_and_stays_bounded():
+    for spec in (PLANAR, JOINTS, RAIL, POINT):
+        candidates = generate(spec, quantity)
+        assert 0 < len(candidates) <= 160
+        for c in candidates:  # every one reads back from a model file
+            assert from_json(c.expression.to_json(), spec.parameters) == c.expression
+
+
+@pytest.mark.parametrize("spec", [PLANAR, JOINTS])
+def test_generated_spaces_bound_themselves(spec):
+    candidates = generate(spec, quantity)[:32]
+    s = ExpressionSpace(spec.parameters, tuple(c.name for c in candidates), tuple(c.expression for c in candidates))
+    rng = np.random.default_rng(3)
+    centre = rng.uniform(-3, 3, (5, len(spec.parameters)))
+    low, high = centre - 0.2, centre + 0.2
+    f_low, f_high = s.bounds(low, high)
+    for k in range(5):
+        values = s.compute(rng.uniform(low[k], high[k], (500, len(spec.parameters))))
+        assert np.all(f_low[k] <= values) and np.all(values <= f_high[k])
+
+
+@pytest.mark.parametrize("simulator, scenario", [("kitchen", "navigate"), ("kitchen", "grip"), ("arm", "reach"),
+                                                 ("soccer", "goToPose")])
+def test_the_bundled_robots_get_candidates_from_their_declarations_alone(simulator, scenario):
+    from tailor.refinement.models.features import first_examples
+    from tailor.sims import registry
+    from tailor.sims.experience import gather
+
+    robot = registry.get(simulator)
+    episodes = [e for e in gather(simulator, scenario, 40, seed=0, progress=False) if e.succeeded]
+    spec = robot.action(episodes[0].action)
+    params, durations = first_examples(episodes)
+    candidates = generate(spec, robot.quantity, params, durations)
+    assert len(candidates) >= 10
+    values = candidate_columns(candidates, spec.parameters, params)
+    assert np.all(np.isfinite(values))
+    for c in candidates:
+        assert from_json(c.expression.to_json(), spec.parameters) == c.expression
+    names = {c.name for c in candidates}
+    if scenario == "navigate":  # a pose with offsets in its frame: the offset point, its composition found
+        assert {"offset_dist", "offset_to"} <= names
+    if simulator == "arm":  # joint angles that never go round: differences not wrapped; their moves timed
+        assert "transfer_max" in names
+        assert any(c.expression.formula() == "theta_ga - theta_a" for c in candidates)
