@@ -7,9 +7,22 @@ subclasses, so an API user catches them all with one `except tailor.TailorError`
 
 from __future__ import annotations
 
+import re
+
+# Characters a message shows escaped, as Python writes them in a string ("\\n", "\\x1b", "\\u202e"): control
+# characters (a newline would make two lines of one error; an ESC byte in a file name would reach the terminal
+# as an escape sequence), line and paragraph separators, and the marks that reorder text (bidi controls).
+_UNPRINTABLE = re.compile("[\x00-\x1f\x7f-\x9f\u061c\u200e\u200f\u2028\u2029\u202a-\u202e\u2066-\u2069]")
+
+
+def printable(text: str) -> str:
+    """`text` with every control character escaped: what a one-line message shows of a name or path."""
+    return _UNPRINTABLE.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), text)
+
 
 class TailorError(Exception):
-    """Base of every tailor error; `str()` is one line: `file:line:col: message`."""
+    """Base of every tailor error; `str()` is one line: `file:line:col: message`, control characters escaped
+    (`message` and `file` keep them as given)."""
 
     exit_code = 9  # an error with no more specific status: "other refinement error"
 
@@ -29,7 +42,7 @@ class TailorError(Exception):
                 if self.col is not None:
                     where += f":{self.col}"
             where += ": "
-        return where + self.message
+        return printable(where + str(self.message))
 
 
 # --- planning (planner_bridge) ---------------------------------------------------------------------------

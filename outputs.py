@@ -5,6 +5,12 @@ written has wasted the user's time: `tailor refine --plot` and `tailor train --o
 creating (and removing) a temporary file in the nearest folder that exists, which catches read-only folders,
 pseudo file systems such as /proc and missing permissions alike, also for root.
 
+The installed package and its bundled domains are read-only to every command, whatever path names them (a
+symbolic link, `domains/a/../b`): the checks compare the path with every symbolic link followed
+(`protected_folders`), so `--out` can never overwrite the models a domain ships with. A path that cannot
+be looked at (a loop of symbolic links, a name too long) is an OutputFileError naming it, like any other
+output that cannot be written.
+
 Every output is written atomically (`write_atomically`: a temporary file beside the target, renamed over it
 once complete) with the permissions any new file of the user gets (0666 less the umask, usually 0644), not
 the 0600 `tempfile.mkstemp` gives: models, reports and plots are meant to be read by others.
@@ -12,9 +18,11 @@ the 0600 `tempfile.mkstemp` gives: models, reports and plots are meant to be rea
 
 from __future__ import annotations
 
+import errno
 import json
 import math
 import os
+import stat
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -22,13 +30,57 @@ from pathlib import Path
 from tailor.errors import OutputFileError
 
 NEW_FILE_MODE = 0o666  # what open() asks for; the umask takes away from it
+PACKAGE_DIR = Path(os.path.realpath(__file__)).parent  # the installed package (a source tree when editable)
+DOMAINS = "domains"  # its bundled domains: PDDL, bindings, problems, models, training reports
 
 
-def _nearest_existing(path: Path) -> Path:
+def protected_folders() -> tuple[Path, ...]:
+    """The folders no command writes in (nor below): the installed package; in a source tree installed in
+    development mode (pyproject.toml beside the package's __init__.py), what installs from it: the bundled
+    domains and the sub-packages (the tree's other folders, and new ones, are the developer's)."""
+    if not (PACKAGE_DIR / "pyproject.toml").is_file():
+        return (PACKAGE_DIR,)
+    return (PACKAGE_DIR / DOMAINS, *sorted(entry for entry in PACKAGE_DIR.iterdir()
+                                           if entry.is_dir() and (entry / "__init__.py").is_file()))
+
+
+def _look(path: Path, shown: str) -> os.stat_result | None:
+    """os.stat of `path` (None when it does not exist); a path that cannot be looked at, such as a loop of
+    symbolic links or a name too long, is an OutputFileError naming `shown`."""
+    try:
+        return os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+    except OSError as exc:
+        reason = {errno.ELOOP: "a loop of symbolic links", errno.ENAMETOOLONG: "the name is too long"}.get(
+            exc.errno, exc.strerror or str(exc))
+        raise OutputFileError(f"cannot write here: {reason}", file=shown) from None
+
+
+def _nearest_existing(path: Path, shown: str) -> Path:
     path = Path(os.path.abspath(path))
-    while not path.exists() and path != path.parent:
+    while _look(path, shown) is None and path != path.parent:
         path = path.parent
     return path
+
+
+def _check_not_protected(path: Path, shown: str, folder: bool) -> None:
+    """An OutputFileError naming `shown` when `path`, every symbolic link in it followed, lies in a protected
+    folder, or is the package folder itself where a folder is to be written (`folder`); for a folder, also
+    when one of its entries is a symbolic link into one (a command writes in DIR/models, DIR/training)."""
+    real = Path(os.path.realpath(path))
+    targets = [real]
+    if folder and real.is_dir():
+        try:
+            targets += [Path(os.path.realpath(e.path)) for e in os.scandir(real) if e.is_symlink()]
+        except OSError:  # (unreadable: the probe says so)
+            pass
+    for target in targets:
+        inside = any(target == p or p in target.parents for p in protected_folders())
+        if inside or (folder and target == PACKAGE_DIR):
+            raise OutputFileError(f"leads into the installed tailor package ({target}), which no command writes "
+                                  "in: the bundled domains and models are read-only (give a folder of your own)",
+                                  file=shown)
 
 
 def _probe(folder: Path, shown: str) -> None:
@@ -44,23 +96,30 @@ def _probe(folder: Path, shown: str) -> None:
 
 
 def check_output_dir(path: Path | str) -> None:
-    """`path` is (or can be made) a folder we can write files in."""
-    path = Path(path)
-    if path.exists() and not path.is_dir():
-        raise OutputFileError("exists and is not a folder", file=str(path))
-    _probe(_nearest_existing(path), str(path))
+    """`path` is (or can be made) a folder we can write files in, outside the installed package."""
+    path, shown = Path(path), str(path)
+    found = _look(path, shown)
+    if found is not None and not stat.S_ISDIR(found.st_mode):
+        raise OutputFileError("exists and is not a folder", file=shown)
+    nearest = _nearest_existing(path, shown)
+    _check_not_protected(path, shown, folder=True)
+    _probe(nearest, shown)
 
 
 def check_output_file(path: Path | str, suffix: str | None = None) -> None:
-    """`path` names a file (not a folder) with `suffix` (e.g. ".png") that can be created or replaced."""
-    path = Path(path)
+    """`path` names a file (not a folder) with `suffix` (e.g. ".png") that can be created or replaced, outside
+    the installed package."""
+    path, shown = Path(path), str(path)
     if suffix is not None and path.suffix.lower() != suffix:
-        raise OutputFileError(f"the file name must end in {suffix}", file=str(path))
-    if path.is_dir():
-        raise OutputFileError("is a folder, not a file name", file=str(path))
-    if path.exists() and not os.access(path, os.W_OK):
-        raise OutputFileError("exists and is not writable", file=str(path))
-    _probe(_nearest_existing(path.parent), str(path))
+        raise OutputFileError(f"the file name must end in {suffix}", file=shown)
+    found = _look(path, shown)
+    if found is not None and stat.S_ISDIR(found.st_mode):
+        raise OutputFileError("is a folder, not a file name", file=shown)
+    if found is not None and not os.access(path, os.W_OK):
+        raise OutputFileError("exists and is not writable", file=shown)
+    nearest = _nearest_existing(path.parent, shown)
+    _check_not_protected(path, shown, folder=False)
+    _probe(nearest, shown)
 
 
 def umask() -> int:

@@ -6,12 +6,11 @@ import argparse
 import math
 from collections.abc import Callable
 
-from tailor.sims.experience import MAX_SEED
+from tailor.sims.experience import MAX_EPISODES, MAX_SEED  # noqa: F401  (MAX_EPISODES: the commands take it from here)
 
 MAX_SECONDS = 1e6  # about 11.6 days: longer limits (and inf) are refused; leave the option out for no limit
 # episodes or situations of one command: a million simulated runs take days on one machine; larger counts are
 # typing mistakes, and some commands list their seeds up front
-MAX_EPISODES = 1_000_000
 
 
 def positive_seconds(text: str) -> float:

@@ -18,7 +18,7 @@ import sys
 import threading
 
 from tailor import __version__
-from tailor.errors import OutputFileError, TailorError
+from tailor.errors import OutputFileError, TailorError, printable
 from tailor.cli.logs import cli_logging, set_verbosity, verbosity_of
 
 COMMANDS = {  # name: (module, one line of help); a module defines add_arguments(parser) and run(args) -> int
@@ -61,7 +61,7 @@ class Parser(argparse.ArgumentParser):
     stays one `--help` away. Subcommand parsers are made of the same class."""
 
     def error(self, message: str):
-        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {printable(message)} (see `{self.prog} --help`)\n")
 
 
 DESCRIPTION = """\
@@ -132,6 +132,10 @@ def command_of(argv: list[str]) -> str | None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run the command `argv` (default: this process's command line, as the `tailor` program) and return its
+    exit status. As the program, the status stands once the command is done: a SIGTERM or Ctrl-C while the
+    interpreter shuts down no longer kills the process by the signal with no word (see _keep_status)."""
+    program = argv is None
     argv = sys.argv[1:] if argv is None else list(argv)
     with cli_logging(verbosity_of(argv)) as log:  # before parsing: argument types may log (--jobs capped)
         args, extras = build_parser(command_of(argv)).parse_known_args(argv)
@@ -140,7 +144,7 @@ def main(argv: list[str] | None = None) -> int:
         log.prog = f"tailor {args.command}"
         set_verbosity(args.verbose - args.quiet)  # as argparse read it (also --qui, --verb)
         args.progress = args.quiet == 0  # progress bars (on a terminal only) unless -q
-        return _run(args)
+        return _run(args, program)
 
 
 class _ClosedOutput(io.TextIOBase):
@@ -174,12 +178,38 @@ def _stdout_failed(exc: OSError | None = None) -> bool:
     return failed
 
 
-def _run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace, program: bool = False) -> int:
+    """Run the parsed command; its exit status. `program`: this process is the `tailor` program, which ends
+    once the status is known (see _keep_status); else the signal handlers are as they were before."""
     previous = None
+    code = None
     if threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGTERM, _terminate)
     if sys.stdout is None:  # started with standard output closed
         sys.stdout = _ClosedOutput()
+    try:
+        code = _status(args)
+        return code
+    finally:
+        if previous is not None:
+            if program and code is not None:
+                _keep_status(code)
+            else:
+                signal.signal(signal.SIGTERM, previous)
+
+
+def _keep_status(code: int) -> None:
+    """From now on SIGTERM and Ctrl-C are ignored: the command is done (`tailor train`'s files are in place) and
+    the process ends with `code` once the interpreter has shut down (most of a second after `tailor train`,
+    with scikit-learn and matplotlib loaded). Ignored, not handled: the interpreter puts back the default
+    action of every signal it handles before it tears its modules down, and a signal then would kill the
+    process with no word; an ignored one stays ignored. (SIGKILL still ends a shutdown that hangs.)"""
+    for signum in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(signum, signal.SIG_IGN)
+
+
+def _status(args: argparse.Namespace) -> int:
+    """Run the command; the status it ends with, each error said in one line on stderr."""
     try:
         code = int(args.run(args) or 0)
         sys.stdout.flush()  # a full disk shows here, not in the interpreter's last flush
@@ -198,14 +228,11 @@ def _run(args: argparse.Namespace) -> int:
         return 0
     except OSError as exc:  # not a project error: writing the results failed, or an unforeseen system error
         if _stdout_failed(exc):
-            print(f"tailor {args.command}: error: cannot write to standard output: {exc.strerror or exc}",
-                  file=sys.stderr)
+            print(f"tailor {args.command}: error: cannot write to standard output: "
+                  f"{printable(str(exc.strerror or exc))}", file=sys.stderr)
             return OutputFileError.exit_code
-        print(f"tailor {args.command}: error: {exc}", file=sys.stderr)
+        print(f"tailor {args.command}: error: {printable(str(exc))}", file=sys.stderr)
         return TailorError.exit_code
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

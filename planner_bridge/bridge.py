@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from tailor.errors import ArgumentValueError
 from tailor.planner_bridge.abstract_plan import AbstractPlan
 from tailor.planner_bridge.in_process import DEFAULT_PLANNER
 from tailor.planner_bridge.reading import PDDLTask, read_pddl
@@ -22,7 +23,7 @@ def plan_files(
     process: PlannerProcess | None = None,
 ) -> AbstractPlan:
     """Read the PDDL pair once and plan it (see plan_pddl)."""
-    _check_limits(timeout, memory_gb)
+    check_limits(timeout, memory_gb)
     return plan_pddl(read_pddl(domain, problem), planner, timeout, memory_gb, process)
 
 
@@ -43,14 +44,24 @@ def plan_pddl(
     NoPlanError, PlannerTimeoutError, PlannerUnavailableError (and PlannerError itself for an engine's failure,
     or when the planner runs out of memory).
     """
-    _check_limits(timeout, memory_gb)
+    check_limits(timeout, memory_gb)
     if process is not None:
         return process.plan_pddl(task, canonical(planner), timeout)
     with PlannerProcess(memory_gb) as process:
         return process.plan_pddl(task, canonical(planner), timeout)
 
 
-def _check_limits(timeout: float | None, memory_gb: float | None) -> None:
+def check_limits(timeout: float | None, memory_gb: float | None = None) -> None:
+    """An ArgumentValueError unless each limit given is a positive, finite number."""
     for name, limit in (("timeout", timeout), ("memory limit", memory_gb)):
-        if limit is not None and not (limit > 0 and math.isfinite(limit)):
-            raise ValueError(f"the {name} must be positive and finite (None for no limit), not {limit}")
+        if limit is not None and not (limit > 0 and _finite(limit)):
+            shown = "an integer no float holds" if isinstance(limit, int) and not _finite(limit) else limit
+            raise ArgumentValueError(f"the {name} must be positive and finite (None for no limit), not {shown}")
+
+
+def _finite(number) -> bool:
+    """math.isfinite, for which an integer beyond any float (10**400) is an error, not infinite."""
+    try:
+        return math.isfinite(number)
+    except OverflowError:
+        return False

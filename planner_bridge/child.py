@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import json
 import os
+import select
 import sys
+import threading
 import time
 import types
 
@@ -14,10 +16,9 @@ from tailor import errors
 from tailor.planner_bridge.in_process import plan_pddl_here
 from tailor.planner_bridge.reading import PDDLTask
 from tailor.planner_bridge.solving import oneshot_planners
-from tailor.planner_bridge.worker import PARENT_ENV, out_of_memory, resident_gb
+from tailor.planner_bridge.worker import LIFELINE_ENV, PARENT_ENV, error_json, out_of_memory, resident_gb
 
-PR_SET_PDEATHSIG = 1  # from <linux/prctl.h>
-WATCH_PARENT_S = 1.0  # how often the fallback thread checks that the parent is alive (not on Linux)
+WATCH_PARENT_S = 1.0  # how often the watcher also checks that the parent's pid is still this process's parent
 # CPython (3.11 and later) keeps Python frames in chunks of 16 kB and frees a chunk as soon as the frame at its
 # base returns: unified-planning's imports, calling in and out across a chunk boundary, had one allocated and
 # freed about 18 000 times (an mmap, a munmap and page faults each time: about a tenth of the child's CPU time).
@@ -26,30 +27,33 @@ WATCH_PARENT_S = 1.0  # how often the fallback thread checks that the parent is 
 ROOM_WORDS = 1 << 16
 
 
-def _error_json(exc: errors.PlannerError) -> dict:
-    return {"class": type(exc).__name__, "message": exc.message, "file": exc.file, "line": exc.line, "col": exc.col}
-
-
 def _die_with_parent() -> None:
-    """Make sure this child does not outlive the process that started it (SIGTERM or a crash of the parent)."""
+    """Make sure this child does not outlive the process that started it (SIGTERM, SIGKILL or a crash of the
+    parent), whichever of the parent's threads started it.
+
+    The parent passes the read end of a pipe (its number in LIFELINE_ENV) whose write end only it holds: the
+    kernel closes that end when the parent process ends, however it ends, and a thread here, waiting on the
+    pipe, then ends this process. (Linux's PR_SET_PDEATHSIG is no substitute: it fires when the parent *thread*
+    that forked the child ends, and the Python API keeps one child for a whole session, for all its threads.)
+    The watcher also checks that the parent's pid is still our parent's, should another process it forked
+    hold a copy of the write end."""
     parent = int(os.environ.get(PARENT_ENV, "0") or 0)
-    if sys.platform.startswith("linux"):
-        import ctypes
-        import signal
+    lifeline = int(os.environ.get(LIFELINE_ENV, "-1") or -1)
 
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-    elif parent:
-        import threading
-
-        def watch() -> None:
-            while os.getppid() == parent:
+    def watch() -> None:
+        while True:
+            if lifeline >= 0:
+                ready, _, _ = select.select([lifeline], [], [], WATCH_PARENT_S)
+                if ready:  # end of file (or an error): the parent's end is closed
+                    os._exit(1)
+            else:
                 time.sleep(WATCH_PARENT_S)
-            os._exit(1)
+            if parent and os.getppid() != parent:
+                os._exit(1)
 
-        threading.Thread(target=watch, daemon=True).start()
-    if parent and os.getppid() != parent:  # the parent died before the kernel was asked to tell us
+    if parent and os.getppid() != parent:  # the parent died before we looked
         os._exit(1)
+    threading.Thread(target=watch, name="tailor-parent-watch", daemon=True).start()
 
 
 def _limit_memory(limit_gb: float | None) -> None:
@@ -95,11 +99,11 @@ def main() -> int:
             plan = plan_pddl_here(task, request["planner"], lambda: send({"event": "searching"}))
             send({"plan": plan.to_json(facts=True)})
         except MemoryError:
-            send({"error": _error_json(errors.PlannerError(out_of_memory(limit_gb), str(task.problem)))})
+            send({"error": error_json(errors.PlannerError(out_of_memory(limit_gb), str(task.problem)))})
         except errors.PlannerError as exc:
-            send({"error": _error_json(exc)})
+            send({"error": error_json(exc)})
         except Exception as exc:  # a bug or an engine's surprise: still one line for the user
-            send({"error": _error_json(errors.PlannerError(f"internal error: {type(exc).__name__}: {exc}"))})
+            send({"error": error_json(errors.PlannerError(f"internal error: {type(exc).__name__}: {exc}"))})
     return 0
 
 

@@ -158,10 +158,41 @@ def _check_formula(expr: Expr, sig: DomainSignature, scope: set[str], objects: s
         items[1].text in ("start", "end", "all")
     ):
         _check_formula(items[2], sig, scope, objects, file)  # durative: (at start F), (over all F)
+    elif head == "at" and len(items) == 3 and isinstance(items[1], Symbol) and _is_number(items[1].text) and (
+        isinstance(items[2], SList)
+    ):
+        _check_formula(items[2], sig, scope, objects, file)  # a timed initial literal: (at 10 (not (open)))
     elif head in NUMERIC or head in SKIPPED:
         return
     else:
         _check_atom(expr, sig, scope, objects, file)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _check_type_cycles(parents: dict[str, tuple[Symbol, Symbol]], file: str) -> None:
+    """A PDDLSemanticError at the declaration of a type that is, through its parents, its own ancestor
+    (unified-planning's reader would recurse along the cycle until Python's recursion limit). `parents` maps
+    a type to its name where declared and its parent's name there."""
+    done: set[str] = set()
+    for start in parents:
+        path: list[str] = []
+        name = start
+        while name in parents and name not in done and name not in path:
+            path.append(name)
+            name = parents[name][1].text
+        if name in path:  # back on the path: a cycle from `name`
+            cycle = path[path.index(name):] + [name]
+            where = parents[cycle[0]][0]
+            raise PDDLSemanticError(f"the type hierarchy is cyclic: {' - '.join(cycle)} (each a subtype of the "
+                                    "next)", file, where.line, where.col)
+        done.update(path)
 
 
 def _keyword_values(items: tuple[Expr, ...]) -> dict[str, Expr]:
@@ -194,6 +225,7 @@ def check_domain(define: SList, file: str) -> DomainSignature:
     name, types, constants = "", set(BUILTIN_TYPES), []  # constants: where each is declared
     predicates: dict[str, int] = {}
     functions: set[str] = set()
+    parents: dict[str, tuple[Symbol, Symbol]] = {}  # a type: its name where declared, and its parent's
     sections = _sections(define)
     _check_requirements(sections, file)
     for section in sections:
@@ -204,6 +236,8 @@ def check_domain(define: SList, file: str) -> DomainSignature:
                 types.add(type_name.text)
                 if isinstance(parent, Symbol):
                     types.add(parent.text)
+                    parents.setdefault(type_name.text, (type_name, parent))
+    _check_type_cycles(parents, file)
     for section in sections:
         if section.head == ":constants":
             for constant, type_expr in _typed_names(section.items[1:]):

@@ -4,32 +4,81 @@ line and column where they are known."""
 
 from __future__ import annotations
 
+import os
 import re
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
-from tailor.errors import InputFileError, PDDLSemanticError, PDDLSyntaxError, PlannerError
+from tailor.errors import InputFileError, PDDLSemanticError, PDDLSyntaxError, PlannerError, TailorError
 from tailor.planner_bridge.lint import DomainSignature, check_domain, check_problem
 from tailor.planner_bridge.sexpr import read_sexpr
 
 # unified-planning's reader reports places as "line: 16, col 38" or "line: 15, col: 18"; pyparsing as "line:19, col:3".
 _UP_PLACE = re.compile(r"line:\s*(\d+),\s*col:?\s*(\d+)")
+# The largest PDDL file read: the biggest IPC problems are a few MB; a bound, so that a mistaken path (a disk
+# image, a log) ends in one line instead of filling the memory.
+MAX_PDDL_BYTES = 64 * 2**20
 
 
-def read_text(path: Path) -> str:
-    """The file's text (without a UTF-8 byte-order mark); a missing, unreadable or non-text file is an
-    InputFileError."""
-    if not path.exists():
-        raise InputFileError("no such file", str(path))
-    if not path.is_file():
-        raise InputFileError("not a file", str(path))
+def read_input(path: Path, limit: int, error: type[TailorError] = InputFileError,
+               missing: str = "no such file") -> bytes:
+    """The bytes of the regular file `path`, at most `limit` of them; any other file is an `error` naming it
+    (`missing` says that it does not exist). A named pipe, a device or a socket is refused before it is
+    opened, and again on what was opened (opened without waiting for a writer): reading one could block
+    forever (a FIFO) or never end (/dev/zero). The PDDL files and the TOML files (binding, belief) are read
+    here."""
+    path = Path(path)
+    try:
+        _check_regular(os.stat(path), path, error)
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    except FileNotFoundError:
+        raise error(missing, str(path)) from None
+    except OSError as exc:
+        raise error(f"cannot read: {exc.strerror or exc}", str(path)) from None
+    try:
+        info = os.fstat(fd)
+        _check_regular(info, path, error)  # (the name may have been swapped for something else meanwhile)
+        if info.st_size > limit:
+            raise error(_too_large(info.st_size, limit), str(path))
+        chunks, total = [], 0
+        while total <= limit:
+            chunk = os.read(fd, min(1 << 20, limit + 1 - total))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            total += len(chunk)
+    except OSError as exc:
+        raise error(f"cannot read: {exc.strerror or exc}", str(path)) from None
+    finally:
+        os.close(fd)
+    if total > limit:  # (it grew while we read)
+        raise error(_too_large(total, limit), str(path))
+    return b"".join(chunks)
+
+
+def _check_regular(info: os.stat_result, path: Path, error: type[TailorError]) -> None:
+    if stat.S_ISDIR(info.st_mode):
+        raise error("not a file (a folder)", str(path))
+    if not stat.S_ISREG(info.st_mode):
+        kind = ("a named pipe" if stat.S_ISFIFO(info.st_mode) else "a socket" if stat.S_ISSOCK(info.st_mode)
+                else "a device")
+        raise error(f"not a regular file ({kind}): inputs are read from regular files only", str(path))
+
+
+def _too_large(size: int, limit: int) -> str:
+    return f"too large to read ({size} bytes; at most {limit})"
+
+
+def read_text(path: Path, limit: int = MAX_PDDL_BYTES) -> str:
+    """The file's text (without a UTF-8 byte-order mark); a missing, unreadable, non-text or too large file,
+    or one that is not a regular file, is an InputFileError."""
+    data = read_input(path, limit)
     try:
         # "utf-8-sig" drops a leading byte-order mark, as Windows editors write one: the BOM is accepted.
-        return path.read_text(encoding="utf-8-sig")
+        return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise InputFileError(f"not a UTF-8 text file (byte {exc.start})", str(path)) from None
-    except OSError as exc:
-        raise InputFileError(f"cannot read: {exc.strerror}", str(path)) from None
 
 
 def _reader_error(exc: Exception, file: str) -> PlannerError:

@@ -11,8 +11,11 @@ Why a child process:
   /proc the child's address space is limited instead), and says so in one line, "planner ran out of memory
   (limit N GB)" (status 1, a PlannerError);
 - a clean stdout: the child points its file descriptor 1 at /dev/null, so no engine's chatter reaches ours;
-- no orphans: the child asks the kernel to kill it when its parent dies (Linux: PR_SET_PDEATHSIG; elsewhere a
-  thread watches the parent's pid), and the parent kills it on every way out of PlannerProcess.plan_pddl.
+- no orphans: the child holds the read end of a pipe whose write end only the parent process holds (its
+  "lifeline"); a thread in the child ends it when that end closes, which the kernel does when the parent process
+  ends, however it ends. The child's lifetime is tied to the process, not to the thread that started it (Linux's
+  PR_SET_PDEATHSIG fires when that *thread* ends: the Python API's child, kept for the session, died with the
+  first thread that planned). The parent kills it on every way out of PlannerProcess.plan_pddl but an answer.
 
 The parent reads and checks the pair (planner_bridge.reading.read_pddl) and sends the child what it read: the
 child neither opens the files nor checks them again.
@@ -47,6 +50,7 @@ CHILD_MODULE = "tailor.planner_bridge.child"
 HASH_SEED = "0"  # fixed string hashing in the child: the engines' set iteration order, hence the plan, is fixed
 KILL_WAIT_S = 5.0  # how long to wait for a killed child to go away
 PARENT_ENV = "TAILOR_PLANNER_PARENT"  # the parent's pid, so a child whose parent died before it looked exits
+LIFELINE_ENV = "TAILOR_PLANNER_LIFELINE"  # the number of the child's file descriptor of the lifeline (see above)
 POLL_S = 0.1  # how often the parent checks the child's time and memory while it waits for an answer
 ERROR_CLASSES = {
     cls.__name__: cls
@@ -62,7 +66,13 @@ ERROR_CLASSES = {
 }
 
 
-def _raise_error(data: dict) -> None:
+def error_json(exc: errors.PlannerError) -> dict:
+    """A planner error as the child sends it (raise_error raises it again in the parent)."""
+    return {"class": type(exc).__name__, "message": exc.message, "file": exc.file, "line": exc.line,
+            "col": exc.col}
+
+
+def raise_error(data: dict) -> None:
     cls = ERROR_CLASSES.get(data["class"], errors.PlannerError)
     raise cls(data["message"], data["file"], data["line"], data["col"])
 
@@ -133,15 +143,30 @@ class PlannerProcess:
         self.memory_gb = memory_gb
         self._child: subprocess.Popen | None = None
         self._stderr = None
+        self._lifeline: int | None = None  # the write end of the child's lifeline, held open while it lives
+        self._room: tempfile.TemporaryDirectory | None = None  # the folder the child runs in
 
     def _start(self) -> subprocess.Popen:
-        env = {**os.environ, "PYTHONHASHSEED": HASH_SEED, PARENT_ENV: str(os.getpid())}
+        self.close()  # a child that ended on its own: its pipes and files go before the next one starts
         self._stderr = tempfile.TemporaryFile()
-        child = subprocess.Popen(
-            [sys.executable, "-m", CHILD_MODULE],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._stderr, env=env, text=True,
-        )
-        self._child = child
+        # a folder of its own to run in: engines that write files where they run (Fast Downward's output.sas)
+        # write them there, not into the user's working folder; it goes with the child
+        self._room = tempfile.TemporaryDirectory(prefix="tailor-planner-")
+        given, held = os.pipe()  # the child's read end and our write end; both close on exec (pass_fds gives
+        # the child its end), so no other program this process starts holds the lifeline
+        env = {**os.environ, "PYTHONHASHSEED": HASH_SEED, PARENT_ENV: str(os.getpid()),
+               LIFELINE_ENV: str(given)}
+        try:
+            child = subprocess.Popen(
+                [sys.executable, "-m", CHILD_MODULE], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                stderr=self._stderr, env=env, text=True, pass_fds=(given,), cwd=self._room.name,
+            )
+        except BaseException:
+            os.close(held)
+            raise
+        finally:
+            os.close(given)
+        self._child, self._lifeline = child, held
         return child
 
     def plan(self, domain: Path, problem: Path, planner: str, timeout: float | None) -> AbstractPlan:
@@ -175,7 +200,7 @@ class PlannerProcess:
                 return AbstractPlan.from_json(message["plan"])
             if "error" in message:
                 keep = True  # the planner answered: the child is fine for the next request
-                _raise_error(message["error"])
+                raise_error(message["error"])
             self._fail(message, problem)
         except BrokenPipeError:
             self._fail({}, problem)
@@ -212,6 +237,12 @@ class PlannerProcess:
         if self._stderr is not None:
             self._stderr.close()
             self._stderr = None
+        lifeline, self._lifeline = self._lifeline, None
+        if lifeline is not None:
+            os.close(lifeline)
+        room, self._room = self._room, None
+        if room is not None:
+            room.cleanup()
 
     def __enter__(self) -> "PlannerProcess":
         return self

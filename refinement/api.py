@@ -7,7 +7,9 @@
     result = tailor.dispatch(refined, seed=0)                  # what the simulator measured
 
 Files are planned in one planner child process kept for the whole session (fixed hash seed: the same files give
-the same plan on every run; its start-up is paid once); unified-planning Problems are planned in this process.
+the same plan on every run; its start-up is paid once), which lives as long as this process, whichever thread
+started it; unified-planning Problems are planned in this process (under a timeout, in a forked copy of it).
+Every call may come from any thread, also from several at once: the planner process serves them in turn.
 Every error is a `tailor.TailorError`; a wrong argument is its ArgumentTypeError (a TypeError) or
 ArgumentValueError (a ValueError), naming the argument.
 """
@@ -15,7 +17,6 @@ ArgumentValueError (a ValueError), naming the argument.
 from __future__ import annotations
 
 import atexit
-import math
 import numbers
 import threading
 from collections.abc import Mapping
@@ -30,10 +31,11 @@ from tailor.planner_bridge.up_interop import link_plan, plan_problem
 from tailor.planner_bridge.worker import PlannerProcess
 from tailor.refinement import pipeline
 from tailor.refinement.action_sequence import ActionSequence
+from tailor.refinement.belief import is_finite, shown
 from tailor.refinement.binding import DOMAIN_FILE
 from tailor.refinement.dispatch import dispatch as dispatch_sequence
 from tailor.refinement.models.meta_model import load_meta_model
-from tailor.refinement.optimizers import OPTIMIZERS
+from tailor.refinement.optimizers import DEFAULT_OPTIMIZER, OPTIMIZERS
 from tailor.refinement.refine import RefinedSequence, check_neighbourhood, check_risk
 from tailor.sims.episode import SequenceResult
 from tailor.sims.experience import MAX_SEED
@@ -87,18 +89,21 @@ class Refinement:
 
 def plan(domain, problem=None, *, planner: str = DEFAULT_PLANNER, timeout: float | None = None) -> AbstractPlan:
     """A validated partial-order plan with causal links, for a PDDL pair (paths or bundled names) or for a
-    unified-planning Problem (given alone, as `domain`, or as `problem`)."""
+    unified-planning Problem (given alone, as `domain`, or as `problem`). `timeout` limits parsing, compiling
+    and search together, in seconds (a PlannerTimeoutError), for either. Safe to call from any thread and from
+    several at once: files are planned in the session's one planner process, one request at a time."""
     _check(planner, str, "planner")
+    _check_timeout(timeout)
     up_problem = _up_problem(domain if problem is None else problem)
     if up_problem is not None:
-        return plan_problem(up_problem, planner)
+        return plan_problem(up_problem, planner, timeout=timeout)
     if problem is None:
         raise ArgumentValueError("problem is missing: give a PDDL problem (path or name) or a unified-planning "
                                  "Problem")
     return _plan_files(domain, problem, planner, timeout)
 
 
-def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 2, optimizer: str = "analytic",
+def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 2, optimizer: str = DEFAULT_OPTIMIZER,
            seed: int = 0, models: str | Path | None = None, planner: str = DEFAULT_PLANNER,
            timeout: float | None = None, assertion: bool = True, filter: bool | None = None,
            risk: float | None = None, neighbourhood: float | None = None) -> Refinement:
@@ -116,7 +121,10 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     refine.DEFAULT_RISK where every model stores its uncertainty, else 0 with a warning; an explicit lambda > 0
     needs it, see models.uncertainty); `neighbourhood` the share of each free range around a choice whose
     worst predicted time is minimized (None: the binding's `[refinement] neighbourhood`, else 0); greedy (h = 1)
-    stays plain."""
+    stays plain. `optimizer` names one of OPTIMIZERS: "auto" (default) runs the analytic minimization where it
+    applies, else the certified branch and bound where the feature spaces declare bounds, else the genetic
+    algorithm; each window of `.refined.windows` says which ran, why the others did not, and its certified gap
+    (`.gap`, None where there is no bound)."""
     seed, horizon = _refine_arguments(domain, problem, belief, seed, horizon, models, assertion, filter, risk,
                                       neighbourhood, optimizer, timeout)
     up_problem = _up_problem(problem)
@@ -136,7 +144,7 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     use_filter = inputs.binding.refinement.filter if filter is None else filter
     meta = load_meta_model(inputs.models.path) if use_filter else None
     if abstract is None:
-        abstract = (plan_problem(up_problem, planner) if up_problem is not None
+        abstract = (plan_problem(up_problem, planner, timeout=timeout) if up_problem is not None
                     else _plan_files(task.domain, task.problem, planner, timeout, inputs.pddl))
     options = pipeline.Options(horizon=horizon, optimizer=optimizer, seed=seed, risk=risk, neighbourhood=neighbourhood,
                                filter=filter, assertion=assertion, greedy=False, planner=planner, timeout=timeout)
@@ -266,8 +274,8 @@ def _belief_table(belief: Mapping) -> dict:
                                     f"got {name!r}: {type(values).__name__}")
         table[name] = {quantity: float(value) if _real(value) else value for quantity, value in values.items()}
         for quantity, value in table[name].items():
-            if isinstance(value, (int, float)) and not isinstance(value, bool) and not math.isfinite(value):
-                raise BeliefError(f"[objects.{name}] {quantity} = {value!r} is not a finite number",
+            if isinstance(value, (int, float)) and not isinstance(value, bool) and not is_finite(value):
+                raise BeliefError(f"[objects.{name}] {quantity} = {shown(value)} is not a finite number",
                                   file="<belief argument>")
     return table
 
@@ -275,8 +283,9 @@ def _belief_table(belief: Mapping) -> dict:
 def _check_timeout(timeout) -> None:
     if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, (int, float))):
         raise ArgumentTypeError(f"timeout must be a number of seconds or None, not {type(timeout).__name__}")
-    if timeout is not None and not (timeout > 0 and math.isfinite(timeout)):
-        raise ArgumentValueError(f"the timeout must be positive and finite (None for no limit), not {timeout}")
+    if timeout is not None and not (timeout > 0 and is_finite(timeout)):
+        raise ArgumentValueError("the timeout must be positive and finite (None for no limit), "
+                                 f"not {shown(timeout)}")
 
 
 def _plan_files(domain, problem, planner: str, timeout: float | None, pddl: PDDLTask | None = None) -> AbstractPlan:

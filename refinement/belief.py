@@ -23,6 +23,7 @@ from tailor.errors import BeliefError
 
 SCHEMA = 1
 BELIEF_SUFFIX = ".toml"
+MAX_SHOWN = 60  # characters of a value an error message repeats
 
 
 @dataclass(frozen=True)
@@ -101,7 +102,24 @@ def _number(obj: str, quantity: str, value: Any, quantities: Collection[str] | N
     if quantities is not None and quantity not in quantities:
         raise fail(f"{where}: unknown quantity '{quantity}' (known: {', '.join(quantities)})")
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise fail(f"{where} = {value!r} is not a number")
-    if not math.isfinite(value):
-        raise fail(f"{where} = {value!r} is not a finite number")
+        raise fail(f"{where} = {shown(value)} is not a number")
+    if not is_finite(value):
+        raise fail(f"{where} = {shown(value)} is not a finite number")
     return float(value)
+
+
+def is_finite(value: float) -> bool:
+    """Whether a number is finite as a float: an integer beyond any float (10**400) is not."""
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
+def shown(value: Any) -> str:
+    """`value` for a one-line message: repr, but an integer too long to print whole by its size (Python will
+    not even print one of more than 4,300 digits), anything else cut to MAX_SHOWN characters."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 64:
+        return f"an integer of {value.bit_length()} bits"
+    text = repr(value)
+    return text if len(text) <= MAX_SHOWN else text[:MAX_SHOWN - 3] + "..."

@@ -23,6 +23,7 @@ from types import MappingProxyType
 from typing import Any
 
 from tailor.errors import BindingError, SimError, TailorError, check_path_argument
+from tailor.planner_bridge.reading import read_input
 from tailor.refinement.binding_domain import check_against_domain, did_you_mean, read_vocabulary, vocabulary_of
 from tailor.sims import registry
 from tailor.sims.protocol import GROUPS, ActionSpec, SimulatorEntry
@@ -37,24 +38,103 @@ NAMED_BOUNDS = {"pi": math.pi, "-pi": -math.pi}  # strings a range bound may be 
 Range = tuple[float, float]
 
 _TOML_WHERE = re.compile(r"^(?P<msg>.*) \(at line (?P<line>\d+), column (?P<col>\d+)\)$")
+MAX_TOML_BYTES = 4 * 2**20  # a binding or a belief of thousands of objects is a few hundred kB
+MAX_TOML_NESTING = 32  # levels of lists and inline tables, and parts of a dotted key
+TOML_INTEGERS = range(-2**63, 2**63)  # "arbitrary 64-bit signed integers" (TOML 1.0); others are an error
+_OUT_OF_RANGE = "an integer outside TOML's 64-bit range (-2**63 .. 2**63 - 1)"
+_LONG_INTEGER = re.compile(r"(?<![\w.])[+-]?\d[\d_]{19,}(?![\w.])")
+# the tokens that matter for nesting: strings (skipped: their brackets and dots are text), comments, brackets,
+# dots and the bare words between them (keys, numbers)
+_TOML_TOKEN = re.compile(r"""
+    (?P<text> \"\"\"(?:\\.|[^\\])*?\"{3,5}  |  \'\'\'.*?\'{3,5}  |  "(?:\\.|[^"\\\n])*"  |  '[^'\n]*' )
+  | (?P<comment> \#[^\n]* )
+  | (?P<open> [\[{] ) | (?P<close> [\]}] ) | (?P<dot> \. ) | (?P<blank> [\ \t]+ )
+  | (?P<word> [\w+-]+ )
+  | (?P<other> . )
+""", re.DOTALL | re.VERBOSE)
 
 
 def read_toml(path: Path, error: type[TailorError], what: str) -> dict[str, Any]:
-    """Parse a TOML file, turning a missing file or a syntax error into `error` naming the file and line."""
+    """Parse a TOML file, turning a missing file or a syntax error into `error` naming the file and line.
+
+    A hostile file ends in the same one line: only a regular file of at most MAX_TOML_BYTES is read (a FIFO or
+    /dev/zero would block or never end); lists and inline tables nested deeper than MAX_TOML_NESTING, or keys
+    of more dotted parts, are refused before tomllib sees them (it recurses into each level, and takes time
+    and memory quadratic in a key's parts); an integer outside TOML's 64-bit range is refused as the TOML
+    specification asks (a 5,000-digit one is more than Python will convert; 10**400 no float can hold)."""
+    file = str(path)
+    data = read_input(Path(path), MAX_TOML_BYTES, error, f"{what} file not found")
     try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise error(f"{what} file not found", file=str(path)) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise error(f"cannot read {what} file: {exc}", file=str(path)) from None
+        text = data.decode("utf-8").removeprefix("\ufeff")  # (a byte-order mark, as editors on Windows write)
+    except UnicodeDecodeError as exc:
+        raise error(f"cannot read {what} file: not UTF-8 text (byte {exc.start})", file=file) from None
+    _check_toml_nesting(text, error, file)
     try:
-        return tomllib.loads(text.removeprefix("\ufeff"))  # (a byte-order mark, as editors on Windows write)
+        parsed = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         where = _TOML_WHERE.match(str(exc))
         if where:
-            raise error(f"invalid TOML: {where['msg']}", file=str(path), line=int(where["line"]),
+            raise error(f"invalid TOML: {where['msg']}", file=file, line=int(where["line"]),
                         col=int(where["col"])) from None
-        raise error(f"invalid TOML: {exc}", file=str(path)) from None
+        raise error(f"invalid TOML: {exc}", file=file) from None
+    except RecursionError:  # (nesting is checked above: a deep caller's stack)
+        raise error("invalid TOML: nested too deeply", file=file) from None
+    except ValueError:  # int() refuses more than sys.get_int_max_str_digits() digits
+        long = _LONG_INTEGER.search(text)
+        line, col = _place(text, long.start()) if long else (None, None)
+        raise error(f"invalid TOML: {_OUT_OF_RANGE}", file=file, line=line, col=col) from None
+    _check_integers(parsed, error, file)
+    return parsed
+
+
+def _place(text: str, index: int) -> tuple[int, int]:
+    """(line, column), 1-based, of text[index]."""
+    line = text.count("\n", 0, index) + 1
+    return line, index - (text.rfind("\n", 0, index) + 1) + 1
+
+
+def _check_toml_nesting(text: str, error: type[TailorError], file: str) -> None:
+    """An `error` at the place where lists or inline tables nest deeper than MAX_TOML_NESTING, or where a
+    dotted key has more parts than that (strings and comments skipped)."""
+    depth = parts = 0
+    after_dot = False
+    for token in _TOML_TOKEN.finditer(text):
+        kind = token.lastgroup
+        if kind == "blank":
+            continue
+        if kind == "dot":
+            after_dot = parts > 0
+            continue
+        if kind == "open":
+            depth += 1
+            parts = 0
+            if depth > MAX_TOML_NESTING:
+                raise error(f"invalid TOML: lists or inline tables nested deeper than {MAX_TOML_NESTING} levels",
+                            file, *_place(text, token.start()))
+        elif kind == "close":
+            depth = max(0, depth - 1)
+            parts = 0
+        elif kind in ("text", "word"):  # a part of a key (or a value: a float is two parts, 1.5)
+            parts = parts + 1 if after_dot else 1
+            if parts > MAX_TOML_NESTING:
+                raise error(f"invalid TOML: a dotted key of more than {MAX_TOML_NESTING} parts",
+                            file, *_place(text, token.start()))
+        else:  # a comment, a line's end, `=`, `,`: no key continues past it
+            parts = 0
+        after_dot = False
+
+
+def _check_integers(data: Any, error: type[TailorError], file: str) -> None:
+    """An `error` naming the key of the first integer outside TOML_INTEGERS (walked without recursion)."""
+    pending = [(data, "")]
+    while pending:
+        value, key = pending.pop()
+        if isinstance(value, dict):
+            pending.extend((item, f"{key}.{name}" if key else str(name)) for name, item in value.items())
+        elif isinstance(value, list):
+            pending.extend((item, f"{key}[{i}]") for i, item in enumerate(value))
+        elif isinstance(value, int) and not isinstance(value, bool) and value not in TOML_INTEGERS:
+            raise error(f"invalid TOML: {key} is {_OUT_OF_RANGE}", file=file)
 
 
 @dataclass(frozen=True)

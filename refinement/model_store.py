@@ -20,6 +20,7 @@ from tailor.errors import ModelFileError
 
 ENVIRONMENT_VARIABLE = "TAILOR_MODELS"
 MODELS = "models"  # the folder of <action>.json inside a domain folder or a training output folder
+MODEL_SUFFIX = ".json"  # of every model file (<action>.json, <action>.collision.json, meta.json)
 
 
 @dataclass(frozen=True)
@@ -66,15 +67,36 @@ def models_folder(path: Path) -> Path:
 
 def resolve_models(domain_dir: Path, explicit: str | Path | None = None) -> ModelSource:
     """The model folder for the domain in `domain_dir`: `explicit` (must exist), else the environment
-    variable's folder for this domain where it exists, else the bundled one."""
+    variable's folder for this domain where it exists, else the bundled one. Every model file name in it must
+    name a regular file (checked before any is opened: a named pipe would block its reader forever)."""
     if explicit is not None:
         folder = models_folder(Path(explicit))
         if not folder.is_dir():
             raise ModelFileError("no such model folder (--models)", file=str(explicit))
-        return ModelSource(folder, "--models")
+        return _checked(ModelSource(folder, "--models"))
     root = os.environ.get(ENVIRONMENT_VARIABLE)
     if root:
         candidate = Path(root).expanduser() / domain_key(domain_dir)
         if candidate.is_dir():
-            return ModelSource(models_folder(candidate), f"${ENVIRONMENT_VARIABLE}")
-    return ModelSource(Path(domain_dir) / MODELS, "domain folder")
+            return _checked(ModelSource(models_folder(candidate), f"${ENVIRONMENT_VARIABLE}"))
+    return _checked(ModelSource(Path(domain_dir) / MODELS, "domain folder"))
+
+
+def _checked(source: ModelSource) -> ModelSource:
+    """`source`, once every `*.json` in its folder is known to be a regular file (or a ModelFileError naming the
+    first that is not, or that cannot be looked at)."""
+    try:
+        entries = sorted(os.scandir(source.path), key=lambda entry: entry.name)
+    except OSError:  # no such folder (the bundled one of a domain without models): the loaders say so
+        return source
+    for entry in entries:
+        if not entry.name.endswith(MODEL_SUFFIX):
+            continue
+        try:
+            regular = entry.is_file()  # (following a symbolic link)
+        except OSError as exc:
+            raise ModelFileError(f"cannot read: {exc.strerror or exc}", file=entry.path) from None
+        if not regular and not entry.is_dir():
+            raise ModelFileError("not a regular file (a named pipe, a device or a socket, or a broken link): "
+                                 "model files are read from regular files only", file=entry.path)
+    return source

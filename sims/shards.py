@@ -12,18 +12,28 @@ is right cannot be told); a shard of another simulator, a file whose content doe
 unknown schema or not a shard at all is an error naming the file, and so is a shard the simulator's code of now
 did not gather (its code fingerprint differs: an edited controller would otherwise train stale models). On
 Ctrl-C the episodes finished so far are written as a shard of their own (a complete file, renamed into place),
-so the next run resumes after them.
+so the next run resumes after them. One run at a time gathers into a folder (`experience_lock`, an advisory
+lock): two at once would both simulate the episodes missing when they started, and write overlapping shards.
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import logging
 import os
 import re
+import threading
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from tailor.errors import DataError
+try:
+    import fcntl
+except ImportError:  # (not on Windows: no lock there)
+    fcntl = None
+
+from tailor.errors import DataError, OutputFileError
 from tailor.sims.episode import Episode
 from tailor.sims import experience, registry
 from tailor.sims.experience import Origin, episode_seeds, load_episodes, read_origin, save_episodes
@@ -31,6 +41,10 @@ from tailor.sims.experience import Origin, episode_seeds, load_episodes, read_or
 log = logging.getLogger(__name__)
 SUFFIX = ".npz"
 NAME = re.compile(r"^(?P<scenario>[^.]+)\.seed(?P<seed>-?\d+)\.(?P<first>\d+)-(?P<stop>\d+)\.npz$")
+LOCK_FILE = ".tailor.lock"  # in an experience folder while a run writes there: flock'ed, holding the run's pid
+LOCK_TRIES = 10  # attempts at taking a lock file that its holder removes meanwhile
+_held: dict[Path, list[int]] = {}  # folder -> [the thread holding its lock, times it entered]
+_held_guard = threading.Lock()
 
 
 @dataclass(frozen=True)
@@ -143,12 +157,100 @@ def load_piece(piece: Piece) -> list[Episode]:
     return chosen
 
 
+@contextlib.contextmanager
+def experience_lock(directory: str | os.PathLike) -> Iterator[None]:
+    """Hold the experience folder's advisory lock (fcntl.flock on LOCK_FILE in it, made if need be) for the
+    block: another run, or another thread, gathering into the same folder meanwhile is an OutputFileError
+    naming the folder and the process holding it. Entered again by the thread holding it, it holds on. The
+    kernel lets go of the lock when its process ends, however it ends: a lock is never left stale (a file left
+    by a process killed with SIGKILL is taken over by the next run)."""
+    folder = Path(os.path.abspath(directory))
+    me = threading.get_ident()
+    with _held_guard:
+        held = _held.get(folder)
+        mine = held is not None and held[0] == me
+        if mine:
+            held[1] += 1
+    if mine:
+        try:
+            yield
+        finally:
+            with _held_guard:
+                held[1] -= 1
+        return
+    if held is not None:
+        raise OutputFileError("another thread of this process is gathering experience into this folder",
+                              file=str(folder))
+    fd = _lock(folder)
+    with _held_guard:
+        _held[folder] = [me, 1]
+    try:
+        yield
+    finally:
+        with _held_guard:
+            del _held[folder]
+        _unlock(folder, fd)
+
+
+def _lock(folder: Path) -> int | None:
+    """The open LOCK_FILE of `folder`, locked; None where there is no lock to take (no fcntl, or a folder we
+    cannot write in: then we will not write shards there either). The holder removes the file when it lets
+    go (_unlock), so a lock taken on a file that is gone by then, or replaced, is taken again on the new one."""
+    if fcntl is None:
+        return None
+    path = folder / LOCK_FILE
+    for _ in range(LOCK_TRIES):
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o644)
+        except OSError as exc:
+            if exc.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
+                return None
+            raise OutputFileError(f"cannot write here: {exc.strerror or exc}", file=str(folder)) from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:  # (BlockingIOError: another open file holds it)
+            holder = os.read(fd, 32).decode("ascii", "replace").strip()
+            os.close(fd)
+            who = f"process {holder}" if holder.isdigit() else "another process"
+            raise OutputFileError(f"another tailor run ({who}) is gathering experience into this folder: wait "
+                                  "for it to end, or give another folder", file=str(folder)) from None
+        try:
+            current = os.stat(path).st_ino
+        except FileNotFoundError:
+            current = None
+        if current == os.fstat(fd).st_ino:
+            os.ftruncate(fd, 0)
+            os.write(fd, f"{os.getpid()}\n".encode("ascii"))
+            return fd
+        os.close(fd)  # the holder before us removed it as we opened it: take the new one
+    raise OutputFileError(f"cannot take the lock {LOCK_FILE} (it keeps changing)", file=str(folder))
+
+
+def _unlock(folder: Path, fd: int | None) -> None:
+    """Let go of the lock _lock took: remove the file while holding it (nothing is left in the folder), then
+    close it (which lets go)."""
+    if fd is None:
+        return
+    try:
+        (folder / LOCK_FILE).unlink(missing_ok=True)
+    finally:
+        os.close(fd)
+
+
 def stored_gather(directory: str | os.PathLike, simulator: str, name: str, episodes: int, seed: int, jobs: int = 1,
                   progress: bool = True, first: int = 0) -> list[Episode]:
     """Episodes first .. first + episodes - 1 of scenario `name`'s seed stream `seed`, like `gather`, but read
-    from the shards in `directory` where they are there; the rest is simulated and written there as shards."""
+    from the shards in `directory` where they are there; the rest is simulated and written there as shards,
+    under the folder's lock (experience_lock)."""
     if episodes < 0 or first < 0:
         raise DataError(f"episodes {first}:{first + episodes} is not a range of episodes")
+    with experience_lock(directory):
+        return _stored_gather(directory, simulator, name, episodes, seed, jobs, progress, first)
+
+
+def _stored_gather(directory: str | os.PathLike, simulator: str, name: str, episodes: int, seed: int, jobs: int,
+                   progress: bool, first: int) -> list[Episode]:
     pieces = cover(stream_shards(find_shards(directory, simulator), name, seed), first, first + episodes)
     stored = sum(p.stop - p.first for p in pieces if p.shard is not None)
     if stored:  # notes, which the command line's -q silences

@@ -95,6 +95,9 @@ def test_refine_reports_what_was_free_and_what_it_was_set_to():
     assert greedy.chosen == pytest.approx({p["id"]: p["greedy"] for p in golden["free_parameters"]}, abs=1e-6)
     result = tailor.dispatch(refined, seed=0)
     assert result.succeeded and result.duration == pytest.approx(golden["refined"]["simulated_total"], abs=1e-3)
+    # the default optimizer is auto, as the CLI's: each window says which optimizer's choice it took
+    assert golden["optimizer"] == "auto"
+    assert [w.method for w in refined.refined.windows] == [w["method"] for w in golden["refined"]["optimization"]]
 
 
 def test_a_belief_given_as_a_dict_is_the_file_and_is_checked():
