@@ -29,15 +29,15 @@ DESCRIPTION = ("make a plug-in package for a robot of your own (a simulator stub
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("kind", choices=KINDS, help="what to make")
-    parser.add_argument("name", metavar="NAME", help="the robot's name: lower case letters, digits and _, starting "
-                        "with a letter (the simulator's, the domain's and the package's name: tailor_NAME)")
+    parser.add_argument("name", metavar="NAME", help="the robot's name: lower case characters a-z, digits and _, not beginning with a digit or _ "
+                        "(the simulator's, the domain's and the package's name: tailor_NAME)")
     parser.add_argument("--out", metavar="DIR", help="the folder to make (default: ./NAME; it must not exist)")
 
 
 def run(args: argparse.Namespace) -> int:
     name = args.name
     if not NAME.match(name) or keyword.iskeyword(name):
-        raise UsageError(f"robot name {name!r}: use lower case letters, digits and _, starting with a letter "
+        raise UsageError(f"robot name {name!r}: use lower case characters a-z, digits and _, not beginning with a digit or _ "
                          "(at most 40)")
     target = Path(args.out if args.out else name)
     if target.exists() or target.is_symlink():

@@ -1,4 +1,5 @@
-"""`tailor plan DOMAIN PROBLEM`: plan a PDDL pair into a partial-order plan with causal links (Sec. 5.2)."""
+"""`tailor plan DOMAIN PROBLEM`: plan a PDDL pair into a partial-order plan with causal links (Sec. 5.2), printed
+as VHPOP-like text, as JSON, or as a sequential IPC plan file (`--format ipc`, as Fast Downward's `sas_plan`)."""
 
 from __future__ import annotations
 
@@ -8,19 +9,28 @@ import sys
 
 from tailor.cli.arguments import positive_seconds
 from tailor.outputs import versioned
-from tailor.planner_bridge import plan_files, render_text, resolve_problem
+from tailor.planner_bridge import format_ipc, plan_files, render_text, resolve_problem
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("domain", metavar="DOMAIN", help="domain.pddl file, the folder holding it, or the name of a bundled domain (see `tailor domains`)")
     parser.add_argument("problem", metavar="PROBLEM", help="problem .pddl file, or the name of one of its problems")
     parser.add_argument(
-        "--planner", default="pyperplan", metavar="NAME", help="any installed unified-planning engine, or pocl (our POCL planner; default: pyperplan)"
+        "--planner", default="pyperplan", metavar="NAME",
+        help="any installed unified-planning engine (fast-downward with `pip install 'tailor[planners]'`), or pocl "
+             "(our POCL planner; default: pyperplan)",
     )
     parser.add_argument(
         "--timeout", type=positive_seconds, default=None, metavar="S", help="seconds the planner may search (default: no limit)"
     )
-    parser.add_argument("--json", action="store_true", help="print the plan as JSON instead of VHPOP-like text")
+    output = parser.add_mutually_exclusive_group()
+    output.add_argument(
+        "--format", choices=sorted(FORMATS), default="text",
+        help="text: the partial-order plan with its causal links, VHPOP-like (default); json: the same as JSON; "
+             "ipc: a sequential IPC plan file, one (action arg ...) a line in a valid order, as Fast Downward "
+             "writes sas_plan",
+    )
+    output.add_argument("--json", action="store_const", const="json", dest="format", help="the same as --format json")
 
 
 def format_json(data: dict) -> str:
@@ -35,11 +45,16 @@ def format_json(data: dict) -> str:
     return "{\n" + ",\n".join(lines) + "\n}\n"
 
 
+# Each output format and what writes it; `--format` takes its choices from here.
+FORMATS = {
+    "text": render_text,
+    "json": lambda plan: format_json(versioned("plan", plan.to_json())),
+    "ipc": format_ipc,
+}
+
+
 def run(args: argparse.Namespace) -> int:
     domain, problem = resolve_problem(args.domain, args.problem)
     plan = plan_files(domain, problem, planner=args.planner, timeout=args.timeout)
-    if args.json:
-        sys.stdout.write(format_json(versioned("plan", plan.to_json())))
-    else:
-        sys.stdout.write(render_text(plan))
+    sys.stdout.write(FORMATS[args.format](plan))
     return 0

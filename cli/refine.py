@@ -13,11 +13,11 @@ import sys
 import time
 
 from tailor.outputs import check_output_file, json_text, versioned
-from tailor.planner_bridge import render_text
+from tailor.planner_bridge import plan_from_ipc, render_text
 from tailor.progress import showing_progress
 from tailor.refinement import pipeline
 from tailor.refinement.models.meta_model import load_meta_model
-from tailor.refinement.optimizers import OPTIMIZERS
+from tailor.refinement.optimizers import DEFAULT_OPTIMIZER, OPTIMIZERS
 from tailor.refinement.refine import predicted_success
 from tailor.refinement.refine_plots import cost_plot_names, draw_refinement
 from tailor.cli.arguments import (
@@ -36,15 +36,21 @@ from tailor.cli.arguments import (
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("domain", metavar="DOMAIN", help="domain.pddl file, the folder holding it, or the name of a bundled domain (see `tailor domains`)")
     parser.add_argument("problem", metavar="PROBLEM", help="problem .pddl file, or the name of one of its problems")
-    parser.add_argument("--optimizer", choices=sorted(OPTIMIZERS), default="analytic",
-                        help="analytic model-tree minimization (falls back to ga where it does not apply), "
-                             "genetic algorithm, or random sampling (default: analytic)")
+    parser.add_argument("--optimizer", choices=sorted(OPTIMIZERS), default=DEFAULT_OPTIMIZER,
+                        help="auto: analytic model-tree minimization where it applies, else the certified branch "
+                             "and bound where the feature spaces declare bounds, else the genetic algorithm; or "
+                             "one of them alone (analytic and certified fall back to ga), or random sampling "
+                             f"(default: {DEFAULT_OPTIMIZER})")
     parser.add_argument("--horizon", type=whole_number(1), default=2, metavar="H",
                         help="actions optimized together (default 2; 1 is greedy)")
     parser.add_argument("--seed", type=seed, default=0, metavar="S", help="seed of optimizer and simulator (default 0)")
     parser.add_argument("--belief", metavar="FILE", help="belief state file (default: PROBLEM's stem + .toml)")
     add_models_argument(parser)
     parser.add_argument("--planner", default="pyperplan", metavar="NAME", help="unified-planning engine, or pocl")
+    parser.add_argument("--plan", metavar="FILE", help="refine this plan instead of planning: a sequential IPC plan "
+                        "file any planner wrote (Fast Downward's sas_plan, `tailor plan --format ipc`), validated and "
+                        "linked first")
+    parser.add_argument("--strict", action="store_true", help="the warnings of `tailor check` are errors (exit 11)")
     parser.add_argument("--timeout", type=positive_seconds, default=None, metavar="S", help="planner time limit")
     parser.add_argument("--simulate", action="store_true", help="execute greedy and refined sequences in the simulator")
     parser.add_argument("--plot", metavar="FILE.png",
@@ -87,12 +93,30 @@ def _execution_json(outcome, success_models=None) -> dict:
             entry["uncertainty"] = round(spread, 4)
     data = {"horizon": refined.horizon, "risk": refined.risk, "neighbourhood": refined.neighbourhood, "actions": actions,
             "predicted_total": round(refined.predicted_total, 4),
-            "optimization": [{"method": w.method, "cost": round(w.cost, 4), "evaluations": w.evaluations,
-                              "seconds": w.seconds, "note": w.note} for w in refined.windows]}
+            "optimizers": optimizers_run(refined.windows),
+            "optimization": [window_json(w) for w in refined.windows]}
     if simulated is not None:
         data["simulated_total"] = round(simulated.duration, 4)
         data["succeeded"] = simulated.succeeded
     return data
+
+
+def optimizers_run(windows) -> list[str]:
+    """The optimizers whose choices a refinement's windows took, in the order they first did."""
+    return list(dict.fromkeys(w.method for w in windows))
+
+
+def window_json(window) -> dict:
+    """One window's optimization: which optimizer's choice, its cost (the worst case over a neighbourhood), and
+    the certified lower bound and gap (s, and as a share of the cost) where there is one (null: unknown)."""
+    gap = window.gap
+    return {"method": window.method, "cost": round(window.cost, 4), "evaluations": window.evaluations,
+            "seconds": window.seconds,
+            "lower_bound": None if window.lower_bound is None or not math.isfinite(window.lower_bound)
+            else round(window.lower_bound, 4),
+            "gap": None if gap is None else round(gap, 6),
+            "gap_share": None if gap is None or not math.isfinite(window.gap_share) else round(window.gap_share, 6),
+            "note": window.note}
 
 
 def result_json(result, method: str, seed: int) -> dict:
@@ -123,8 +147,9 @@ def _gain(refined: float, greedy: float) -> str:
     return f"{100 * (1 - refined / greedy):.1f}%" if greedy > 0 else "-"
 
 
-def _print_text(result, method: str) -> None:
-    """The plan, the instantiated sequence, the free parameters chosen and the durations, as a table."""
+def _print_text(result) -> None:
+    """The plan, the instantiated sequence, the free parameters chosen and the durations, as a table; the header
+    of the refined column names the optimizers whose choices it took (not the one asked for: auto is none)."""
     out = sys.stdout.write
     plan, decision = result.plan, result.decision
     outcomes = {"greedy": result.greedy, "refined": result.refined}
@@ -143,8 +168,9 @@ def _print_text(result, method: str) -> None:
         out(f"Meta filter (Sec. 5.5.4): {decision.reason}\n")
     free = result.sequence.free_parameters()
     risk, around = outcomes["refined"].refined.risk, outcomes["refined"].refined.neighbourhood
+    ran = "+".join(optimizers_run(outcomes["refined"].refined.windows)) or "nothing free"
     names = [("greedy", "greedy (h=1)"),
-             ("refined", f"refined (h={outcomes['refined'].refined.horizon}, {method}"
+             ("refined", f"refined (h={outcomes['refined'].refined.horizon}, {ran}"
                          + (f", risk {risk:g}" if risk else "") + (f", neighbourhood {around:g}" if around else "")
                          + ")")]
     names = [(k, label) for k, label in names if k in outcomes]
@@ -190,7 +216,8 @@ def _print_text(result, method: str) -> None:
         out(line + "\n")
     for w in outcomes["refined"].refined.windows:
         note = f" ({w.note})" if w.note else ""
-        out(f"Optimizer: {w.method}, {1000 * w.seconds:.1f} ms, {w.evaluations} evaluations{note}\n")
+        gap = "" if w.gap is None else f", gap {w.gap:.3g} s ({100 * w.gap_share:.2g}%)"
+        out(f"Optimizer: {w.method}, {1000 * w.seconds:.1f} ms, {w.evaluations} evaluations{gap}{note}\n")
 
 
 NOTHING_TO_REFINE = "the goal holds in the initial state: the plan is empty, nothing to refine or simulate"
@@ -228,10 +255,12 @@ def run(args: argparse.Namespace) -> int:
     meta = load_meta_model(inputs.models.path) if use_filter else None  # a bad one fails before planning
     options = pipeline.Options(horizon=args.horizon, optimizer=args.optimizer, seed=args.seed, risk=args.risk,
                                neighbourhood=args.neighbourhood, filter=args.filter, zero=None if args.plot else False,
-                               simulate=args.simulate or bool(args.plot), planner=args.planner, timeout=args.timeout)
+                               simulate=args.simulate or bool(args.plot), planner=args.planner, timeout=args.timeout,
+                               strict=args.strict)
     started = time.perf_counter()
     with showing_progress(getattr(args, "progress", True)):  # the genetic algorithm takes seconds per window
-        result = pipeline.run(inputs, options, meta=meta)
+        given = plan_from_ipc(inputs.pddl, args.plan) if args.plan else None
+        result = pipeline.run(inputs, options, plan=given, meta=meta)
     logging.getLogger(__name__).debug("planned and refined greedy and with h=%d in %.2f s", args.horizon,
                                       time.perf_counter() - started)
     if result.empty:
@@ -248,6 +277,6 @@ def run(args: argparse.Namespace) -> int:
         if written:  # stdout holds the JSON only
             logging.getLogger(__name__).info("wrote %s", ", ".join(str(path) for path in written))
     else:
-        _print_text(result, args.optimizer)
+        _print_text(result)
         sys.stdout.write("".join(f"Wrote {path}\n" for path in written))
     return 0

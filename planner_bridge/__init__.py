@@ -3,6 +3,8 @@
     task = read_pddl(domain, problem)      # each file read once and checked (PDDLTask: texts, signature, names)
     plan = plan_pddl(task)                 # planned in a child process (plan_files(domain, problem): both steps)
     problem = parse_task(task)             # the unified-planning Problem, in this process, from the same texts
+    plan = plan_from_ipc(task, "sas_plan") # a plan file another planner wrote, validated and linked
+    text = format_ipc(plan)                # the plan as a sequential IPC plan file
 """
 
 from tailor.planner_bridge.abstract_plan import GOAL, INITIAL, AbstractPlan, CausalLink, Step, render_text
@@ -18,6 +20,7 @@ from tailor.errors import (
     PlannerUnavailableError,
 )
 from tailor.planner_bridge.in_process import DEFAULT_PLANNER, plan_here, plan_pddl_here
+from tailor.planner_bridge.ipc import format_ipc, plan_from_ipc, read_ipc_plan
 from tailor.planner_bridge.reading import PDDLTask, parse_task, read_pddl
 
 __all__ = [
@@ -35,6 +38,9 @@ __all__ = [
     "plan_here",
     "plan_pddl_here",
     "render_text",
+    "format_ipc",
+    "read_ipc_plan",
+    "plan_from_ipc",
     "resolve_problem",
     "resolve_domain_dir",
     "bundled_domains",

@@ -64,6 +64,8 @@ def check_task(plan: AbstractPlan, binding: Binding, belief: BeliefState) -> Tas
                  for obj, values in sorted(belief.objects.items()) for quantity, value in values.items())
     where = belief.file or "the belief"
     warnings = []
+    if not plan.steps:  # the goal holds initially: nothing runs, nothing needs the belief
+        return TaskCheck(sequence, uses, ())
     free = {p.id.lower(): p for p in sequence.free_parameters()}
     for use in uses:
         if use.read:

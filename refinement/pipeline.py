@@ -26,6 +26,7 @@ from tailor.refinement.dispatch import check_scene, dispatch
 from tailor.refinement.meta_filter import MetaDecision, decide
 from tailor.refinement.model_store import ModelSource, resolve_models
 from tailor.refinement.models.action_models import ActionModel, load_action_models, load_success_models
+from tailor.refinement.optimizers import DEFAULT_OPTIMIZER
 from tailor.refinement.refine import RefinedSequence, predicted_durations, refine, resolve_risk
 from tailor.sims.episode import SequenceResult
 
@@ -70,7 +71,7 @@ class Options:
     refine.DEFAULT_RISK where every model stores its uncertainty."""
 
     horizon: int = 2
-    optimizer: str = "analytic"
+    optimizer: str = DEFAULT_OPTIMIZER
     seed: int = 0
     risk: float | None = None
     neighbourhood: float | None = None

@@ -1,0 +1,229 @@
+"""docs/results/*.md from the result files committed with each bundled domain (domains/NAME/training/): the
+training report `tailor train` wrote (report.json), the `--json` reports of `tailor evaluate` kept there
+(evaluate*.json), the other text reports (e.g. meta_evaluation.txt, verbatim) and the pictures. Every number
+on these pages comes from those files; nothing is typed by hand.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from mdtext import GENERATED, code, escape, table
+
+ROOT = Path(__file__).resolve().parents[2]
+DOMAINS = ROOT / "domains"
+SKIPPED_TEXT = {"report.txt"}  # the training report as text: report.json holds the same, report.html shows it
+
+
+def _num(value, digits: int = 2) -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "-"
+    return f"{value:.{digits}f}"
+
+
+def _pct(value, digits: int = 1) -> str:
+    return "-" if value is None else f"{100 * value:.{digits}f}%"
+
+
+def _p(value) -> str:
+    return "-" if value is None else f"{value:.2g}"
+
+
+def _seconds(value) -> str:
+    if value is None:
+        return "-"
+    minutes, seconds = divmod(round(value), 60)
+    return f"{minutes} min {seconds} s" if minutes else f"{seconds} s"
+
+
+def _feature_spaces(domain: str) -> dict[str, str]:
+    """Each stored model's feature space, as its model file (domains/NAME/models/ACTION.json) says."""
+    out = {}
+    for path in sorted((DOMAINS / domain / "models").glob("*.json")):
+        model = json.loads(path.read_text(encoding="utf-8"))
+        if str(model.get("schema", "")).startswith("tailor.action_model/"):
+            out[model["action"]] = model.get("feature_space") or model.get("feature_set") or ""
+    return out
+
+
+def training_dirs() -> list[Path]:
+    """The bundled domains that carry committed results."""
+    return sorted(d for d in DOMAINS.glob("*/training") if (d / "report.json").is_file())
+
+
+def _training(domain: str, report: dict) -> list[str]:
+    spaces = _feature_spaces(domain)
+    out = [f"## Action models: `tailor train {domain}`\n",
+           f"From `domains/{domain}/training/report.json` (schema `{report.get('schema', '?')}`): the models in "
+           f"`domains/{domain}/models/`, learned by `tailor train {domain}` with seed {report['seed']} and "
+           f"{report['episodes_per_scenario']} episodes per experience scenario (a model whose recipe names its own "
+           f"count learns from that many); gathering took {_seconds(report.get('gather_seconds'))}, training "
+           f"{_seconds(report.get('train_seconds'))} (experience already gathered is reused, not simulated again).\n"]
+    if report.get("provenance"):
+        out += ["Provenance recorded in the report:\n",
+                table(["", ""], [[escape(str(k)), code(str(v))] for k, v in report["provenance"].items()], "ll")]
+    out += ["### Duration models (Table 4.3)\n",
+            "Successful episodes each model learned from, their mean duration, and the mean absolute error on the "
+            "held-out quarter (first example of each episode) beside that of gradient boosting "
+            "(HistGradientBoostingRegressor) on the same split:\n"]
+    out.append(table(["model", "episodes", "mean t (s)", "MAE (s)", "MAE / t", "HGB MAE (s)", "MAE / HGB"],
+                     [[escape(action), str(m["episodes"]), _num(m["mean_duration"]), _num(m["mae"], 3),
+                       _pct(m["mae_relative"]), _num(m["mae_hgb"], 3), _num(m["mae_over_hgb"])]
+                      for action, m in report["models"].items()]))
+    out += [f"\nThe stored trees (`domains/{domain}/models/`): the feature space each model learns in, the examples "
+            "per episode n_i and the leaf size chosen on a validation quarter, the leaves of the tree trained on all "
+            "episodes, and the held-out spread refinement's `--risk` charges (uncertainty, overall):\n",
+            table(["model", "features", "n_i", "leaf size", "leaves", "uncertainty (s)"],
+                  [[escape(action), code(spaces[action]) if spaces.get(action) else "-", str(m["n_i"]),
+                    str(m["min_samples_leaf"]), str(m["leaves"]), _num(m.get("uncertainty_overall"), 3)]
+                   for action, m in report["models"].items()], align="llrrrr")]
+    failed = [[escape(action), str(m["episodes_gathered"]),
+               ", ".join(f"{k} {v}" for k, v in m["outcomes"].items() if k != "success") or "none"]
+              for action, m in report["models"].items()]
+    out += ["\nEpisodes gathered and how the unsuccessful ones ended (they are left out of the duration models):\n",
+            table(["model", "gathered", "not successful"], failed, align="lrl")]
+    curves = [[escape(action), str(c["episodes"]), _num(c["mae"], 3), _num(c.get("mae_hgb"), 3), str(c["leaves"])]
+              for action, m in report["models"].items() for c in m.get("episodes_curve") or []]
+    if curves:
+        drawn = " (`mae_vs_episodes.png` below draws it)" if (DOMAINS / domain / "training" / "mae_vs_episodes.png"
+                                                              ).is_file() else ""
+        out += ["\n### Learning curves\n",
+                f"MAE on the same held-out episodes after training on a growing number of the others{drawn}:\n",
+                table(["model", "episodes", "MAE (s)", "HGB MAE (s)", "leaves"], curves)]
+    for action, c in report.get("classifiers", {}).items():
+        out += [f"\n### Success classifier of `{action}` (Sec. 4.2.2, Table 4.4)\n",
+                f"A decision tree learned from {c['episodes']} episodes ("
+                + ", ".join(f"{k} {v}" for k, v in c["outcomes"].items())
+                + f"), a false success costing {_num(c['cost_false_success'], 1)} times a false failure relative to "
+                f"the class balance, leaves of at least {c['min_samples_leaf']} episodes: {c['leaves']} leaves. On "
+                f"{c['confusion']['episodes']} fresh episodes it was right in {_pct(c['accuracy'])}, and predicted "
+                f"success for {_pct(c['false_success'])} of the failing ones. Shares of the fresh episodes:\n"]
+        counts, n = c["confusion"]["counts"], c["confusion"]["episodes"]
+        cell = {key: counts[key] / n for key in counts}
+        out.append(table(["", "observed fail", "observed success", "total"], [
+            ["predicted fail", _pct(cell["predicted_fail_observed_fail"]),
+             _pct(cell["predicted_fail_observed_success"]), _pct(c["confusion"]["predicted_fail"])],
+            ["predicted success", _pct(cell["predicted_success_observed_fail"]),
+             _pct(cell["predicted_success_observed_success"]), _pct(1 - c["confusion"]["predicted_fail"])],
+            ["total", _pct(c["confusion"]["observed_fail"]), _pct(1 - c["confusion"]["observed_fail"]),
+             f"correct {_pct(c['accuracy'])}"]]))
+        if c.get("note"):
+            out.append("\n" + escape(c["note"]) + "\n")
+    if report.get("subgoal_experience"):
+        out += ["\n### Subgoal experience (Sec. 8.1)\n",
+                "Episodes started at the subgoals refinement chose in random situations (greedy and refined in turn, "
+                "in rounds, each with the models of the round before retrained); the duration model of the action "
+                "learned from them beside its scenarios' episodes:\n",
+                table(["action", "situations", "episodes", "succeeded", "rounds"],
+                      [[f"{code(s['action'])} in {code(s['generator'])}", str(s["situations"]), str(s["episodes"]),
+                        str(s["succeeded"]), str(s["rounds"])] for s in report["subgoal_experience"]], align="lrrrr")]
+    warnings = report.get("warnings") or []
+    out += ["\n### Warnings\n",
+            "\n".join(f"- {escape(str(w))}" for w in warnings) + "\n" if warnings
+            else "`tailor train` raised no warning about this run (too few held-out episodes, a model no better "
+                 "than the median duration, a classifier at chance level).\n"]
+    return out
+
+
+def _evaluation(domain: str, name: str, e: dict) -> list[str]:
+    horizons = (e.get("horizons") or {}).get("horizons") or []
+    command = (f"tailor evaluate {domain} --situations {e['comparison']} --episodes {e['scenarios']} "
+               f"--oracle-episodes {e.get('oracle_episodes', 0)} --horizon-episodes "
+               f"{(e.get('horizons') or {}).get('scenarios', 0)} --seed {e['seed']} --json")
+    out = [f"## Refined against greedy: `{name}`\n",
+           f"From `domains/{domain}/training/{name}`, the report of `{command}`. {e['scenarios']} random "
+           f"{code(e['comparison'])} situations (problems {', '.join(e['problems'])}), each executed greedily (h = 1) "
+           "and refined (h = 2) in the simulator with the same seed; the means are over the situations where both "
+           "succeeded.\n"]
+    rows = [["situations where greedy and refined both succeeded",
+             f"{e['episodes']} of {e['scenarios']} (failed: greedy {e['failed_greedy']}, "
+             f"refined {e['failed_refined']})"],
+            ["mean duration greedy (h=1) / refined (h=2)", f"{_num(e['greedy_mean'])} s / {_num(e['refined_mean'])} s"],
+            ["mean improvement (Eq. 5.3)", f"{_pct(e['improvement'])} (predicted {_pct(e['predicted_improvement'])})"],
+            ["paired t-test p", _p(e["p_value"])],
+            ["better / equal / worse (1% band)", f"{e['better']} / {e['equal']} / {e['worse']}"]]
+    if e.get("oracle_episodes"):
+        rows.append([f"refined / simulated optimum ({', '.join(e.get('oracle_methods') or [])})",
+                     f"{_num(e['oracle_ratio'], 3)} over {e['oracle_episodes']} situations "
+                     f"(greedy / optimum {_num(e['greedy_oracle_ratio'], 3)})"])
+    rows.append(["optimizer time per window (median, wall clock on the machine that ran it)",
+                 f"{_num(e['window_ms_median'], 0)} ms; all windows {_pct(e['optimizer_share'])} of the execution time"])
+    out.append(table(["", "measured"], rows, align="ll"))
+    if e.get("per_action"):
+        out += ["\nPer action (Table 5.2), mean duration in seconds:\n",
+                table(["problem", "step", "action", "greedy (h=1)", "refined (h=2)"],
+                      [[code(a["problem"]), str(a["step"]), code(a["action"]), _num(a["greedy_mean"]),
+                        _num(a["refined_mean"])] for a in e["per_action"]], align="lrlrr")]
+    if horizons:
+        out += [f"\nHorizons (Table 5.3) over {e['horizons']['scenarios']} random "
+                f"{code(e.get('horizon_situations', e['comparison']))} situations: mean duration, improvement over "
+                "h = 1 and over the horizon before, with the p-value of the paired t-test against it:\n",
+                table(["horizon", "mean (s)", "vs h=1", "vs h-1", "p (vs h-1)", "failed", "optimizer"],
+                      [[f"h={h['horizon']}", _num(h["mean"]), _pct(h["improvement"]),
+                        _pct(h["improvement_over_previous"]), _p(h["p_value_vs_previous"]), str(h["failed"]),
+                        ", ".join(h.get("methods") or [])] for h in horizons], align="lrrrrrl")]
+    return out
+
+
+def domain_page(training: Path) -> str:
+    domain = training.parent.name
+    report = json.loads((training / "report.json").read_text(encoding="utf-8"))
+    out = [GENERATED.format(source=f"the files in domains/{domain}/training/"),
+           f"# Results: {domain}\n",
+           f"What the committed result files of the `{domain}` domain say (simulator `{report['simulator']}`). "
+           "They are rewritten by the commands named with each section; this page is generated from them.\n"]
+    out += _training(domain, report)
+    for path in sorted(training.glob("evaluate*.json")):
+        evaluation = json.loads(path.read_text(encoding="utf-8"))
+        if "greedy_mean" in evaluation:
+            out += ["\n"] + _evaluation(domain, path.name, evaluation)
+    for path in sorted(training.glob("*.txt")):
+        if path.name in SKIPPED_TEXT:
+            continue
+        out += [f"\n## `{path.name}`\n", f"`domains/{domain}/training/{path.name}`, as the command wrote it:\n",
+                "```text\n" + path.read_text(encoding="utf-8").rstrip("\n") + "\n```\n"]
+    pictures = sorted(training.glob("*.png"))
+    if pictures:
+        out.append("\n## Pictures\n")
+        for png in pictures:
+            out += [f"`{png.name}`\n", f"![{png.stem}](../../domains/{domain}/training/{png.name})\n"]
+    also = {"report.txt": "the tables and every model's rules as text",
+            "report.html": "the same in one page with the pictures"}
+    present = [f"`{name}` ({what})" for name, what in also.items() if (training / name).is_file()]
+    if present:
+        out.append(f"\nAlso in the folder, as `tailor train` wrote them: {' and '.join(present)}.\n")
+    return "\n".join(out)
+
+
+def index_page(dirs: list[Path]) -> str:
+    rows = []
+    for training in dirs:
+        report = json.loads((training / "report.json").read_text(encoding="utf-8"))
+        domain = training.parent.name
+        models = ", ".join(f"{a} {_num(m['mae'], 3)} s ({_pct(m['mae_relative'])})" for a, m in report["models"].items())
+        kept = []
+        for path in sorted(training.glob("evaluate*.json")):
+            e = json.loads(path.read_text(encoding="utf-8"))
+            if "improvement" in e:
+                kept.append(f"{code(path.name)}: refined {_pct(e['improvement'])} faster than greedy")
+        kept += [code(path.name) for path in sorted(training.glob("*.txt")) if path.name not in SKIPPED_TEXT]
+        rows.append([f"[{domain}]({domain}.md)", escape(models), "; ".join(kept) or "-"])
+    return "\n".join([
+        GENERATED.format(source="the files in domains/*/training/"),
+        "# Results\n",
+        "One page per bundled domain, generated from the result files committed beside its models "
+        "(`domains/NAME/training/`): the training report of `tailor train`, the reports of `tailor evaluate` kept "
+        "there, and their pictures. When a command writes those files again, `python docs/scripts/generate.py` "
+        "writes these pages again; a test fails while they differ.\n",
+        table(["domain", "duration models: MAE (share of the mean duration)", "evaluations kept"],
+              rows, align="lll")])
+
+
+def pages() -> dict[str, str]:
+    dirs = training_dirs()
+    out = {"results/index.md": index_page(dirs)}
+    for training in dirs:
+        out[f"results/{training.parent.name}.md"] = domain_page(training)
+    return out
