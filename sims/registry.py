@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import importlib
 import inspect
+import sys
 from importlib.metadata import entry_points
 from pathlib import Path
 
@@ -100,3 +102,17 @@ def code_fingerprint(name: str) -> str:
         digest.update(str(path.relative_to(root) if root is not None else path.name).encode())
         digest.update(b"\0" + path.read_bytes() + b"\0")
     return digest.hexdigest()[:16]
+
+
+def deferred_names(package: str, module: str, names: tuple[str, ...]):
+    """A module `__getattr__` for a robot's package: `names` of its `module` (the simulator, whose physics library
+    loads slowly) are imported on first use, so declaring the robot (its SimulatorEntry) loads no physics."""
+
+    def __getattr__(name: str):
+        if name in names:
+            value = getattr(importlib.import_module(f"{package}.{module}"), name)
+            setattr(sys.modules[package], name, value)
+            return value
+        raise AttributeError(f"module {package!r} has no attribute {name!r}")
+
+    return __getattr__

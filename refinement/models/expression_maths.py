@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from tailor.sims.kinematics import transfer_time
+
 PI, TWO_PI = np.pi, 2.0 * np.pi
 _EPS = np.finfo(float).eps
 _ULPS = 8.0  # outward widening of every computed bound, in units of the bound's magnitude times eps
@@ -38,27 +40,9 @@ def _protected_div(x: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 
 def transfer(d: np.ndarray, v0: np.ndarray, vg: np.ndarray, vmax: float, amax: float) -> np.ndarray:
-    """Least duration of a move by displacement d from speed v0 to vg under |v| <= vmax, |a| <= amax: the fastest
-    of the three-phase profiles (to a cruise speed vc, cruise, to vg) over every candidate vc (the limits, the
-    boundary speeds, and the peaks of the profiles without cruise)."""
-    d, v0, vg = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (d, v0, vg)))
-    v0, vg = np.clip(v0, -vmax, vmax), np.clip(vg, -vmax, vmax)
-    candidates = [np.full_like(d, vmax), np.full_like(d, -vmax), v0, vg]
-    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        for s1, s3 in ((1.0, -1.0), (-1.0, 1.0)):  # no cruise: d = s1 (vc^2 - v0^2)/2a + s3 (vg^2 - vc^2)/2a
-            square = (2.0 * amax * d + s1 * v0 * v0 - s3 * vg * vg) / (s1 - s3)
-            root = np.where(square >= -TRANSFER_TOL, np.sqrt(np.maximum(square, 0.0)), np.nan)
-            candidates += [root, -root]
-        best = np.full_like(d, np.inf)
-        for vc in candidates:
-            vc = np.clip(vc, -vmax, vmax)
-            t1, t3 = np.abs(vc - v0) / amax, np.abs(vg - vc) / amax
-            rest = d - 0.5 * (v0 + vc) * t1 - 0.5 * (vc + vg) * t3
-            tc = np.where(vc != 0.0, rest / np.where(vc != 0.0, vc, 1.0),
-                          np.where(np.abs(rest) <= TRANSFER_TOL, 0.0, -np.inf))
-            total = np.where(tc >= -TRANSFER_TOL, t1 + np.maximum(tc, 0.0) + t3, np.inf)
-            best = np.fmin(best, np.where(np.isnan(total), np.inf, total))
-    return best
+    """Least duration of a move by displacement d from speed v0 to vg under |v| <= vmax, |a| <= amax
+    (sims.kinematics.transfer_time)."""
+    return transfer_time(d, v0, vg, vmax, amax, TRANSFER_TOL)
 
 
 def _rest_to_rest(distance: np.ndarray, vmax: float, amax: float) -> np.ndarray:

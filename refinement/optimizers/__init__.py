@@ -51,24 +51,23 @@ def _with_ga(objective: Objective, seed: int, start: float, notes: list[str]) ->
     return replace(result, seconds=time.perf_counter() - start, note="; ".join(notes + [result.note]))
 
 
-def _analytic_or_ga(objective: Objective, seed: int = 0) -> OptimizationResult:
-    """Analytic minimization where the models are mergeable, the genetic algorithm otherwise."""
-    start = time.perf_counter()
-    try:
-        return analytic.minimize(objective, seed)
-    except NotApplicable as why:
-        log.debug("analytic minimization not applicable (%s): the genetic algorithm instead", why)
-        return _with_ga(objective, seed, start, [f"analytic not applicable: {why}"])
+def _or_ga(name: str, minimize) -> Callable[[Objective, int], OptimizationResult]:
+    """`minimize` where it applies, the genetic algorithm otherwise (the note says why)."""
+
+    def run(objective: Objective, seed: int = 0) -> OptimizationResult:
+        start = time.perf_counter()
+        try:
+            return minimize(objective, seed)
+        except NotApplicable as why:
+            log.debug("%s not applicable (%s): the genetic algorithm instead", name, why)
+            return _with_ga(objective, seed, start, [f"{name} not applicable: {why}"])
+
+    run.__doc__ = f"{name} where it applies, the genetic algorithm otherwise."
+    return run
 
 
-def _certified_or_ga(objective: Objective, seed: int = 0) -> OptimizationResult:
-    """The certified branch and bound where every term can be bounded, the genetic algorithm otherwise."""
-    start = time.perf_counter()
-    try:
-        return certified.minimize(objective, seed)
-    except NotApplicable as why:
-        log.debug("certified optimizer not applicable (%s): the genetic algorithm instead", why)
-        return _with_ga(objective, seed, start, [f"certified not applicable: {why}"])
+_analytic_or_ga = _or_ga("analytic", analytic.minimize)
+_certified_or_ga = _or_ga("certified", certified.minimize)
 
 
 def auto(objective: Objective, seed: int = 0) -> OptimizationResult:

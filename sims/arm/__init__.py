@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 
 from tailor.sims.arm.features import RAMPS
 from tailor.sims.arm.scenarios import SITUATIONS, run_reach, run_stroke_leg, subgoal_episode
+from tailor.sims.registry import deferred_names
 from tailor.sims.protocol import ActionSpec, Quantity, Scenario, SimulatorEntry
 
 if TYPE_CHECKING:
@@ -51,16 +52,7 @@ SIMULATOR = SimulatorEntry(
 )
 
 # names of the simulator module, imported on first use (see above)
-_FROM_SIMULATOR = ("ArmSim", "Noise", "simulate_sequence")
-
-
-def __getattr__(name: str):
-    if name in _FROM_SIMULATOR:
-        from tailor.sims.arm import simulator  # deferred: pymunk loads with the first use of these names
-
-        value = globals()[name] = getattr(simulator, name)
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = deferred_names(__name__, "simulator", ("ArmSim", "Noise", "simulate_sequence"))
 
 
 __all__ = ["SIMULATOR", "ArmSim", "Noise", "simulate_sequence"]

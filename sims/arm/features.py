@@ -15,6 +15,7 @@ import numpy as np
 from tailor.sims.arm import world as W
 from tailor.sims.arm.profile import EPS
 from tailor.sims.invariances import shift_mirror_axes
+from tailor.sims.kinematics import transfer_time
 from tailor.sims.protocol import FeatureSpace
 
 PARAMETERS = ("theta_a", "omega_a", "theta_b", "omega_b", "theta_ga", "omega_ga", "theta_gb", "omega_gb")
@@ -25,23 +26,7 @@ def ramp_durations(x0: np.ndarray, v0: np.ndarray, xg: np.ndarray, vg: np.ndarra
                    v_max: float = W.OMEGA_MAX, a_max: float = W.ALPHA_MAX) -> np.ndarray:
     """The time-optimal ramp's duration per row: profile.optimal vectorized (its boundary profiles: every
     candidate cruise speed, the fastest one that needs no negative cruise time)."""
-    v0, vg = np.clip(v0, -v_max, v_max), np.clip(vg, -v_max, v_max)
-    d = xg - x0
-    candidates = [np.full_like(d, v_max), np.full_like(d, -v_max), v0, vg]
-    for s1, s3 in ((1.0, -1.0), (-1.0, 1.0)):  # no cruise: d = s1 (vc^2 - v0^2) / 2a + s3 (vg^2 - vc^2) / 2a
-        sq = (2.0 * a_max * d + s1 * v0 * v0 - s3 * vg * vg) / (s1 - s3)
-        root = np.where(sq >= -EPS, np.sqrt(np.maximum(sq, 0.0)), np.nan)
-        candidates += [root, -root]
-    best = np.full_like(d, np.inf)
-    for vc in candidates:
-        vc = np.clip(vc, -v_max, v_max)  # NaN stays NaN: no such candidate
-        t1, t3 = np.abs(vc - v0) / a_max, np.abs(vg - vc) / a_max
-        rest = d - 0.5 * (v0 + vc) * t1 - 0.5 * (vc + vg) * t3
-        with np.errstate(divide="ignore", invalid="ignore"):
-            tc = np.where(vc != 0.0, rest / vc, np.where(np.abs(rest) <= EPS, 0.0, -np.inf))  # vc = 0: wait
-        total = np.where(tc >= -EPS, t1 + np.maximum(tc, 0.0) + t3, np.inf)
-        best = np.fmin(best, np.where(np.isnan(total), np.inf, total))
-    return best
+    return transfer_time(xg - x0, v0, vg, v_max, a_max, EPS)
 
 
 def _ramps(params: np.ndarray) -> np.ndarray:

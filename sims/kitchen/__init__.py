@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 from tailor.sims.kitchen.drawing import draw_scene
 from tailor.sims.kitchen.features import GRASP, ROUTE, SPOT
 from tailor.sims.kitchen.scenarios import SITUATIONS, run_goto, run_grip, run_put, subgoal_episode
+from tailor.sims.registry import deferred_names
 from tailor.sims.protocol import ActionSpec, Quantity, Scenario, SimulatorEntry
 
 if TYPE_CHECKING:
@@ -60,16 +61,7 @@ SIMULATOR = SimulatorEntry(
 )
 
 # names of the simulator module, imported on first use (see above)
-_FROM_SIMULATOR = ("KitchenSim", "Noise", "simulate_sequence")
-
-
-def __getattr__(name: str):
-    if name in _FROM_SIMULATOR:
-        from tailor.sims.kitchen import simulator  # deferred: pymunk loads with the first use of these names
-
-        value = globals()[name] = getattr(simulator, name)
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = deferred_names(__name__, "simulator", ("KitchenSim", "Noise", "simulate_sequence"))
 
 
 __all__ = ["SIMULATOR", "KitchenSim", "Noise", "simulate_sequence"]

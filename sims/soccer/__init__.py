@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+from tailor.sims.registry import deferred_names
 from tailor.sims.protocol import ActionSpec, DurationCurve, Quantity, Scenario, SimulatorEntry, SuccessRegion
 from tailor.sims.soccer.actions import ACTION_FUNCTIONS, approachBall, dribbleBall, goToPose
 from tailor.sims.soccer.features import APPROACH, DRIBBLE, GOTO_SPACE
@@ -84,16 +85,7 @@ SIMULATOR = SimulatorEntry(
 )
 
 # names of the simulator module, imported on first use (see above)
-_FROM_SIMULATOR = ("Noise", "SoccerSim", "simulate_sequence")
-
-
-def __getattr__(name: str):
-    if name in _FROM_SIMULATOR:
-        from tailor.sims.soccer import simulator  # deferred: pymunk loads with the first use of these names
-
-        value = globals()[name] = getattr(simulator, name)
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = deferred_names(__name__, "simulator", ("Noise", "SoccerSim", "simulate_sequence"))
 
 
 __all__ = ["ACTION_FUNCTIONS", "Noise", "SIMULATOR", "SoccerSim", "approachBall", "dribbleBall", "goToPose",
