@@ -95,7 +95,8 @@ def _fmt(value, pattern="{:.2f}") -> str:
 
 
 def _pct(value) -> str:
-    return _fmt(None if value is None else 100 * value, "{:.1f}")
+    """A share as a percentage, "12.3%"; "-" where there is none (no "-%")."""
+    return "-" if value is None else _fmt(100 * value, "{:.1f}") + "%"
 
 
 def _print_text(report: dict) -> None:
@@ -108,35 +109,35 @@ def _print_text(report: dict) -> None:
         f = s["filter_decisions"]
         out(f"  meta filter (Sec. 5.5.4)     refined {f['refined']}, greedy kept {f['kept_greedy']} "
             f"(not judged, refined: {f['not_judged']})\n")
-    out(f"  failure rate greedy / refined {_pct(s['failure_rate_greedy'])}% / {_pct(s['failure_rate_refined'])}%\n")
+    out(f"  failure rate greedy / refined {_pct(s['failure_rate_greedy'])} / {_pct(s['failure_rate_refined'])}\n")
     out(f"  penalized mean, all scenarios {_fmt(s['penalized_greedy_mean'])} s / {_fmt(s['penalized_refined_mean'])} s "
-        f"(a failure counts its time + {s['failure_penalty_s']:.0f} s; improvement {_pct(s['penalized_improvement'])}%)\n")
+        f"(a failure counts its time + {s['failure_penalty_s']:.0f} s; improvement {_pct(s['penalized_improvement'])})\n")
     out(f"  mean duration greedy (h=1)   {_fmt(s['greedy_mean'])} s\n")
     risk = f", risk {report['risk']:g}" if report.get("risk") else ""
     out(f"  mean duration refined (h=2{risk})  {_fmt(s['refined_mean'])} s\n")
-    out(f"  mean improvement (Eq. 5.3)   {_pct(s['improvement'])}%   (predicted {_pct(s['predicted_improvement'])}%)\n")
+    out(f"  mean improvement (Eq. 5.3)   {_pct(s['improvement'])}   (predicted {_pct(s['predicted_improvement'])})\n")
     out(f"  paired t-test p-value        {_fmt(s['p_value'], '{:.2g}')}\n")
     out(f"  better / equal / worse       {s['better']} / {s['equal']} / {s['worse']}   "
-        f"(mean improvement {_pct(s['improvement_better'])}% / {_pct(s['improvement_equal'])}% / "
-        f"{_pct(s['improvement_worse'])}%)\n")
+        f"(mean improvement {_pct(s['improvement_better'])} / {_pct(s['improvement_equal'])} / "
+        f"{_pct(s['improvement_worse'])})\n")
     if "zero_mean" in s:
         out(f"  free parameters all zero     {_fmt(s['zero_mean'])} s over {s['zero_episodes']} (failed "
-            f"{s['failed_zero']}); refined is {_pct(s['improvement_over_zero'])}% faster, "
+            f"{s['failed_zero']}); refined is {_pct(s['improvement_over_zero'])} faster, "
             f"p {_fmt(s['p_value_zero'], '{:.2g}')}\n")
     out(f"  refined / simulated optimum  {_fmt(s['oracle_ratio'], '{:.3f}')} over {s['oracle_episodes']} episodes "
         f"(greedy / optimum {_fmt(s['greedy_oracle_ratio'], '{:.3f}')}; {', '.join(s['oracle_methods']) or '-'})\n")
     if s.get("stronger_baseline") == "zero":
         out(f"  over the stronger baseline   zero ({_fmt(s['stronger_baseline_mean'])} s, faster than greedy): refined "
-            f"is {_pct(s['improvement_over_stronger_baseline'])}% faster over the "
+            f"is {_pct(s['improvement_over_stronger_baseline'])} faster over the "
             f"{s['stronger_baseline_episodes']} situations where all three succeeded\n")
     optimizer = report.get("optimizer", "auto")
     out(f"  optimizer per sequence       {optimizer} {_fmt(s['analytic_ms_median'])} ms, ga alone "
         f"{_fmt(s['ga_ms_median'])} ms (medians); their predicted totals agree within 1% in "
-        f"{_pct(s['analytic_ga_agree'])}%\n")
+        f"{_pct(s['analytic_ga_agree'])}\n")
     for method, row in (s.get("optimizers") or {}).items():
         gaps = (f"; certified gap median {100 * row['gap_share_median']:.3f}%, max {100 * row['gap_share_max']:.3f}% "
                 f"over {row['certified_windows']} windows" if row["certified_windows"] else "")
-        out(f"  windows by {method:<17} {_pct(row['share'])}% ({row['windows']}), median {_fmt(row['median_ms'])} ms"
+        out(f"  windows by {method:<17} {_pct(row['share'])} ({row['windows']}), median {_fmt(row['median_ms'])} ms"
             f"{gaps}\n")
         if "vs_ga" in row:
             v = row["vs_ga"]
@@ -146,8 +147,8 @@ def _print_text(report: dict) -> None:
                 f"0.1%), below it on {v['below_ga']}; the GA's median {_fmt(v['ga_median_ms'])} ms\n")
     if s.get("window_ms_median") is not None:
         out(f"  optimizer per window (h=2)   median {_fmt(s['window_ms_median'])} ms; all windows of a sequence take "
-            f"{_pct(s['optimizer_share'])}% of its execution time on average, execution waits for "
-            f"{_pct(s.get('optimizer_wait_share'))}% (each window refined while the action before it executes)\n")
+            f"{_pct(s['optimizer_share'])} of its execution time on average, execution waits for "
+            f"{_pct(s.get('optimizer_wait_share'))} (each window refined while the action before it executes)\n")
     if s.get("per_action"):
         out("\nPer action (Table 5.2), mean duration (s) over the situations where both succeeded (how many):\n")
         out("  problem          step  action              greedy (h=1)  refined (h=2)\n")
@@ -162,9 +163,9 @@ def _print_text(report: dict) -> None:
             "lambda * uncertainty\n")
         out("  lambda  failed greedy/refined  improvement  penalized  better/equal/worse  worse  refined/optimum\n")
         for row in sweep:
-            out(f"  {row['risk']:<6g}  {_pct(row['failure_rate_greedy']):>6}% / {_pct(row['failure_rate_refined']):>5}%"
-                f"  {_pct(row['improvement']):>10}%  {_pct(row['penalized_improvement']):>8}%"
-                f"  {row['better']:>6}/{row['equal']}/{row['worse']:<5}  {_pct(row['worse_share']):>5}%"
+            out(f"  {row['risk']:<6g}  {_pct(row['failure_rate_greedy']):>6} / {_pct(row['failure_rate_refined']):>5}"
+                f"  {_pct(row['improvement']):>10}  {_pct(row['penalized_improvement']):>8}"
+                f"  {row['better']:>6}/{row['equal']}/{row['worse']:<5}  {_pct(row['worse_share']):>5}"
                 f"  {_fmt(row['oracle_ratio'], '{:.3f}'):>8} ({row['oracle_episodes']})\n")
     w = report.get("horizons")
     if w:
@@ -172,8 +173,8 @@ def _print_text(report: dict) -> None:
             "where every horizon succeeded:\n")
         out("  horizon  mean (s)  improvement vs h=1  vs h-1   p (vs h-1)  optimizer\n")
         for row in w["horizons"]:
-            out(f"  h={row['horizon']:<6} {_fmt(row['mean']):>8}  {_pct(row['improvement']):>17}%"
-                f"  {_pct(row['improvement_over_previous']):>6}%  {_fmt(row['p_value_vs_previous'], '{:.2g}'):>10}"
+            out(f"  h={row['horizon']:<6} {_fmt(row['mean']):>8}  {_pct(row['improvement']):>17}"
+                f"  {_pct(row['improvement_over_previous']):>6}  {_fmt(row['p_value_vs_previous'], '{:.2g}'):>10}"
                 f"  {','.join(row['methods'])}\n")
 
 

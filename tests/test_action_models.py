@@ -229,20 +229,3 @@ def test_loader_rejects_a_tree_of_the_wrong_shape(action_model, collision_model,
     with pytest.raises(ModelFileError, match="expected 'tailor.collision_model/1'"):
         load_collision_model(path)
 
-
-def test_an_absurd_prediction_of_a_model_in_training_says_too_few_episodes_not_a_bad_file():
-    """Issue 33 (9): at the documented minimum of episodes a model being trained may extrapolate; that is said as
-    such (a data error), not as an inconsistent file naming no file."""
-    import dataclasses
-
-    from tailor.errors import DataError, ModelFileError
-    from tailor.planner_bridge.bundled import DOMAINS_DIR
-    from tailor.refinement.models.action_models import load_action_models
-
-    model = load_action_models(DOMAINS_DIR / "soccer" / "models", ("goToPose",))["goToPose"]
-    with pytest.raises(ModelFileError, match=r"goToPose.json: step 1 goToPose: the model predicts 1e\+06 s"):
-        model.check_duration(1e6, "step 1 goToPose")
-    training = dataclasses.replace(model, source=None)
-    with pytest.raises(DataError, match=r"^step 1 goToPose: the goToPose model being trained predicts 1e\+06 s here.*"
-                                        r"too few episodes to learn it from \(train with more --episodes\)$"):
-        training.check_duration(1e6, "step 1 goToPose")

@@ -187,3 +187,13 @@ def test_a_small_evaluation_runs_as_many_horizon_situations_as_episodes(monkeypa
     with pytest.raises(Stop):
         main(["-q", "evaluate", "soccer", "--episodes", "2", "--oracle-episodes", "0"])
     assert asked == [2]
+
+
+def test_a_share_that_is_not_known_prints_as_a_dash_not_as_dash_percent(capsys):
+    """Issue 32: `evaluate` printed "-%" where a share had no value (too few situations)."""
+    from tailor.cli.evaluate import _pct
+
+    assert (_pct(None), _pct(0.1234)) == ("-", "12.3%")
+    assert main(["-q", "evaluate", "soccer", "--episodes", "1", "--oracle-episodes", "0", "--horizon-episodes", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "-%" not in out and "%" in out

@@ -79,3 +79,31 @@ def test_each_round_chooses_subgoals_with_the_model_the_round_before_retrained(m
     assert models["dribbleBall"] == "model 2 on 17"  # the last retraining used all 7 subgoal episodes
     assert report == {"generator": "score", "action": "dribbleBall", "situations": 7, "episodes": 7, "rounds": 3,
                       "succeeded": 7}
+
+
+def test_a_model_just_trained_that_extrapolates_is_too_few_episodes_not_a_bad_file(monkeypatch):
+    """Issue 33 (9): at the documented minimum of episodes a model just trained may predict an absurd duration
+    while training refines situations with it; that is said as too few episodes (a data error), not as an
+    inconsistent model file naming no file."""
+    import pytest
+
+    from tailor.errors import DataError, ModelFileError
+    from tailor.refinement.learning import subgoal_experience
+
+    def absurd(*args, **kwargs):
+        raise ModelFileError("step 1 dribbleBall: the model predicts -1.769 s, outside the plausible [0.5, 9] s")
+
+    monkeypatch.setattr(subgoal_experience, "refine", absurd)
+    monkeypatch.setattr(subgoal_experience, "situation_sequence", lambda job, objects: None)
+    job = SimpleNamespace(seed=0, plan=SimpleNamespace(problem="score"))
+    monkeypatch.setattr(subgoal_experience, "job_binding", lambda job: SimpleNamespace(entry=None))
+    with pytest.raises(DataError, match=r"^the models just trained predict a duration outside .* situation 3 of "
+                                        r"'score' .* too few episodes to learn from \(train with more --episodes\)$"):
+        subgoal_experience._episodes([(job, 3, {})], {}, "dribbleBall")
+
+    def bad_file(*args, **kwargs):
+        raise ModelFileError("the model predicts -1.769 s", file="models/dribbleBall.json")
+
+    monkeypatch.setattr(subgoal_experience, "refine", bad_file)
+    with pytest.raises(ModelFileError):
+        subgoal_experience._episodes([(job, 3, {})], {}, "dribbleBall")

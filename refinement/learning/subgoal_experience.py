@@ -15,6 +15,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from tailor.errors import DataError, ModelFileError
 from tailor.refinement.binding import load_domain_binding
 from tailor.refinement.refine import refine
 from tailor.refinement.situations import Job, draw_situations, job_binding, situation_sequence, stream_seed
@@ -31,7 +32,15 @@ def _episodes(situations: list[tuple[Job, int, dict]], models: dict, action: str
     for job, i, objects in situations:
         entry = job_binding(job).entry
         seed = stream_seed(job.seed, SUBGOAL_STREAM, i)
-        refined = refine(situation_sequence(job, objects), models, horizon=1 + i % 2, method="analytic", seed=seed)
+        try:
+            refined = refine(situation_sequence(job, objects), models, horizon=1 + i % 2, method="analytic", seed=seed)
+        except ModelFileError as exc:
+            if exc.file is not None:  # a model read from a file: it is the file that is wrong
+                raise
+            # a model just trained, not a file: at the minimum of episodes it may extrapolate absurdly
+            raise DataError(f"the models just trained predict a duration outside the durations seen in training "
+                            f"when refining situation {i} of '{job.plan.problem}' to choose subgoals: too few "
+                            "episodes to learn from (train with more --episodes)") from None
         for k, follow in enumerate(refined.sequence.actions):
             if k == 0 or follow.action != action:  # the first action starts from the belief, not a subgoal
                 continue

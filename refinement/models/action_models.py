@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from tailor.refinement.models.decision_tree import DecisionTree, LeafBox
-from tailor.errors import DataError, ModelFileError, check_path_argument
+from tailor.errors import ModelFileError, check_path_argument
 from tailor.refinement.models.expression_space import AUTO, ExpressionSpace
 from tailor.refinement.models.expressions import ExpressionError
 from tailor.refinement.models.features import compute_features, feature_space as registered_space, feature_spaces
@@ -130,10 +130,6 @@ class ActionModel:
             raise ModelFileError(f"{where}: the model predicts a duration of {value} s: its coefficients are "
                                  "broken (retrain with `tailor train`)", file=self.source)
         if not bounds[0] <= value <= bounds[1]:
-            if self.source is None:  # a model still in training, not read from a file: it learned too little
-                raise DataError(f"{where}: the {self.action} model being trained predicts {value:.4g} s here, outside "
-                                f"the plausible [{bounds[0]:.3g}, {bounds[1]:.3g}] s (the durations seen in training, "
-                                "with a margin): too few episodes to learn it from (train with more --episodes)")
             raise ModelFileError(f"{where}: the model predicts {value:.4g} s, outside the plausible "
                                  f"[{bounds[0]:.3g}, {bounds[1]:.3g}] s (the durations seen in training, with a "
                                  "margin): the file is inconsistent (retrain with `tailor train`)", file=self.source)
