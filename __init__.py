@@ -20,7 +20,7 @@ from __future__ import annotations
 from importlib.metadata import PackageNotFoundError, version
 
 from tailor.errors import ArgumentTypeError, ArgumentValueError, TailorError
-from tailor.planner_bridge.engine_registration import install as install_engine
+from tailor.engine_registration import install as install_engine
 
 try:
     __version__ = version("tailor")

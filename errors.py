@@ -7,7 +7,9 @@ subclasses, so an API user catches them all with one `except tailor.TailorError`
 
 from __future__ import annotations
 
+import math
 import re
+from typing import Any
 
 # Characters a message shows escaped, as Python writes them in a string ("\\n", "\\x1b", "\\u202e"): control
 # characters (a newline would make two lines of one error; an ESC byte in a file name would reach the terminal
@@ -18,6 +20,27 @@ _UNPRINTABLE = re.compile("[\x00-\x1f\x7f-\x9f\u061c\u200e\u200f\u2028\u2029\u20
 def printable(text: str) -> str:
     """`text` with every control character escaped: what a one-line message shows of a name or path."""
     return _UNPRINTABLE.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), text)
+
+
+
+MAX_SHOWN = 60  # characters of a value an error message repeats
+
+
+def is_finite(value: float) -> bool:
+    """Whether a number is finite as a float: an integer beyond any float (10**400) is not."""
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
+def shown(value: Any) -> str:
+    """`value` for a one-line message: repr, but an integer too long to print whole by its size (Python will
+    not even print one of more than 4,300 digits), anything else cut to MAX_SHOWN characters."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 64:
+        return f"an integer of {value.bit_length()} bits"
+    text = repr(value)
+    return text if len(text) <= MAX_SHOWN else text[:MAX_SHOWN - 3] + "..."
 
 
 class TailorError(Exception):

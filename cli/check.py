@@ -15,7 +15,6 @@ from tailor.errors import BindingError
 from tailor.outputs import json_text, versioned
 from tailor.planner_bridge import bundled_problems, plan_pddl, resolve_domain_dir
 from tailor.refinement import pipeline
-from tailor.refinement.check import check_task
 
 DESCRIPTION = (
     "say what the binding and each problem's belief file make of the problem: the free parameters with their "
@@ -43,8 +42,7 @@ def run(args: argparse.Namespace) -> int:
         task = pipeline.resolve_task(args.domain, problem, args.belief if args.problem else None)
         inputs = pipeline.read_task(task)
         plan = plan_pddl(inputs.pddl, planner=args.planner, timeout=args.timeout)
-        belief = inputs.belief.check_objects([name for name, _ in plan.objects]) if plan.objects else inputs.belief
-        checked = check_task(plan, inputs.binding, belief)
+        checked = pipeline.check(inputs, plan)
         reports.append((task, plan, checked))
     if args.json:
         sys.stdout.write(json_text(versioned("check", {"problems": [

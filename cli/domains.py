@@ -29,7 +29,7 @@ def describe(domain_dir) -> dict:
         info["notes"].append(f"no {BINDING_FILE}: planning only")
         return info
     try:
-        binding = load_domain_binding(domain_dir)
+        binding = load_domain_binding(domain_dir, vocabulary=vocabulary)  # (the domain file read once)
     except TailorError as exc:
         info["notes"].append(str(exc))
         return info

@@ -3,10 +3,9 @@ links out, planned in a child process (planner_bridge.worker)."""
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
-from tailor.errors import ArgumentValueError
+from tailor.errors import ArgumentValueError, is_finite, shown
 from tailor.planner_bridge.abstract_plan import AbstractPlan
 from tailor.planner_bridge.in_process import DEFAULT_PLANNER
 from tailor.planner_bridge.reading import PDDLTask, read_pddl
@@ -54,14 +53,5 @@ def plan_pddl(
 def check_limits(timeout: float | None, memory_gb: float | None = None) -> None:
     """An ArgumentValueError unless each limit given is a positive, finite number."""
     for name, limit in (("timeout", timeout), ("memory limit", memory_gb)):
-        if limit is not None and not (limit > 0 and _finite(limit)):
-            shown = "an integer no float holds" if isinstance(limit, int) and not _finite(limit) else limit
-            raise ArgumentValueError(f"the {name} must be positive and finite (None for no limit), not {shown}")
-
-
-def _finite(number) -> bool:
-    """math.isfinite, for which an integer beyond any float (10**400) is an error, not infinite."""
-    try:
-        return math.isfinite(number)
-    except OverflowError:
-        return False
+        if limit is not None and not (limit > 0 and is_finite(limit)):
+            raise ArgumentValueError(f"the {name} must be positive and finite (None for no limit), not {shown(limit)}")

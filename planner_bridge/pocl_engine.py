@@ -19,7 +19,7 @@ from unified_planning.plans import ActionInstance, PartialOrderPlan
 
 from tailor.planner_bridge.abstract_plan import GOAL, INITIAL, CausalLink
 from tailor.planner_bridge.causal import transitive_reduction
-from tailor.planner_bridge.engine_registration import ENGINE_NAME
+from tailor.engine_registration import ENGINE_NAME
 from tailor.planner_bridge.pocl import GOAL as POCL_GOAL
 from tailor.planner_bridge.pocl import INIT as POCL_INIT
 from tailor.planner_bridge.pocl import Planner, flaws_of, linearization

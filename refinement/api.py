@@ -23,15 +23,15 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from tailor.errors import ArgumentTypeError, ArgumentValueError, BeliefError
+from tailor.errors import ArgumentTypeError, ArgumentValueError
 from tailor.planner_bridge import (DEFAULT_PLANNER, AbstractPlan, PDDLTask, plan_pddl, read_pddl, resolve_domain_dir,
                                    resolve_problem)
 from tailor.planner_bridge.reading import parse_task
+from tailor.planner_bridge.bridge import check_limits
 from tailor.planner_bridge.up_interop import link_plan, plan_problem
 from tailor.planner_bridge.worker import PlannerProcess
 from tailor.refinement import pipeline
 from tailor.refinement.action_sequence import ActionSequence
-from tailor.refinement.belief import is_finite, shown
 from tailor.refinement.binding import DOMAIN_FILE
 from tailor.refinement.dispatch import dispatch as dispatch_sequence
 from tailor.refinement.models.meta_model import load_meta_model
@@ -273,19 +273,13 @@ def _belief_table(belief: Mapping) -> dict:
             raise ArgumentTypeError("belief must map object names to {quantity: value} mappings, "
                                     f"got {name!r}: {type(values).__name__}")
         table[name] = {quantity: float(value) if _real(value) else value for quantity, value in values.items()}
-        for quantity, value in table[name].items():
-            if isinstance(value, (int, float)) and not isinstance(value, bool) and not is_finite(value):
-                raise BeliefError(f"[objects.{name}] {quantity} = {shown(value)} is not a finite number",
-                                  file="<belief argument>")
     return table
 
 
 def _check_timeout(timeout) -> None:
     if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, (int, float))):
         raise ArgumentTypeError(f"timeout must be a number of seconds or None, not {type(timeout).__name__}")
-    if timeout is not None and not (timeout > 0 and is_finite(timeout)):
-        raise ArgumentValueError("the timeout must be positive and finite (None for no limit), "
-                                 f"not {shown(timeout)}")
+    check_limits(timeout)
 
 
 def _plan_files(domain, problem, planner: str, timeout: float | None, pddl: PDDLTask | None = None) -> AbstractPlan:

@@ -11,7 +11,6 @@ Only the values the binding reads are required (for facts that hold in the initi
 
 from __future__ import annotations
 
-import math
 from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,11 +18,10 @@ from types import MappingProxyType
 from typing import Any
 
 from tailor.refinement.binding import read_toml
-from tailor.errors import BeliefError
+from tailor.errors import BeliefError, is_finite, shown
 
 SCHEMA = 1
 BELIEF_SUFFIX = ".toml"
-MAX_SHOWN = 60  # characters of a value an error message repeats
 
 
 @dataclass(frozen=True)
@@ -106,20 +104,3 @@ def _number(obj: str, quantity: str, value: Any, quantities: Collection[str] | N
     if not is_finite(value):
         raise fail(f"{where} = {shown(value)} is not a finite number")
     return float(value)
-
-
-def is_finite(value: float) -> bool:
-    """Whether a number is finite as a float: an integer beyond any float (10**400) is not."""
-    try:
-        return math.isfinite(value)
-    except OverflowError:
-        return False
-
-
-def shown(value: Any) -> str:
-    """`value` for a one-line message: repr, but an integer too long to print whole by its size (Python will
-    not even print one of more than 4,300 digits), anything else cut to MAX_SHOWN characters."""
-    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 64:
-        return f"an integer of {value.bit_length()} bits"
-    text = repr(value)
-    return text if len(text) <= MAX_SHOWN else text[:MAX_SHOWN - 3] + "..."

@@ -24,7 +24,8 @@ from typing import Any
 
 from tailor.errors import BindingError, SimError, TailorError, check_path_argument
 from tailor.planner_bridge.reading import read_input
-from tailor.refinement.binding_domain import check_against_domain, did_you_mean, read_vocabulary, vocabulary_of
+from tailor.refinement.binding_domain import (DomainVocabulary, check_against_domain, did_you_mean, read_vocabulary,
+                                              vocabulary_of)
 from tailor.sims import registry
 from tailor.sims.protocol import GROUPS, ActionSpec, SimulatorEntry
 
@@ -265,20 +266,21 @@ def load_binding(path: Path | str) -> Binding:
     return parse_binding(data, file)
 
 
-def load_domain_binding(domain_dir: Path | str, domain_file: Path | str | None = None, signature=None) -> Binding:
+def load_domain_binding(domain_dir: Path | str, domain_file: Path | str | None = None, signature=None,
+                        vocabulary: DomainVocabulary | None = None) -> Binding:
     """The binding of the domain in `domain_dir` (its `actions.toml`), checked against the PDDL domain: its
-    `signature` where the caller has read the domain already (planner_bridge.read_pddl), else the file
-    `domain_file` (default: `domain_dir/domain.pddl` where it exists): no table names what the domain lacks."""
+    `signature` where the caller has read and checked the domain already (planner_bridge.read_pddl), or its
+    `vocabulary` where the caller has read it lightly, else a light read of the file `domain_file` (default:
+    `domain_dir/domain.pddl` where it exists): no table names what the domain lacks."""
     check_path_argument(domain_dir, "domain_dir")
     binding = load_binding(Path(domain_dir) / BINDING_FILE)
     if signature is not None:
-        check_against_domain(binding, vocabulary_of(signature), DEFAULT_TYPE)
-        return binding
-    domain_file = Path(domain_dir) / DOMAIN_FILE if domain_file is None else Path(domain_file)
-    if domain_file.is_file():
-        vocabulary = read_vocabulary(domain_file)
-        if vocabulary is not None:  # where the read fails, the planner reports the fault with its place
-            check_against_domain(binding, vocabulary, DEFAULT_TYPE)
+        vocabulary = vocabulary_of(signature)
+    elif vocabulary is None:
+        domain_file = Path(domain_dir) / DOMAIN_FILE if domain_file is None else Path(domain_file)
+        vocabulary = read_vocabulary(domain_file) if domain_file.is_file() else None
+    if vocabulary is not None:  # where the read failed, the planner reports the fault with its place
+        check_against_domain(binding, vocabulary, DEFAULT_TYPE)
     return binding
 
 

@@ -21,7 +21,7 @@ from tailor.refinement.action_sequence import ActionSequence
 from tailor.refinement.assertion import AssertedSequence, Assertion, assert_subgoals
 from tailor.refinement.belief import BeliefState, belief_path_for, load_belief, parse_belief
 from tailor.refinement.binding import BINDING_FILE, Binding, load_domain_binding
-from tailor.refinement.check import check_task
+from tailor.refinement.check import TaskCheck, check_task
 from tailor.refinement.dispatch import check_scene, dispatch
 from tailor.refinement.meta_filter import MetaDecision, decide
 from tailor.refinement.model_store import ModelSource, resolve_models
@@ -239,14 +239,20 @@ def refine_stage(sequence: ActionSequence, models: dict[str, ActionModel], succe
     return Refinements(refined_run, greedy_run if options.greedy else None, zero, decision, optimized)
 
 
+def check(inputs: Inputs, plan: AbstractPlan) -> TaskCheck:
+    """Alg. 3 on `plan`, noting what it reads from the belief (refinement.check): the belief's objects checked
+    against the plan's first. `prepare` and `tailor check` both start here."""
+    objects = [name for name, _ in plan.objects]
+    belief = inputs.belief.check_objects(objects) if objects else inputs.belief
+    return check_task(plan, inputs.binding, belief)
+
+
 def prepare(inputs: Inputs, options: Options = Options(), plan: AbstractPlan | None = None) -> Prepared:
     """Algorithm 4 up to refinement on a task read by `read_task`: plan (unless `plan` is given), instantiate,
     assert (unless `options.assertion` is False), load the models, resolve the options' defaults."""
     if plan is None:
         plan = plan_pddl(inputs.pddl, planner=options.planner, timeout=options.timeout)
-    objects = [name for name, _ in plan.objects]
-    belief = inputs.belief.check_objects(objects) if objects else inputs.belief
-    checked = check_task(plan, inputs.binding, belief)  # Alg. 3, noting what it reads from the belief
+    checked = check(inputs, plan)
     for warning in checked.warnings:
         if options.strict:
             raise BindingError(f"{warning} (--strict)")

@@ -19,7 +19,7 @@ NOT_PACKAGE = {"tests", "domains", "docs", ".git", ".venv", ".ci", "build"}
 # The floors, lowest first: a module may import its own floor's modules and those of floors below, never above.
 # Modules on one floor in different rooms (planner_bridge and sims; a robot and the models) do not import each other.
 FLOORS = (
-    ("foundation", ("tailor.errors", "tailor.progress", "tailor.outputs")),
+    ("foundation", ("tailor.errors", "tailor.progress", "tailor.outputs", "tailor.engine_registration")),
     ("planner_bridge", ("tailor.planner_bridge",)),
     ("sims", ("tailor.sims",)),
     ("robots", ()),  # tailor.sims.<robot>: one package per simulator that registers in sims.registry

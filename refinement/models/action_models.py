@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from tailor.refinement.models.decision_tree import DecisionTree, LeafBox
-from tailor.errors import ModelFileError, check_path_argument
+from tailor.errors import ModelFileError, check_path_argument, is_finite
 from tailor.refinement.models.expression_space import AUTO, ExpressionSpace
 from tailor.refinement.models.expressions import ExpressionError
 from tailor.refinement.models.features import compute_features, feature_space as registered_space, feature_spaces
@@ -319,12 +319,7 @@ def write_json_atomic(path: Path, data: dict) -> None:
 
 
 def _is_number(value) -> bool:
-    if not isinstance(value, (int, float)) or isinstance(value, bool):
-        return False
-    try:
-        return math.isfinite(value)
-    except OverflowError:  # an integer beyond any float (10**400)
-        return False
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and is_finite(value)
 
 
 def _check_schema(data: dict, schema: str, source: str) -> None:
