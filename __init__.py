@@ -12,6 +12,8 @@ The Python API (refinement.api), one call per stage:
     refined = tailor.refine(domain, problem)           # belief: the problem's file, a dict or a path
     refined.chosen                                     # the free parameters' values: {"pos2.phi": 2.356, ...}
     result = tailor.dispatch(refined)                  # simulated durations and outcomes
+    for event in tailor.execute(domain, problem):      # closed loop: monitor, re-refine, replan, learn
+        ...
     tailor.to_partial_order_plan(plan, up_problem)     # a unified-planning PartialOrderPlan
 """
 
@@ -35,6 +37,9 @@ _API = {
     "refine": "tailor.refinement.api",
     "dispatch": "tailor.refinement.api",
     "Refinement": "tailor.refinement.api",
+    "execute": "tailor.refinement.execution",
+    "Executor": "tailor.refinement.execution",
+    "Executed": "tailor.refinement.execution",
     "AbstractPlan": "tailor.planner_bridge.abstract_plan",
     "link_plan": "tailor.planner_bridge.up_interop",
     "to_partial_order_plan": "tailor.planner_bridge.up_interop",

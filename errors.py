@@ -169,6 +169,15 @@ class SimError(TailorError):
     exit_code = 15
 
 
+# --- closed-loop execution ------------------------------------------------------------------------------
+class ExecutionError(TailorError):
+    """An executor (a robot adapter, or a simulator run one action at a time) raised or reported something
+    impossible for a step: a duration that is not a finite number >= 0, an unknown outcome, a state that is not
+    finite numbers. The message names the step; the experience kept so far is intact."""
+
+    exit_code = 18
+
+
 # --- the Python API -------------------------------------------------------------------------------------
 class ArgumentTypeError(TailorError, TypeError):
     """An API call got an argument of the wrong type (the message names the argument); also a TypeError."""

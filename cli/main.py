@@ -32,6 +32,8 @@ COMMANDS = {  # name: (module, one line of help); a module defines add_arguments
               "say what the binding and belief make of a problem: free parameters, belief values read, warnings"),
     "refine": ("tailor.cli.refine",
               "refine the free parameters of a plan for the fastest predicted execution, optionally simulate it"),
+    "execute": ("tailor.cli.execute",
+              "execute a refined plan one action at a time, closed loop: monitor, re-refine, replan, learn (Ch. 8.1)"),
     "evaluate": ("tailor.cli.evaluate",
               "measure refined vs greedy execution in the simulator over random situations"),
     "coordinate": ("tailor.cli.coordinate",

@@ -167,7 +167,10 @@ class PredicateBinding:
 
     `read`: quantities taken from the belief state when the fact holds in the initial state (causal link
     from step 0); `ranges`: the interval each quantity lies in whenever the fact holds; `scene`: the scene
-    object the fact places when it holds initially; `args`: the argument positions it applies to (None: all).
+    object the fact places when it holds initially; `args`: the argument positions it applies to (None: all);
+    `lost_on_failure`: closed-loop execution (tailor.refinement.execution) takes a fact of this predicate that a
+    failed action needed to be false afterwards, and what the step that made it true deleted to hold again (the
+    robot that lost the ball no longer has it, and stands where it stood: it must approach again).
     """
 
     name: str
@@ -175,6 +178,7 @@ class PredicateBinding:
     ranges: Mapping[str, Range]
     scene: str | None
     args: tuple[int, ...] | None
+    lost_on_failure: bool = False
 
     def objects(self, fact: Sequence[str], file: str | None) -> tuple[str, ...]:
         """The objects of `fact` (predicate name first) this binding speaks about."""
@@ -443,7 +447,10 @@ def _action(name: str, table: Mapping[str, Any], entry: SimulatorEntry, fail) ->
 def _predicate(name: str, table: Mapping[str, Any], entry: SimulatorEntry, fail) -> PredicateBinding:
     quantities = entry.quantities
     where = f"[predicates.{name}]"
-    extra = {"read", "scene", "args"}
+    extra = {"read", "scene", "args", "lost_on_failure"}
+    lost = table.get("lost_on_failure", False)
+    if not isinstance(lost, bool):
+        raise fail(f"{where} lost_on_failure must be true or false, not {lost!r}")
     read = table.get("read", [])
     if not isinstance(read, list) or not all(isinstance(q, str) for q in read):
         raise fail(f"{where} read must be a list of quantity names")
@@ -466,7 +473,7 @@ def _predicate(name: str, table: Mapping[str, Any], entry: SimulatorEntry, fail)
             raise fail(f"{where} args must be a non-empty list of argument indices")
         args = tuple(_index(f"{where} args", a, fail) for a in args)
     ranges = _ranges(where, table, extra, quantities, fail)
-    return PredicateBinding(name.lower(), tuple(read), MappingProxyType(ranges), scene, args)
+    return PredicateBinding(name.lower(), tuple(read), MappingProxyType(ranges), scene, args, lost)
 
 
 def _ranges(where: str, table: Mapping[str, Any], extra: set[str], quantities: tuple[str, ...],

@@ -247,16 +247,19 @@ def check(inputs: Inputs, plan: AbstractPlan) -> TaskCheck:
     return check_task(plan, inputs.binding, belief)
 
 
-def prepare(inputs: Inputs, options: Options = Options(), plan: AbstractPlan | None = None) -> Prepared:
+def prepare(inputs: Inputs, options: Options = Options(), plan: AbstractPlan | None = None, warn: bool = True
+            ) -> Prepared:
     """Algorithm 4 up to refinement on a task read by `read_task`: plan (unless `plan` is given), instantiate,
-    assert (unless `options.assertion` is False), load the models, resolve the options' defaults."""
+    assert (unless `options.assertion` is False), load the models, resolve the options' defaults. `warn` False:
+    the check's warnings are kept in the result, not logged (a replan's belief holds values executed so far)."""
     if plan is None:
         plan = plan_pddl(inputs.pddl, planner=options.planner, timeout=options.timeout)
     checked = check(inputs, plan)
     for warning in checked.warnings:
         if options.strict:
             raise BindingError(f"{warning} (--strict)")
-        logging.getLogger(__name__).warning("%s", warning)
+        if warn:
+            logging.getLogger(__name__).warning("%s", warning)
     instantiated = checked.sequence
     success_models: dict = {}
     sequence, assertions = instantiated, ()

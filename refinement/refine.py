@@ -366,40 +366,16 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
     compared: list[OptimizationResult] = []
     steps = progress_bar(iterable=range(len(actions)), desc=f"refining (h={horizon})", unit="action", leave=False)
     for i in steps:
-        window = actions[i:i + horizon]
-        free: list[FreeParameter] = []
-        seen: set[str] = set()
-
-        def take(action: ExecutableAction) -> None:
-            for p in action.params:
-                if p.free and p.id not in assignment and p.id not in seen:
-                    seen.add(p.id)
-                    free.append(FreeParameter(p.id, p.low, p.high))
-
-        for action in window:
-            take(action)
-        if not any(p.free and p.id not in assignment for p in actions[i].params):
+        window = optimize_window(actions, i, horizon, assignment, models, method, seed, success_models, risk,
+                                 margin_share, neighbourhood)
+        if window is None:
             continue  # action i's subgoal is already fixed; nothing of it to choose in this window
-        # a guarded action beyond the horizon that shares a free parameter still constrains it (Alg. 6): it
-        # joins as a validity-only term, its other open parameters chosen with the window's (not fixed yet)
-        beyond = [a for a in actions[i + horizon:] if a.guard and any(p.id in seen for p in a.params if p.free)]
-        for action in beyond:
-            take(action)
-        free_t = tuple(free)
-        shared: dict = {}  # one feature batch and duration model per action model of the window
-        terms = tuple(action_term(a, model_for(a, models), free_t, assignment, guard_for(a, success_models), risk,
-                                  shared) for a in window)
-        terms += tuple(guard_term(a, model_for(a, models), free_t, assignment, guard_for(a, success_models))
-                       for a in beyond)
-        margin = tuple(margin_share * (p.high - p.low) for p in free_t)
-        radius = tuple(neighbourhood * (p.high - p.low) for p in free_t) if neighbourhood else ()
-        objective = Objective(free=free_t, terms=terms, margin=margin, neighbourhood=radius)
-        result = optimize(objective, method=method, seed=seed + i)
+        objective, result = window
         windows.append(result)
         acted.append(i)
         if compare is not None:
             compared.append(result if result.method == compare else optimize(objective, method=compare, seed=seed + i))
-        chosen = dict(zip((p.id for p in free_t), result.values))
+        chosen = dict(zip((p.id for p in objective.free), result.values))
         for p in actions[i].params:  # fix what action i uses; later subgoals are optimized again
             if p.id in chosen:
                 assignment[p.id] = float(chosen[p.id])
@@ -407,3 +383,42 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
     return RefinedSequence(sequence=bound, predicted=predicted_durations(bound, models), windows=tuple(windows),
                            horizon=horizon, risk=float(risk), spread=predicted_spreads(bound, models),
                            neighbourhood=float(neighbourhood), window_actions=tuple(acted), compared=tuple(compared))
+
+
+def optimize_window(actions: tuple[ExecutableAction, ...], i: int, horizon: int, assignment: Mapping[str, float],
+                    models: Mapping[str, ActionModel], method: str = DEFAULT_OPTIMIZER, seed: int = 0,
+                    success_models: Mapping[str, object] | None = None, risk: float = 0.0,
+                    margin_share: float = MARGIN_SHARE, neighbourhood: float = 0.0
+                    ) -> tuple[Objective, OptimizationResult] | None:
+    """The window of `horizon` actions from action i, its free parameters not in `assignment` optimized (seed
+    `seed + i`): the objective and its optimum; None where action i has nothing left to choose. One step of
+    `refine`, and what closed-loop execution re-optimizes from a measured state (receding horizon)."""
+    window = actions[i:i + horizon]
+    free: list[FreeParameter] = []
+    seen: set[str] = set()
+
+    def take(action: ExecutableAction) -> None:
+        for p in action.params:
+            if p.free and p.id not in assignment and p.id not in seen:
+                seen.add(p.id)
+                free.append(FreeParameter(p.id, p.low, p.high))
+
+    for action in window:
+        take(action)
+    if not any(p.free and p.id not in assignment for p in actions[i].params):
+        return None
+    # a guarded action beyond the horizon that shares a free parameter still constrains it (Alg. 6): it joins as
+    # a validity-only term, its other open parameters chosen with the window's (not fixed yet)
+    beyond = [a for a in actions[i + horizon:] if a.guard and any(p.id in seen for p in a.params if p.free)]
+    for action in beyond:
+        take(action)
+    free_t = tuple(free)
+    shared: dict = {}  # one feature batch and duration model per action model of the window
+    terms = tuple(action_term(a, model_for(a, models), free_t, assignment, guard_for(a, success_models), risk,
+                              shared) for a in window)
+    terms += tuple(guard_term(a, model_for(a, models), free_t, assignment, guard_for(a, success_models))
+                   for a in beyond)
+    margin = tuple(margin_share * (p.high - p.low) for p in free_t)
+    radius = tuple(neighbourhood * (p.high - p.low) for p in free_t) if neighbourhood else ()
+    objective = Objective(free=free_t, terms=terms, margin=margin, neighbourhood=radius)
+    return objective, optimize(objective, method=method, seed=seed + i)

@@ -82,6 +82,20 @@ class Simulator(Protocol):
         """Execute actions one after the other without stopping between them; stop at the first failure."""
 
 
+@runtime_checkable
+class Observable(Protocol):
+    """A simulator the closed loop can run (tailor.execution): besides `Simulator`, what the robot measures now,
+    between two actions. Both read the believed (noisy) state, as the robot's own sensors would."""
+
+    def observe(self, action: str) -> tuple[float, ...]:
+        """The observed parameter group of `action` (its ActionSpec's `observed`, in order) as measured now: what
+        `run(ActionCall(action, ...))` would log as the first values of `Episode.params`."""
+
+    def scene(self) -> dict[str, tuple[float, ...]]:
+        """Every scene object's measured values now, in the form `reset` takes (so `reset(scene())` places the
+        world as the robot believes it to be)."""
+
+
 @dataclass(frozen=True)
 class Quantity:
     """What a simulator's quantity (or logged state column) is: its unit ("m", "rad", "m/s"; "" where none is
@@ -195,7 +209,9 @@ class SimulatorEntry:
 
     name: str
     actions: Mapping[str, ActionSpec]
-    create: Callable[..., Simulator]  # create(seed, noise=None): noise None is the simulator's default noise
+    # create(seed, noise=None, disturbance=None, variant=None): noise None is the simulator's default noise;
+    # disturbance / variant name one of `disturbances` / `variants` below (None: none, the robot as modelled)
+    create: Callable[..., Simulator]
     scenarios: Mapping[str, Scenario] = field(default_factory=dict)
     situations: Mapping[str, Situation] = field(default_factory=dict)
     subgoal_episode: SubgoalEpisode | None = None
@@ -216,6 +232,12 @@ class SimulatorEntry:
     # pictures of its learned models it can draw, besides the learning curves every simulator gets: Fig. 4.7's
     # DurationCurve, Fig. 4.8's SuccessRegion
     model_pictures: tuple[DurationCurve | SuccessRegion, ...] = ()
+    # seeded disturbances of the world it can add to a run (name -> what happens, in words; Ch. 8.1: the ball
+    # nudged by an opponent, a cup displaced): part of the scene, never known to refinement in advance
+    disturbances: Mapping[str, str] = field(default_factory=dict)
+    # changed robots it can simulate (name -> what changed, in words; Ch. 8.1: weaker motors, a payload): the
+    # learned models do not know them; learning in operation adapts to them
+    variants: Mapping[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for key, spec in self.actions.items():
@@ -233,6 +255,22 @@ class SimulatorEntry:
                 raise ValueError(f"simulator {self.name}: units[{name!r}] must be a Quantity, got "
                                  f"{type(quantity).__name__}")
         object.__setattr__(self, "units", MappingProxyType(dict(self.units)))
+        object.__setattr__(self, "disturbances", MappingProxyType(dict(self.disturbances)))
+        object.__setattr__(self, "variants", MappingProxyType(dict(self.variants)))
+
+    def simulator(self, seed: int, noise=None, disturbance: str | None = None, variant: str | None = None
+                  ) -> Simulator:
+        """A new simulator: `create` with a disturbance and a variant checked against those declared."""
+        from tailor.errors import SimError
+
+        for kind, name, known in (("disturbance", disturbance, self.disturbances),
+                                  ("variant", variant, self.variants)):
+            if name is not None and name not in known:
+                raise SimError(f"simulator {self.name!r} has no {kind} {name!r} (known: "
+                               f"{', '.join(known) or 'none'})")
+        if disturbance is None and variant is None:
+            return self.create(seed, noise)
+        return self.create(seed, noise, disturbance=disturbance, variant=variant)
 
     @property
     def quantities(self) -> tuple[str, ...]:

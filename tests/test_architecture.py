@@ -27,6 +27,7 @@ FLOORS = (
     ("optimizers", ("tailor.refinement.optimizers",)),
     ("core", ("tailor.refinement",)),
     ("learning", ("tailor.refinement.learning",)),
+    ("execution", ("tailor.refinement.execution",)),
     ("evaluation", ("tailor.refinement.evaluation",)),
     ("cli", ("tailor.cli",)),
 )
