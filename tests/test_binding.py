@@ -163,7 +163,7 @@ BAD_BINDINGS = [
     ("evaluation = \"score\"\n", r"'evaluation' must be a table \(\[evaluation\]\)"),
     ("domain = 3\n", r"'domain' must be a string"),
     ("[predicates.at]\nspeed = [0, 1]\n",
-     r"\[predicates.at\]: unknown key 'speed' \(expected one of args, read, scene, x, y, phi, v\)"),
+     r"\[predicates.at\]: unknown key 'speed' \(expected one of args, lost_on_failure, read, scene, x, y, phi, v\)"),
     ("[predicates.at]\nread = [\"x\", \"z\"]\n",
      r"\[predicates.at\] read: unknown quantity 'z' \(known: x, y, phi, v\)"),
     ("[predicates.at]\nread = \"x\"\n", r"\[predicates.at\] read must be a list of quantity names"),

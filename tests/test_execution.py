@@ -116,7 +116,7 @@ def test_the_next_window_is_re_refined_from_the_measured_state():
     assert summarize(events).completed
     assert any(e.kind == "re-refined" for e in events)
     off = Teleport(heading_error=0.8)
-    events_off = events_of("waypoints", off, tolerance=0.99, time_tolerance=0.99)
+    events_off = events_of("waypoints", off, object_tolerance=0.99, time_tolerance=0.99)
     assert not any(e.kind == "re-refined" for e in events_off)
     open_loop = Teleport(heading_error=0.8)
     events_of("waypoints", open_loop, closed_loop=False)
@@ -254,3 +254,35 @@ def test_execute_command_line(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "tailor.cli", "execute", "soccer", "score", "--disturb", "gale"],
                          capture_output=True, text=True, timeout=300)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "gale" in bad.stderr
+
+
+def test_the_closed_loop_summary():
+    from tailor.refinement.evaluation.closed_loop import summarize_closed_loop
+
+    def run(done, duration, overhead=0.1, replans=0):
+        return {"completed": done, "duration": duration, "overhead": overhead, "actions": 2, "failures": int(not done),
+                "re_refinements": 0, "replans": replans, "reason": ""}
+
+    rows = [{"open_loop": run(False, 3.0), "closed_loop": run(True, 12.0, replans=1)},
+            {"open_loop": run(False, 2.0), "closed_loop": run(False, 5.0, replans=2)},
+            {"open_loop": run(True, 10.0), "closed_loop": run(True, 10.0, overhead=0.0)},
+            {"open_loop": run(False, 1.0), "closed_loop": run(True, 11.0, replans=1)}]
+    s = summarize_closed_loop(rows)
+    assert s["open_loop"]["failed_runs"] == 3 and s["closed_loop"]["failed_runs"] == 1
+    assert s["open_loop"]["mean_penalized"] == pytest.approx((33 + 32 + 10 + 31) / 4)
+    assert s["closed_loop"]["mean_penalized"] == pytest.approx((12 + 35 + 10 + 11) / 4)
+    assert s["recovered_share"] == pytest.approx(2 / 3)
+    assert s["overhead_share"] == pytest.approx(sorted([0.1 / 12, 0.1 / 5, 0.0, 0.1 / 11])[1:3][0] / 2
+                                                + sorted([0.1 / 12, 0.1 / 5, 0.0, 0.1 / 11])[1:3][1] / 2)
+    assert s["closed_loop"]["replans"] == 4
+
+
+def test_evaluate_closed_loop_recovers_a_nudged_ball():
+    """Open loop cannot cope with the ball nudged away; closed loop replans and completes most of those runs."""
+    done = subprocess.run([sys.executable, "-m", "tailor.cli", "evaluate", "soccer", "--closed-loop", "--episodes", "4",
+                           "--disturb", "nudge", "--json"], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout)
+    assert report["open_loop"]["runs"] == report["closed_loop"]["runs"] == 4
+    assert report["closed_loop"]["failed_runs"] < report["open_loop"]["failed_runs"]
+    assert report["recovered_share"] > 0 and report["closed_loop"]["replans"] > 0

@@ -53,7 +53,10 @@ from tailor.refinement.pipeline import BELIEF_ARGUMENT, Inputs, Options, prepare
 from tailor.refinement.refine import guard_for, model_for, optimize_window, refine
 from tailor.sims.episode import SUCCESS, ActionCall, Episode
 
-TOLERANCE = 0.02  # share of a quantity's range a measurement may differ from the plan before re-refining
+# share of its quantity's range a scene object (a ball, a cup) may lie from where the plan assumed it before the
+# window is refined again with it where it is: 0.5% (4 cm on the soccer field, 6 cm in the kitchen) is a few
+# times the sensors' noise and far less than an object someone moved
+OBJECT_TOLERANCE = 0.005
 TIME_TOLERANCE = 0.02  # share of a window's predicted time a deviation must change it by to re-refine it
 FAILED_RUN_PENALTY = 30.0  # s charged on top of a failed run's time where runs are compared (evaluations)
 ABSOLUTE_TOLERANCE = 1e-3  # for quantities whose range is a single value
@@ -69,7 +72,7 @@ class ExecuteOptions:
     replans: int = 2
     learn: bool = False
     learn_every: int = 5
-    tolerance: float = TOLERANCE
+    object_tolerance: float = OBJECT_TOLERANCE
     time_tolerance: float = TIME_TOLERANCE
     disturbance: str | None = None
     variant: str | None = None
@@ -79,7 +82,7 @@ class ExecuteOptions:
             raise ValueError(f"replans must be an integer >= 0, not {self.replans!r}")
         if isinstance(self.learn_every, bool) or not isinstance(self.learn_every, int) or self.learn_every < 1:
             raise ValueError(f"learn_every must be an integer >= 1, not {self.learn_every!r}")
-        for name in ("tolerance", "time_tolerance"):
+        for name in ("object_tolerance", "time_tolerance"):
             value = getattr(self, name)
             if isinstance(value, bool) or not (isinstance(value, (int, float)) and 0.0 <= value < 1.0):
                 raise ValueError(f"{name} must be a share in [0, 1), not {value!r}")
@@ -301,8 +304,11 @@ class ClosedLoop:
         return {p.id: float(p.value) for a in bound.actions for p in a.params if p.value is not None}
 
     def _remember(self, action, choices: Mapping[str, float]) -> None:
-        """Keep the executed action's values in the belief (object.quantity ids), for a replan's instantiation."""
-        for p in action.params:
+        """Keep the executed action's subgoal (its internal parameters, object.quantity ids) in the belief, for a
+        replan's instantiation. Its observed ones are the previous subgoal or the belief already (or, measured,
+        the robot's state in the simulator's own form, which need not be the plan's)."""
+        n_observed = len(self.entry.action(action.action).observed)
+        for p in action.params[n_observed:]:
             value = p.value if p.value is not None else choices.get(p.id)
             obj, _, quantity = p.id.rpartition(".")
             if obj and value is not None:
@@ -351,7 +357,7 @@ class ClosedLoop:
                 if p.id in chosen:
                     choices[p.id] = float(chosen[p.id])
         reason = ", ".join(reasons) if reasons else "the window after a re-refined one"
-        return _Verdict(sequence=sequence, choices=choices, re_refined=window is not None, reason=reason)
+        return _Verdict(sequence=sequence, choices=choices, re_refined=window is not None or bool(moved), reason=reason)
 
     def _failing_guards(self, sequence: ActionSequence, choices: Mapping[str, float], i: int) -> list[str]:
         """The guarded actions of the window from action i whose success classifier predicts failure at the
@@ -373,11 +379,11 @@ class ClosedLoop:
             total += float(model_for(action, self.models).predict_duration(values[None, :])[0])
         return total
 
-    def _differs(self, now: float, then: float, width: float, angle: bool) -> bool:
+    def _differs(self, now: float, then: float, width: float, angle: bool, share: float) -> bool:
         diff = now - then
         if angle:
             diff = math.remainder(diff, 2 * math.pi)
-        tolerance = self.settings.tolerance * width if math.isfinite(width) and width > 0 else ABSOLUTE_TOLERANCE
+        tolerance = share * width if math.isfinite(width) and width > 0 else ABSOLUTE_TOLERANCE
         return abs(diff) > max(tolerance, ABSOLUTE_TOLERANCE)
 
     @staticmethod
@@ -424,7 +430,8 @@ class ClosedLoop:
                     continue
                 default = self.binding.type_range(types, quantity)
                 width = default[0][1] - default[0][0] if default else 0.0
-                if self._differs(now, then, width, self.entry.quantity(quantity).angle):
+                if self._differs(now, then, width, self.entry.quantity(quantity).angle,
+                                 self.settings.object_tolerance):
                     moved[name] = (obj, quantities, tuple(scene[name]))
                     break
         return moved
@@ -463,7 +470,7 @@ class ClosedLoop:
             return None
         self.replans_left -= 1
         if self._effects is None:
-            self._effects = StepEffects(self.inputs.pddl)
+            self._effects = _effects_of(self.inputs.pddl)
         facts = set(self._effects.after(initial_facts, done_steps))
         step = sequence.actions[i].step
         for link in plan.links_to(step):
@@ -507,9 +514,30 @@ class ClosedLoop:
         return new_plan, new_sequence, self._choices(refined.sequence), frozenset(facts)
 
 
+_EFFECTS: dict = {}  # the domain's effects per task read (parsing it with unified-planning costs a replan most)
+
+
+def _effects_of(task) -> StepEffects:
+    key = (task.domain_text, task.problem_text)
+    if key not in _EFFECTS:
+        if len(_EFFECTS) > 32:
+            _EFFECTS.clear()
+        _EFFECTS[key] = StepEffects(task)
+    return _EFFECTS[key]
+
+
+_PLANS: dict = {}  # plans of the tasks posed so far (the planner is deterministic: the same task, the same plan)
+
+
 def _plan(task, planner: str, timeout: float | None) -> AbstractPlan:
-    """Plan in the session's planner process (started once: a replan costs the search, not a start-up)."""
-    return _plan_files(task.domain, task.problem, planner, timeout, task)
+    """Plan in the session's planner process (started once: a replan costs the search, not a start-up); a task
+    posed before (a replan from the facts that held at the start) takes the plan found then."""
+    key = (task.domain_text, task.problem_text, planner)
+    if key not in _PLANS:
+        if len(_PLANS) > 256:
+            _PLANS.clear()
+        _PLANS[key] = _plan_files(task.domain, task.problem, planner, timeout, task)
+    return _PLANS[key]
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,8 @@ of them for the coordination experiments (sims.soccer.team).
 `SIMULATOR` is what the package registers (entry point `tailor.simulators: soccer`): the three actions with
 their pose parameters (Table 2.1), the simulator factory, the experience scenarios and the random situations,
 the feature spaces of a navigation to a pose (sims.soccer.pose) and the actions' own (sims.soccer.features,
-sims.soccer.walls), its quantities' units, and the pictures of its learned models (Figs. 4.7, 4.8).
+sims.soccer.walls), its quantities' units, the pictures of its learned models (Figs. 4.7, 4.8), and what a
+closed loop may meet (Ch. 8.1): the disturbance "nudge" and the robot variant "weak_motors".
 
 Declaring the robot loads no physics: the simulator module (sims.soccer.simulator, which imports pymunk) is
 imported when a simulator is first created or an episode first runs, so that `tailor domains` and
@@ -24,6 +25,7 @@ from tailor.sims.soccer.pose import POSE_DELTA_SPACE, POSE_SPACE, POSITION_SPACE
 from tailor.sims.soccer.scenarios import RANGES, SITUATIONS, subgoal_episode
 from tailor.sims.soccer.team import TEAM
 from tailor.sims.soccer.walls import POSE_WALLS
+from tailor.sims.soccer.world import NUDGE, NUDGE_ROLL, NUDGE_WINDOW, WEAK_MOTOR_FACTOR, variant_dynamics
 
 if TYPE_CHECKING:
     from tailor.sims.soccer.simulator import Noise, SoccerSim
@@ -59,11 +61,26 @@ SUCCESS_REGION = SuccessRegion(
     goal="goal pose (heading +x)", goal_heading="phig")
 
 
-def _create(seed: int, noise: Noise | None = None) -> SoccerSim:
+# Ch. 8.1: what can differ from the world the models were learned in (world.DISTURBANCES, world.VARIANTS)
+DISTURBANCES = {
+    NUDGE: f"an opponent pushes the ball once, at a random time {NUDGE_WINDOW[0]:g}-{NUDGE_WINDOW[1]:g} s "
+           f"after the start, in a random direction (away from a robot that has it), so that it rolls "
+           f"{NUDGE_ROLL[0]:g}-{NUDGE_ROLL[1]:g} m",
+}
+VARIANTS = {
+    "weak_motors": f"the robot's motors are {1.0 - WEAK_MOTOR_FACTOR:.0%} weaker: its accelerations (a_max, "
+                   f"alpha_max) are {WEAK_MOTOR_FACTOR:g} times the modelled robot's, its speed limits the "
+                   f"same",
+}
+
+
+def _create(seed: int, noise: Noise | None = None, disturbance: str | None = None,
+            variant: str | None = None) -> SoccerSim:
+    """A soccer simulator: default noise where `noise` is None, the disturbance and robot variant named."""
     # deferred: the simulator module loads pymunk, which declaring the robot must not
     from tailor.sims.soccer.simulator import Noise, SoccerSim
 
-    return SoccerSim(seed, Noise() if noise is None else noise)
+    return SoccerSim(seed, Noise() if noise is None else noise, variant_dynamics(variant), disturbance)
 
 
 SIMULATOR = SimulatorEntry(
@@ -82,6 +99,8 @@ SIMULATOR = SimulatorEntry(
     units=UNITS,
     model_pictures=(APPROACH_ANGLE, SUCCESS_REGION),
     description="RoboCup mid-size field, Pioneer-like robot with a ball guide, a ball (pymunk)",
+    disturbances=DISTURBANCES,
+    variants=VARIANTS,
 )
 
 # names of the simulator module, imported on first use (see above)

@@ -2,8 +2,9 @@
 
 Each scenario draws the initial state (robot, ball) and the goal from documented ranges (all positions keep
 FIELD_MARGIN to the field lines; the goal lies DIST_RANGE from the start) and executes one action in a fresh
-SoccerSim. The situations are random belief states of the bundled problems `score` and `waypoints`, which
-`tailor evaluate soccer` refines and dispatches.
+SoccerSim; `variant` (a name of world.VARIANTS, e.g. "weak_motors") runs it on the changed robot, the
+experience of that robot (Ch. 8.1). The situations are random belief states of the bundled problems `score`
+and `waypoints`, which `tailor evaluate soccer` refines and dispatches.
 """
 
 from __future__ import annotations
@@ -15,7 +16,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tailor.sims.episode import ActionCall, Episode
-from tailor.sims.soccer.world import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, PIONEER, SPARROW, V_MAX, Dynamics
+from tailor.sims.soccer.world import (FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, PIONEER, SPARROW, V_MAX, Dynamics,
+                                      variant_dynamics)
 
 if TYPE_CHECKING:
     from tailor.sims.episode import SequenceResult
@@ -50,10 +52,11 @@ class Ranges:
         """Where the ball lies at the start of an episode from position `start` to `goal` (None: no ball)."""
         return {"none": None, "goal": goal, "guide": start}[self.ball]
 
-    def run(self, seed: int, noise: Noise | None = None) -> Episode:
-        """One episode; the task and the simulator's noise both follow from `seed`."""
+    def run(self, seed: int, noise: Noise | None = None, variant: str | None = None) -> Episode:
+        """One episode; the task and the simulator's noise both follow from `seed` (the task is the same for
+        every `variant` of the robot)."""
         robot, ball, call = sample_task(self, np.random.default_rng((seed, SAMPLING_STREAM)))
-        return _episode(seed, robot, ball, call, noise, self.dynamics)
+        return _episode(seed, robot, ball, call, noise, variant_dynamics(variant, self.dynamics))
 
 
 RANGES: dict[str, Ranges] = {
@@ -101,12 +104,14 @@ def sample_task(ranges: Ranges, rng: np.random.Generator):
     return (start[0], start[1], phi, v), ball, ActionCall(ranges.action, (goal[0], goal[1], phig, vg))
 
 
-def subgoal_episode(action: str, params: np.ndarray, seed: int) -> Episode:
+def subgoal_episode(action: str, params: np.ndarray, seed: int, variant: str | None = None) -> Episode:
     """An episode of `action` from a refined subgoal (start and goal in `params`), the ball placed as in the
-    action's experience scenario (in the guide for dribbleBall): the on-line experience of Sec. 8.1."""
+    action's experience scenario (in the guide for dribbleBall), on the robot `variant` (None: the modelled
+    one): the on-line experience of Sec. 8.1."""
     p = [float(v) for v in params]
     ball = RANGES[action].ball_at((p[0], p[1]), (p[4], p[5]))
-    return _episode(seed, (p[0], p[1], p[2], p[3]), ball, ActionCall(action, tuple(p[4:])))
+    return _episode(seed, (p[0], p[1], p[2], p[3]), ball, ActionCall(action, tuple(p[4:])), None,
+                    variant_dynamics(variant))
 
 
 CHAIN_SEPARATION = 1.0  # m, least distance between robot, ball and target in a random chain

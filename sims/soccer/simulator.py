@@ -10,12 +10,25 @@ An action ends (Episode.outcome) on
   vg (goToPosition: no heading); for approachBall the untouched ball also lies within POS_TOL of the ball point, for dribbleBall the
   ball sits in the guide (within BALL_HELD_DISTANCE of the ball point);
 - "collision": a ball is in the scene, the action does not dribble, and the ball moved (by more than
-  BUMP_DISTANCE) before the goal pose was reached;
-- "ball_lost": dribbling, the ball is further than BALL_LOST_DISTANCE from the ball point, or it lies at rest
-  outside the guide while the robot stands at a goal it was to reach standing (nothing would move either again:
-  without this the action waited for its timeout);
+  BUMP_DISTANCE) before the goal pose was reached: the robot bumped it;
+- "ball_moved": as "collision", but the disturbance "nudge" pushed the ball during the action: someone else
+  moved it (a failure the robot's own models cannot predict, kept apart from the collisions they learn);
+- "ball_lost": dribbling, the ball is further than BALL_LOST_DISTANCE from the ball point (also when a nudge
+  knocked it out of the guide), or it lies at rest outside the guide while the robot stands at a goal it was
+  to reach standing (nothing would move either again: without this the action waited for its timeout);
 - "timeout": TIMEOUT simulated seconds passed.
-Termination is judged on the true state; the action sees (and the Episode logs) the believed state.
+An action the nudge made fail ("ball_moved", or "ball_lost" with the push during it) ends only once the
+robot, braking to a stop, and the ball lie at rest (NUDGE_FAILURES). Termination is judged on the true state;
+the action sees (and the Episode logs) the believed state.
+
+Closed-loop execution (Ch. 8.1, tailor.execution) reads between two actions what the robot measures now:
+`observe(action)` (the action's observed parameters) and `scene()` (every scene object). Both read the
+believed state without drawing from the noise stream: they return exactly the reading the next action starts
+from (its Episode.params), and a closed loop that observes sees the same noise as an open loop that does not.
+
+The disturbance "nudge" (`Nudge`): once in a simulator's life, at a time drawn from its seed in
+W.NUDGE_WINDOW, an opponent pushes the ball (see `Nudge`). The variant "weak_motors" is a `W.Dynamics`
+(W.weak_motors) passed as `dynamics`.
 """
 
 from __future__ import annotations
@@ -44,6 +57,12 @@ BALL_HELD_DISTANCE = 0.06  # m, a ball this close to the ball point is in the gu
 BALL_LOST_DISTANCE = 0.15  # m, a dribbled ball further than this from the ball point is lost
 BUMP_DISTANCE = 0.02  # m, a ball moved this far was bumped
 TIMEOUT = 30.0  # s, simulated time an action may take
+
+# outcomes of an action the nudge made fail (during it): the robot, which sees the ball go, brakes to a stop,
+# and the episode ends (its duration counts the wait) once robot and ball are at rest, where the next action
+# (or a closed loop's scene()) finds them: an approach begun while the ball still rolled failed at once as a
+# collision (a closed loop completed none of 100 nudged `score` situations so, 93 with the wait)
+NUDGE_FAILURES = ("ball_moved", "ball_lost")
 
 _WALL_RADIUS = 0.02  # m, thickness of the wall segments
 _GUIDE_RADIUS = 0.005  # m, thickness of the guide arms
@@ -112,16 +131,56 @@ def _rolling_damping(vx: float, vy: float) -> float | None:
     return None
 
 
+@dataclass(frozen=True)
+class Nudge:
+    """The push of the disturbance "nudge", drawn from the simulator's seed (its own stream, W.NUDGE_STREAM,
+    so the motor and sensor noise are those without it): at physics step `step` of the simulator's clock
+    (which reset does not rewind) the ball's velocity gains `speed` in direction `direction` (rad), the speed
+    at which a ball at rest rolls `roll` metres before friction stops it. A ball within BALL_LOST_DISTANCE of
+    the ball point (in the guide, dribbled or just reached) is knocked out ahead of the robot: the direction,
+    taken relative to the heading, is scaled into +-W.NUDGE_KNOCK_CONE (a push sideways would only press it
+    against a guide arm, one backward against the robot). Without a ball in the scene then nothing happens."""
+
+    step: int
+    direction: float
+    roll: float
+
+    @property
+    def time(self) -> float:
+        """s of the simulator's clock at which the push comes (a whole physics step)."""
+        return self.step * DT
+
+    @property
+    def speed(self) -> float:
+        """m/s: rolling friction stops a ball pushed from rest at this speed after `roll` metres."""
+        return math.sqrt(2.0 * W.ROLL_DECELERATION * self.roll)
+
+    @classmethod
+    def draw(cls, seed: int) -> Nudge:
+        rng = np.random.default_rng([int(seed), W.NUDGE_STREAM])
+        time = rng.uniform(*W.NUDGE_WINDOW)
+        direction, roll = rng.uniform(-math.pi, math.pi), rng.uniform(*W.NUDGE_ROLL)
+        return cls(math.ceil(time / DT - 1e-9), float(direction), float(roll))
+
+
 STATE_COLUMNS = ("x", "y", "phi", "v", "ball_x", "ball_y")  # the logged believed state (ball NaN without one)
 TRAJECTORY_COLUMNS = ("t", *STATE_COLUMNS)  # the true state of a dispatched sequence
 
 
 class SoccerSim:
-    """The soccer field with one robot and (optionally) a ball; `run` executes one action as an Episode."""
+    """The soccer field with one robot and (optionally) a ball; `run` executes one action as an Episode.
+
+    `dynamics`: the robot's motor limits (W.PIONEER, W.SPARROW, or a variant: W.weak_motors(W.PIONEER));
+    `disturbance`: None or W.NUDGE (see `Nudge`).
+    """
 
     state_columns = STATE_COLUMNS
 
-    def __init__(self, seed: int, noise: Noise = Noise(), dynamics: W.Dynamics = W.PIONEER):
+    def __init__(self, seed: int, noise: Noise = Noise(), dynamics: W.Dynamics = W.PIONEER,
+                 disturbance: str | None = None):
+        if disturbance is not None and disturbance not in W.DISTURBANCES:
+            raise SimError(f"the soccer simulator has no disturbance {disturbance!r} "
+                           f"(known: {', '.join(W.DISTURBANCES)})")
         self.noise = noise
         self.dynamics = dynamics
         self._a_step = _A_STEP if dynamics == W.PIONEER else dynamics.a_max * DT
@@ -142,12 +201,15 @@ class SoccerSim:
         ball_shape = pymunk.Circle(self.ball, W.BALL_RADIUS)
         ball_shape.friction, ball_shape.elasticity = 0.0, W.WALL_ELASTICITY
         self._ball_shape = ball_shape
-        self._friction_callback, self._damping = True, 1.0  # how pymunk steps the ball's friction (_advance)
+        self._friction_callback, self._damping = True, 1.0  # how pymunk steps the ball's friction (_physics)
         self.has_ball = False
         self.time = 0.0
         self.v = self.w = 0.0  # true translational / rotational velocity
         self.phi = 0.0  # true heading (mirrors the body's angle)
         self.v_cmd = self.w_cmd = 0.0
+        self.steps = 0  # physics steps in this simulator's life: the clock of a disturbance (reset keeps it)
+        self.nudge = Nudge.draw(seed) if disturbance == W.NUDGE else None  # the push to come (or that came)
+        self.nudged: tuple[float, float] | None = None  # where the push found the ball (NaN: none), once done
 
     def _add_walls(self) -> None:
         hx, hy = W.FIELD_HALF_LENGTH + W.WALL_RUNOFF, W.FIELD_HALF_WIDTH + W.WALL_RUNOFF
@@ -211,6 +273,31 @@ class SoccerSim:
         """The true state with the seeded sensing noise of `self.noise`."""
         return self._believe(self.true_state())
 
+    def observe(self, action: str) -> tuple[float, float, float, float]:
+        """What `action` measures now, its observed parameters (x, y, phi, v): exactly the first four values
+        of the Episode.params of `run` called next. Advances neither the world nor the noise stream."""
+        if action not in ACTION_FUNCTIONS:
+            raise SimError(f"unknown soccer action {action!r}; known: {', '.join(ACTION_FUNCTIONS)}")
+        return self._measure()[:4]
+
+    def scene(self) -> dict[str, tuple[float, ...]]:
+        """The scene as the robot measures it now, in the form `reset` takes: {"robot": (x, y, phi, v),
+        "ball": (x, y)} (no ball without one); the same reading as `observe`. Advances neither the world nor
+        the noise stream. `reset(scene())` places pose, speed and ball, not a turn rate or a rolling ball."""
+        belief = self._measure()
+        scene = {"robot": belief[:4]}
+        if self.has_ball:
+            scene["ball"] = belief[4:]
+        return scene
+
+    def _measure(self) -> tuple[float, float, float, float, float, float]:
+        """The believed state the next action starts from: drawn from a copy of the noise stream's state."""
+        state = self.rng.bit_generator.state
+        try:
+            return self.believed_state()
+        finally:
+            self.rng.bit_generator.state = state
+
     def _believe(self, true: tuple[float, float, float, float, float, float]
                  ) -> tuple[float, float, float, float, float, float]:
         x, y, phi, v, bx, by = true
@@ -236,6 +323,31 @@ class SoccerSim:
             self._restore_friction()
 
     def _advance(self, steps: int) -> None:
+        """`steps` physics steps (see `step`); the nudge, if one is due among them, between two of them."""
+        nudge = self.nudge
+        due = nudge.step - self.steps if nudge is not None and self.nudged is None else -1
+        if 0 <= due < steps:
+            self._physics(due)
+            self.steps += due
+            self._push(nudge)
+            steps -= due
+        self._physics(steps)
+        self.steps += steps
+
+    def _push(self, nudge: Nudge) -> None:
+        """The opponent's push (see `Nudge`): the ball gains nudge.speed, away from a robot that has it."""
+        if not self.has_ball:
+            self.nudged = (math.nan, math.nan)  # nothing to push: the nudge is spent
+            return
+        x, y, phi, _, bx, by = self.true_state()
+        direction = nudge.direction
+        if math.hypot(bx - x, by - y) <= BALL_LOST_DISTANCE:  # knocked out ahead: relative angle scaled in
+            direction = phi + W.wrap(direction - phi) * (W.NUDGE_KNOCK_CONE / math.pi)
+        vx, vy = self.ball.velocity
+        self.ball.velocity = (vx + nudge.speed * math.cos(direction), vy + nudge.speed * math.sin(direction))
+        self.nudged = (bx, by)
+
+    def _physics(self, steps: int) -> None:
         """`steps` physics steps (see `step`), with the per-step work kept to what changes the outcome.
 
         Two shortcuts, both exact (the episodes are bit-for-bit those of one `space.step` after setting every
@@ -286,7 +398,7 @@ class SoccerSim:
             self._friction_callback, self._damping = callback, damping_sent
 
     def _restore_friction(self) -> None:
-        """Install the rolling-friction callback and a damping of 1 again (see `_advance`)."""
+        """Install the rolling-friction callback and a damping of 1 again (see `_physics`)."""
         if not self._friction_callback:
             self.ball.velocity_func = _ball_velocity
             self._friction_callback = True
@@ -333,6 +445,8 @@ class SoccerSim:
         if dribbling and not self.has_ball:
             raise SimError("dribbleBall needs a ball in the scene")
         ball_start = tuple(self.ball.position) if self.has_ball else None
+        nudged_before = self.nudged is not None
+        settling = None  # the outcome of an action the nudge ended, while robot and ball come to rest
         ticks = 0
         log_t, log_state = [], []
         params = None
@@ -350,13 +464,25 @@ class SoccerSim:
                 if ticks % CONTROLS_PER_LOG == 0:
                     log_t.append(ticks / CONTROL_HZ)
                     log_state.append(belief)
-                ended = self._judge(true, call.action, dribbling, ball_start, xg, yg, phig, vg)
-                if ended is not None:
-                    outcome = ended
+                if settling is None:
+                    ended = self._judge(true, call.action, dribbling, ball_start, xg, yg, phig, vg)
+                    nudged = not nudged_before and self.nudged is not None  # during this action
+                    if ended == "collision" and nudged:
+                        ended = "ball_moved"
+                    if ended in NUDGE_FAILURES and nudged:
+                        settling = outcome = ended  # the robot stops; the ball rolls out (see NUDGE_FAILURES)
+                    elif ended is not None:
+                        outcome = ended
+                        break
+                if (settling is not None and self.v == 0.0 and self.w == 0.0
+                        and _get_velocity(self.ball) == (0.0, 0.0)):
                     break
                 if ticks >= max_ticks:
                     break
-                self.command(*act(belief[0], belief[1], belief[2], belief[3], xg, yg, phig, vg))
+                if settling is not None:
+                    self.command(0.0, 0.0)
+                else:
+                    self.command(*act(belief[0], belief[1], belief[2], belief[3], xg, yg, phig, vg))
                 self._advance(STEPS_PER_CONTROL)
                 self._keep_inside()
                 ticks += 1

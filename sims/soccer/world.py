@@ -17,12 +17,19 @@ the ball decelerates by itself (ROLL_DECELERATION).
 
 Ball: a RoboCup ball (BALL_RADIUS) that slides without spin (infinite moment) and loses speed at the
 constant rolling-friction deceleration mu_r * g, so it stops after v0^2 / (2 mu_r g).
+
+What may differ from the world the actions were learned in (Ch. 8.1; the simulator declares them, SIMULATOR):
+the disturbance "nudge" (an opponent pushes the ball once, NUDGE_WINDOW after the start, so that it rolls
+NUDGE_ROLL) and the robot variants of VARIANTS ("weak_motors": accelerations times WEAK_MOTOR_FACTOR).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+from tailor.errors import SimError
 
 # --- field (m) -------------------------------------------------------------------------------------------
 FIELD_HALF_LENGTH = 4.0  # m, playing area x in [-4, 4]
@@ -97,3 +104,42 @@ def guide_arms() -> list[tuple[tuple[float, float], tuple[float, float]]]:
 def wrap(angle: float) -> float:
     """The angle normalized to [-pi, pi)."""
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+# --- changed robots (variants, Ch. 8.1): the learned models know only PIONEER ----------------------------
+WEAK_MOTOR_FACTOR = 0.75  # the weak motors' share of the accelerations (25% weaker)
+
+
+def weak_motors(dynamics: Dynamics) -> Dynamics:
+    """The robot with motors WEAK_MOTOR_FACTOR as strong: a_max and alpha_max scaled, v_max and w_max kept, so
+    every speed a subgoal may ask for is still reachable (only later)."""
+    return replace(dynamics, a_max=WEAK_MOTOR_FACTOR * dynamics.a_max,
+                   alpha_max=WEAK_MOTOR_FACTOR * dynamics.alpha_max)
+
+
+VARIANTS: dict[str, Callable[[Dynamics], Dynamics]] = {"weak_motors": weak_motors}
+
+
+def variant_dynamics(variant: str | None, dynamics: Dynamics = PIONEER) -> Dynamics:
+    """The motor limits of robot `dynamics` changed as `variant` (None: unchanged) says; a SimError names the
+    known variants."""
+    if variant is None:
+        return dynamics
+    if variant not in VARIANTS:
+        raise SimError(f"the soccer robot has no variant {variant!r} (known: {', '.join(VARIANTS)})")
+    return VARIANTS[variant](dynamics)
+
+
+# --- disturbances (Ch. 8.1): seeded events of the world that refinement does not know in advance ----------
+NUDGE = "nudge"  # an opponent pushes the ball once (sims.soccer.simulator.Nudge)
+DISTURBANCES = (NUDGE,)
+# s, the push comes at a uniform time in this window of the simulator's clock (physics steps since the
+# simulator was made; a reset does not rewind it): inside the approach of a `score` situation (refined, it took
+# 2.2-9.2 s in 100 random ones, so the push came during it in all of them)
+NUDGE_WINDOW = (0.5, 3.0)
+NUDGE_ROLL = (0.3, 0.8)  # m, a ball at rest rolls a uniform distance in this range before friction stops it
+# rad, a ball in the guide is knocked out ahead, within this angle of the robot's heading: pushed anywhere
+# ahead (within 90 degrees), a sixth of 200 dribbles kept the ball, all pushed 60 degrees or more off the
+# heading (it slid along an arm back into the V); within 45 degrees 1 of 200 kept it
+NUDGE_KNOCK_CONE = math.radians(45.0)
+NUDGE_STREAM = 2  # second seed word of the push's own random draws (the noise stream stays that of the seed)

@@ -1,0 +1,108 @@
+"""`tailor evaluate DOMAIN --closed-loop` and `--learning-curve`: closed-loop execution measured (issue 30, Ch. 8.1).
+
+--closed-loop: random situations of the binding's comparison generator (or --situations), each refined once and
+executed open and closed loop with the same simulator seed (and --disturb); failed runs, mean time with a failed
+run charged its time + 30 s, the share of open-loop failures closed loop completes, the overhead.
+--learning-curve: a stream of --episodes tasks executed closed loop on the robot --variant while the models
+learn in operation; the models' error on the tasks met so far and refined vs greedy time, per task (--plot).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+import numpy as np
+
+from tailor.errors import UsageError
+
+CURVE_WINDOW = 20  # tasks per point of the learning curve's moving mean
+
+
+def _check(args, binding) -> None:
+    entry = binding.entry
+    for flag, name, known in (("--disturb", args.disturb, entry.disturbances), ("--variant", args.variant, entry.variants)):
+        if name is not None and name not in known:
+            raise UsageError(f"{flag} {name!r} is not one simulator {entry.name!r} offers (known: "
+                             f"{', '.join(known) or 'none'})")
+
+
+def run_closed_loop(args: argparse.Namespace, domain_dir, binding, plan, models_dir, items) -> int:
+    from tailor.outputs import json_text, model_files, provenance, versioned
+    from tailor.refinement.evaluation.closed_loop import closed_loop_episode, summarize_closed_loop
+    from tailor.sims.parallel import run_in_workers
+
+    _check(args, binding)
+    if args.variant is not None:
+        raise UsageError("--variant belongs to --learning-curve (a changed robot the models learn to follow)")
+    rows = run_in_workers(closed_loop_episode, [(job, i, objects, args.disturb) for job, i, objects in items],
+                          args.jobs, "open vs closed loop", unit="situation")
+    report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
+              "generator": plan.comparison, "disturbance": args.disturb, "situations": len(rows)}
+    report.update(summarize_closed_loop(rows))
+    if args.json:
+        origin = provenance(getattr(args, "argv", None), {"seed": args.seed}, model_files(models_dir))
+        sys.stdout.write(json_text(versioned("evaluate_closed_loop", {**report, "rows": rows}, origin)) + "\n")
+        return 0
+    out = sys.stdout.write
+    out(f"Domain {report['domain']}: {len(rows)} random '{plan.comparison}' situations (seed {args.seed}), each "
+        f"refined once and executed open and closed loop with the same simulator seed"
+        f"{', disturbance ' + args.disturb if args.disturb else ''}\n")
+    for side in ("open_loop", "closed_loop"):
+        s = report[side]
+        mean = "-" if s["mean_penalized"] is None else f"{s['mean_penalized']:.2f} s"
+        out(f"  {side.replace('_', ' '):<12} failed {s['failed_runs']:>4} of {s['runs']}, mean time {mean} (a failed "
+            f"run charged +{report['penalty']:.0f} s), {s['re_refinements']} re-refinements, {s['replans']} replans\n")
+    rec = report["recovered_share"]
+    out(f"  recovered    {'-' if rec is None else f'{100 * rec:.1f}%'} of the runs open loop fails\n")
+    p, share = report["p_closed_faster"], report["overhead_share"]
+    out(f"  closed - open mean {report['closed_minus_open_mean']:+.2f} s (Wilcoxon one-sided p "
+        f"{'-' if p is None else f'{p:.2g}'}); overhead median "
+        f"{'-' if share is None else f'{100 * share:.2f}%'} of execution time\n")
+    return 0
+
+
+def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, models_dir, items) -> int:
+    from tailor.outputs import check_output_file, json_text, model_files, provenance, versioned
+    from tailor.refinement.evaluation.closed_loop import learning_stream
+
+    _check(args, binding)
+    if args.plot:
+        check_output_file(args.plot, ".png")
+    rows = learning_stream(items, args.variant)
+    errors = [np.mean(r["relative_errors"]) if r["relative_errors"] else np.nan for r in rows]
+    first = rows[:CURVE_WINDOW]
+    last = rows[-CURVE_WINDOW:]
+
+    def mean_error(chunk):
+        values = [e for r in chunk for e in r["abs_errors"]]
+        return float(np.mean(values)) if values else None
+
+    def gain(chunk):
+        g = np.mean([r["greedy"] for r in chunk])
+        return float((g - np.mean([r["refined"] for r in chunk])) / g) if chunk else None
+
+    report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
+              "generator": plan.comparison, "variant": args.variant, "tasks": len(rows),
+              "mae_first": mean_error(first), "mae_last": mean_error(last),
+              "improvement_first": gain(first), "improvement_last": gain(last)}
+    if args.plot:
+        from tailor.refinement.evaluation.closed_loop_plots import draw_learning_curve
+
+        draw_learning_curve(args.plot, rows, errors, report, CURVE_WINDOW)
+        report["plot"] = str(args.plot)
+    if args.json:
+        origin = provenance(getattr(args, "argv", None), {"seed": args.seed}, model_files(models_dir))
+        sys.stdout.write(json_text(versioned("evaluate_learning_curve", {**report, "rows": rows}, origin)) + "\n")
+        return 0
+    out = sys.stdout.write
+    out(f"Domain {report['domain']}: {len(rows)} tasks executed closed loop, learning in operation"
+        f"{' on variant ' + args.variant if args.variant else ''} (seed {args.seed})\n")
+    fmt = lambda v, unit="": "-" if v is None else f"{v:.3f}{unit}"  # noqa: E731
+    out(f"  duration MAE  first {CURVE_WINDOW} tasks {fmt(report['mae_first'], ' s')}, last {CURVE_WINDOW} "
+        f"{fmt(report['mae_last'], ' s')}\n")
+    pct = lambda v: "-" if v is None else f"{100 * v:.1f}%"  # noqa: E731
+    out(f"  refined vs greedy  first {pct(report['improvement_first'])}, last {pct(report['improvement_last'])}\n")
+    if args.plot:
+        out(f"Wrote {args.plot}\n")
+    return 0

@@ -1,0 +1,132 @@
+"""Closed loop against open loop (issue 30, Ch. 8.1): the same refined plans, executed one action at a time with
+the same noise (and disturbance) seeds, once open loop (the first failure ends the run) and once closed loop
+(monitored, re-refined, replanned); and a stream of tasks on which the models learn in operation.
+
+A failed run is charged its time + FAILED_RUN_PENALTY s (`penalized`), so failing fast does not look fast.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from statistics import median
+
+import numpy as np
+from scipy import stats
+
+from tailor.refinement.belief import parse_belief
+from tailor.refinement.execution import FAILED_RUN_PENALTY, ClosedLoop, ExecuteOptions, OnlineLearner, summarize
+from tailor.refinement.execution.loop import _plan
+from tailor.refinement.pipeline import BELIEF_ARGUMENT, Options, read_task, prepare
+from tailor.refinement.refine import refine
+from tailor.refinement.evaluation.experiments import situation_seed
+from tailor.refinement.situations import Job
+
+_INPUTS: dict = {}  # per worker process: each problem's inputs, read once
+
+
+def _inputs(job: Job):
+    key = (str(job.task.domain), str(job.task.problem), str(job.task.models_dir))
+    if key not in _INPUTS:
+        _INPUTS[key] = read_task(job.task, job.task.models_dir)
+    return _INPUTS[key]
+
+
+def closed_loop_episode(job: Job, index: int, objects: dict, disturbance: str | None, horizon: int = 2,
+                        replans: int = 2) -> dict:
+    """One situation: its plan refined once, then executed open and closed loop with the same simulator seed."""
+    seed = situation_seed(job.seed, index)
+    base = _inputs(job)
+    belief = parse_belief({"objects": objects}, BELIEF_ARGUMENT, None, base.binding.quantities)
+    inputs = replace(base, belief=belief)
+    options = Options(horizon=horizon, seed=seed, greedy=False)
+    prepared = prepare(inputs, options, job.plan, warn=False)
+    o = prepared.options
+    refined = refine(prepared.sequence, prepared.models, horizon=o.horizon, method=o.optimizer, seed=seed,
+                     success_models=prepared.success_models, risk=o.risk, neighbourhood=o.neighbourhood)
+    row = {"index": index, "seed": seed, "problem": job.plan.problem}
+    for name, closed in (("open_loop", False), ("closed_loop", True)):
+        settings = ExecuteOptions(closed_loop=closed, replans=replans, disturbance=disturbance)
+        events = list(ClosedLoop(inputs, options, settings, prepared=prepared, refined=refined).events())
+        row[name] = summarize(events).to_json()
+    return row
+
+
+def _side(rows: list[dict], name: str) -> dict:
+    runs = [r[name] for r in rows]
+    penalized = [r["duration"] + (0.0 if r["completed"] else FAILED_RUN_PENALTY) for r in runs]
+    done = [r["duration"] for r in runs if r["completed"]]
+    return {"runs": len(runs), "failed_runs": sum(1 for r in runs if not r["completed"]),
+            "mean_penalized": float(np.mean(penalized)) if penalized else None,
+            "mean_completed_time": float(np.mean(done)) if done else None,
+            "re_refinements": sum(r["re_refinements"] for r in runs), "replans": sum(r["replans"] for r in runs)}
+
+
+def summarize_closed_loop(rows: list[dict]) -> dict:
+    """The floors' numbers: each side's failed runs and mean penalized time, the share of the runs open loop
+    fails that closed loop completes, the median overhead share of closed loop, and the one-sided Wilcoxon
+    signed-rank p of closed loop's penalized times being lower (paired by situation)."""
+    out = {"open_loop": _side(rows, "open_loop"), "closed_loop": _side(rows, "closed_loop"),
+           "penalty": FAILED_RUN_PENALTY}
+    failed_open = [r for r in rows if not r["open_loop"]["completed"]]
+    out["recovered_share"] = (sum(1 for r in failed_open if r["closed_loop"]["completed"]) / len(failed_open)
+                              if failed_open else None)
+    shares = [r["closed_loop"]["overhead"] / r["closed_loop"]["duration"] for r in rows
+              if r["closed_loop"]["duration"] > 0]
+    out["overhead_share"] = float(median(shares)) if shares else None
+    out["overhead_share_mean"] = float(np.mean(shares)) if shares else None
+    pen = lambda r: r["duration"] + (0.0 if r["completed"] else FAILED_RUN_PENALTY)  # noqa: E731
+    diff = np.array([pen(r["closed_loop"]) - pen(r["open_loop"]) for r in rows])
+    if np.any(diff != 0):
+        out["p_closed_faster"] = float(stats.wilcoxon(diff, alternative="less").pvalue)
+    else:
+        out["p_closed_faster"] = None
+    out["closed_minus_open_mean"] = float(diff.mean()) if len(diff) else None
+    return out
+
+
+# --- learning in operation on a stream of tasks ------------------------------------------------------------
+def learning_stream(items: list[tuple[Job, int, dict]], variant: str | None, every: int = 5, horizon: int = 2
+                    ) -> list[dict]:
+    """Execute the tasks in turn, closed loop, the models learning in operation (one OnlineLearner across the
+    stream) on the robot `variant`; per task: the models' error on its actions before they ran (prequential),
+    the executed time, and the greedy (h = 1) time with the same models on the same seed."""
+    learner = None
+    rows = []
+    for job, index, objects in items:
+        seed = situation_seed(job.seed, index)
+        base = _inputs(job)
+        if learner is None:
+            learner = OnlineLearner(base.binding.entry, every)
+        belief = parse_belief({"objects": objects}, BELIEF_ARGUMENT, None, base.binding.quantities)
+        inputs = replace(base, belief=belief)
+        before = len(learner.errors)
+        row = {"index": index, "seed": seed}
+        for name, h in (("refined", horizon), ("greedy", 1)):
+            options = Options(horizon=h, seed=seed, greedy=False)
+            settings = ExecuteOptions(closed_loop=True, variant=variant, learn=name == "refined")
+            use = learner if name == "refined" else _frozen(learner)
+            events = list(ClosedLoop(inputs, options, settings, learner=use).events())
+            summary = summarize(events)
+            row[name] = summary.duration + (0.0 if summary.completed else FAILED_RUN_PENALTY)
+            row[f"{name}_completed"] = summary.completed
+        errors = learner.errors[before:]
+        row["abs_errors"] = [abs(p - m) for _, p, m in errors]
+        row["relative_errors"] = [abs(p - m) / m for _, p, m in errors if m > 0]
+        rows.append(row)
+    return rows
+
+
+class _Frozen(OnlineLearner):
+    """The stream's learner as it stands, not learning from the greedy run (the greedy comparison only)."""
+
+    def record(self, episode, predicted=None) -> None:
+        return None
+
+
+def _frozen(learner: OnlineLearner) -> OnlineLearner:
+    frozen = _Frozen(learner.entry, learner.every)
+    frozen._trained, frozen._adapted = learner._trained, learner._adapted
+    return frozen
+
+
+__all__ = ["closed_loop_episode", "summarize_closed_loop", "learning_stream", "_plan"]
