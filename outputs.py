@@ -11,6 +11,9 @@ symbolic link, `domains/a/../b`): the checks compare the path with every symboli
 be looked at (a loop of symbolic links, a name too long) is an OutputFileError naming it, like any other
 output that cannot be written.
 
+Every JSON output and report carries its `Provenance` (the tailor version, the command line, the seeds and the
+SHA-256 of the model files read), so a result can be told apart from another and made again.
+
 Every output is written atomically (`write_atomically`: a temporary file beside the target, renamed over it
 once complete) with the permissions any new file of the user gets (0666 less the umask, usually 0644), not
 the 0600 `tempfile.mkstemp` gives: models, reports and plots are meant to be read by others.
@@ -19,15 +22,19 @@ the 0600 `tempfile.mkstemp` gives: models, reports and plots are meant to be rea
 from __future__ import annotations
 
 import errno
+import hashlib
 import json
 import math
 import os
 import stat
+import sys
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
-from tailor.errors import OutputFileError
+from tailor import __version__
+from tailor.errors import ModelFileError, OutputFileError
 
 NEW_FILE_MODE = 0o666  # what open() asks for; the umask takes away from it
 PACKAGE_DIR = Path(os.path.realpath(__file__)).parent  # the installed package (a source tree when editable)
@@ -200,7 +207,62 @@ SCHEMA_VERSION = 1
 UNITS = {"durations": "s", "quantities": "SI: m, rad, m/s, rad/s"}
 
 
-def versioned(kind: str, data: dict) -> dict:
-    """A command's JSON output led by its schema (`tailor.<kind>/<version>`) and the units of its numbers
-    (the README's "JSON outputs")."""
-    return {"schema": f"tailor.{kind}/{SCHEMA_VERSION}", "units": UNITS, **data}
+def versioned(kind: str, data: dict, provenance: Provenance | None = None) -> dict:
+    """A command's JSON output led by its schema (`tailor.<kind>/<version>`), the units of its numbers (the
+    README's "JSON outputs") and, given, where it comes from (`Provenance.to_json`)."""
+    head = {"schema": f"tailor.{kind}/{SCHEMA_VERSION}", "units": UNITS}
+    if provenance is not None:
+        head["provenance"] = provenance.to_json()
+    return {**head, **data}
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """Where a result comes from: the tailor version that made it, the command line that asked for it, the
+    seeds it used and the SHA-256 of every model file it read (a model retrained in place changes its digest)."""
+
+    version: str
+    argv: tuple[str, ...]  # ("tailor", "refine", ...); () where a library call, not a command, made the result
+    seeds: tuple[tuple[str, int], ...] = ()  # (option or role, seed)
+    models: tuple[tuple[str, str], ...] = ()  # (model file, SHA-256 of its bytes), by file name
+
+    def to_json(self) -> dict:
+        return {"tailor": self.version, "argv": list(self.argv), "seeds": dict(self.seeds),
+                "models": [{"file": file, "sha256": digest} for file, digest in self.models]}
+
+
+def provenance(argv: Sequence[str] | None = None, seeds: Mapping[str, int] | None = None,
+               models: Iterable[Path | str] = ()) -> Provenance:
+    """The provenance of a command's result: `argv` its arguments after the program name (default: this
+    process's, sys.argv[1:]), `seeds` by name, `models` the model files it read (each digested here)."""
+    words = tuple(sys.argv[1:] if argv is None else argv)
+    files = sorted({str(path) for path in models}, key=lambda name: (Path(name).name, name))
+    return Provenance(__version__, ("tailor", *words), tuple((seeds or {}).items()),
+                      tuple((file, file_digest(file)) for file in files))
+
+
+def provenance_lines(data: Mapping) -> list[str]:
+    """A provenance in its JSON form (`Provenance.to_json`, as a report holds it) as lines of text, for a report
+    meant to be read: the version, the command line and the seeds, then each model file read with its digest."""
+    seeds = ", ".join(f"{name} {value}" for name, value in data.get("seeds", {}).items()) or "none"
+    command = " ".join(data.get("argv", ())) or "(a library call)"
+    return [f"tailor {data.get('tailor', '?')}; command: {command}; seeds: {seeds}",
+            *(f"model read: {m['file']} (sha256 {m['sha256']})" for m in data.get("models", ()))]
+
+
+def file_digest(path: Path | str) -> str:
+    """The SHA-256 of a file's bytes, in hex (a model file that cannot be read is a ModelFileError naming it)."""
+    try:
+        with open(path, "rb") as handle:
+            return hashlib.file_digest(handle, "sha256").hexdigest()
+    except OSError as exc:
+        raise ModelFileError(f"cannot read: {exc.strerror or exc}", file=str(path)) from None
+
+
+def model_files(folder: Path | str) -> list[Path]:
+    """Every model file (*.json) in `folder`, by name: what a command may read when its worker processes load
+    the models they need (none where the folder does not exist)."""
+    try:
+        return sorted(path for path in Path(folder).glob("*.json") if path.is_file())
+    except OSError:
+        return []

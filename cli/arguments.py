@@ -77,7 +77,8 @@ def add_models_argument(parser: argparse.ArgumentParser) -> None:
     """`--models DIR`: the action models to use instead of the domain's bundled ones (see model_store)."""
     parser.add_argument("--models", metavar="DIR", default=None,
                         help="action models to use: a folder of <action>.json, or a `tailor train` output folder "
-                             "(default: $TAILOR_MODELS/<domain> where it exists, else the domain's bundled models)")
+                             "(default: $TAILOR_MODELS/<domain> where it exists, else what `tailor train` wrote to the user "
+                             "data folder, else the domain's bundled models)")
 
 
 def add_filter_arguments(parser: argparse.ArgumentParser) -> None:

@@ -12,7 +12,7 @@ import sys
 
 from tailor.cli.arguments import positive_seconds
 from tailor.errors import BindingError
-from tailor.outputs import json_text, versioned
+from tailor.outputs import json_text, provenance, versioned
 from tailor.planner_bridge import bundled_problems, plan_pddl, resolve_domain_dir
 from tailor.refinement import pipeline
 
@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(json_text(versioned("check", {"problems": [
             {"problem": plan.problem, "file": str(task.problem), "belief_file": str(task.belief), **checked.to_json()}
-            for task, plan, checked in reports]})) + "\n")
+            for task, plan, checked in reports]}, provenance(getattr(args, "argv", None)))) + "\n")
     else:
         for task, plan, checked in reports:
             _print_text(task, plan, checked)

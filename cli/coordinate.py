@@ -117,11 +117,10 @@ def run(args: argparse.Namespace) -> int:
 
         written = draw_all(report, scene.bounds, args.plot)
     if args.json:
-        from tailor.outputs import json_text
+        from tailor.outputs import json_text, model_files, provenance, versioned
 
-        from tailor.outputs import versioned
-
-        sys.stdout.write(json_text(versioned("coordinate", {**report, "models": str(source.path)})) + "\n")
+        origin = provenance(getattr(args, "argv", None), {"seed": args.seed}, model_files(source.path))
+        sys.stdout.write(json_text(versioned("coordinate", {**report, "models": str(source.path)}, origin)) + "\n")
     else:
         _print_text(report)
     log = logging.getLogger(__name__)

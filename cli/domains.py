@@ -14,11 +14,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def describe(domain_dir) -> dict:
-    """What the domain in `domain_dir` provides: problems, binding, simulator, models, recipe, evaluation."""
+    """What the domain in `domain_dir` provides: problems, binding, simulator, models (those `tailor refine` would
+    read, model_store.resolve_models), recipe, evaluation."""
     from tailor.errors import TailorError
     from tailor.refinement.binding import BINDING_FILE, DOMAIN_FILE, load_domain_binding
     from tailor.refinement.binding_domain import read_vocabulary
     from tailor.refinement.learning.recipe import recipe_from_binding
+    from tailor.refinement.model_store import resolve_models
 
     problems = sorted(p.stem for p in (domain_dir / "problems").glob("*.pddl"))
     vocabulary = read_vocabulary(domain_dir / DOMAIN_FILE)  # the PDDL domain's own name (None: unreadable)
@@ -34,7 +36,13 @@ def describe(domain_dir) -> dict:
         info["notes"].append(str(exc))
         return info
     info["simulator"] = binding.simulator
-    info["models"] = sorted(p.name for p in (domain_dir / "models").glob("*.json"))
+    try:  # the models `tailor refine` would read: also those training wrote to the user data folder
+        source = resolve_models(domain_dir)
+    except TailorError as exc:
+        info["notes"].append(str(exc))
+    else:
+        info["models"] = sorted(p.name for p in source.path.glob("*.json"))
+        info["models_folder"] = str(source.path)
     for capability, check in (("train", lambda: recipe_from_binding(binding, domain_dir)),
                               ("evaluate", binding.require_evaluation)):
         try:
@@ -66,10 +74,11 @@ def run(args: argparse.Namespace) -> int:
     domains = [describe(DOMAINS_DIR / name) for name in bundled_domains()]
     domains += [describe(Path(resolve_domain_dir(p))) for p in args.paths]
     if args.json:
-        from tailor.outputs import versioned
+        from tailor.outputs import provenance, versioned
 
         sys.stdout.write(json.dumps(versioned("domains", {"simulators": sims, "failed_simulators": registry.failed(),
-                                                          "domains": domains}), indent=1) + "\n")
+                                                          "domains": domains}, provenance(getattr(args, "argv", None))),
+                                    indent=1) + "\n")
         return 0
     out = sys.stdout.write
     out("Simulators (entry point group tailor.simulators):\n")

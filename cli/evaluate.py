@@ -23,7 +23,7 @@ from tailor.cli.arguments import (
 )
 
 
-HORIZONS = (1, 2, 3, 4)
+HORIZONS = (1, 2, 3, 4)  # run on every horizon situation; reported where one differs from a shorter horizon
 HORIZON_EPISODES = 100  # situations of the horizons experiment (Table 5.3) without --horizon-episodes
 
 
@@ -35,7 +35,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="of these, how many are also searched in the simulator (default 100)")
     parser.add_argument("--horizon-episodes", type=whole_number(0, MAX_EPISODES), default=None, metavar="N",
                         help=f"situations run with horizons 1-4 (Table 5.3; default {HORIZON_EPISODES}, or --episodes "
-                             "if fewer)")
+                             "if fewer); a horizon longer than a sequence acts as its length, and one longer than "
+                             "every sequence is not listed")
     parser.add_argument("--situations", metavar="NAME", default=None,
                         help="a situation generator of the domain's simulator to evaluate on (greedy vs refined and "
                              "the horizons) instead of the binding's [evaluation] ones, e.g. another scenario")
@@ -51,6 +52,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--plot", metavar="FILE.png",
                         help="with --assertion: draw three instances with their asserted subgoals (Fig. 6.6); "
                              "with --meta: the meta model's tree and regions (Fig. 5.16)")
+    parser.add_argument("--closed-loop", action="store_true",
+                        help="execute each situation's refined plan open and closed loop (monitored, re-refined, "
+                             "replanned; Ch. 8.1) with the same simulator seed: failed runs, time, recovered share, "
+                             "overhead")
+    parser.add_argument("--learning-curve", action="store_true",
+                        help="execute --episodes tasks in turn, closed loop, the models learning in operation "
+                             "(optionally on --variant); the models' error and refined vs greedy time per task")
+    parser.add_argument("--reference-episodes", type=whole_number(0, MAX_EPISODES), default=0, metavar="N",
+                        help="with --learning-curve: also train models from scratch on N episodes of the variant "
+                             "per experience scenario and compare their error (default 0: not)")
+    parser.add_argument("--disturb", metavar="NAME", default=None,
+                        help="with --closed-loop: a seeded disturbance of the simulated world in every run "
+                             "(see `tailor domains`)")
+    parser.add_argument("--variant", metavar="NAME", default=None,
+                        help="with --learning-curve: the changed robot the tasks run on (see `tailor domains`)")
     parser.add_argument("--meta", action="store_true",
                         help="learn the meta action model (Sec. 5.5.4) from --episodes situations and measure "
                              "refinement unfiltered vs filtered by it on --fresh-episodes others (Tables 5.4-5.6)")
@@ -175,7 +191,9 @@ def _print_text(report: dict) -> None:
         for row in w["horizons"]:
             out(f"  h={row['horizon']:<6} {_fmt(row['mean']):>8}  {_pct(row['improvement']):>17}"
                 f"  {_pct(row['improvement_over_previous']):>6}  {_fmt(row['p_value_vs_previous'], '{:.2g}'):>10}"
-                f"  {','.join(row['methods'])}\n")
+                f"  {','.join(row['methods'])}"
+                + (f"  ({row['shorter']} of {w['scenarios']} situations have fewer actions: h={row['horizon']} acts "
+                   "as their length there)" if row.get("shorter") else "") + "\n")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -188,6 +206,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     from tailor.refinement.binding import load_domain_binding
     from tailor.refinement.evaluation.experiments import (
         comparison_episode,
+        distinct_horizons,
         horizon_episode,
         horizon_rows,
         situation_rows,
@@ -216,7 +235,7 @@ def _evaluate(args: argparse.Namespace) -> int:
         return run_meta(args, domain_dir, binding, plan, source)
     if args.fresh_episodes is not None or args.out is not None or args.worse_cost is not None:
         raise UsageError("--fresh-episodes, --worse-cost and --out belong to --meta")
-    if args.assertion or args.plot:
+    if args.assertion or (args.plot and not args.learning_curve):
         from tailor.cli.evaluate_assertion import run_assertion
 
         return run_assertion(args, domain_dir, binding, plan, source.path)
@@ -235,6 +254,15 @@ def _evaluate(args: argparse.Namespace) -> int:
         return draw_situations(domain_dir, binding, generator, seeds, args.seed, planned, source.path)
 
     items = situations(plan.comparison, args.episodes)
+    if args.closed_loop or args.learning_curve:
+        from tailor.cli.evaluate_closed_loop import run_closed_loop, run_learning_curve
+
+        if args.closed_loop and args.learning_curve:
+            raise UsageError("--closed-loop and --learning-curve are two experiments: give one")
+        run_experiment = run_closed_loop if args.closed_loop else run_learning_curve
+        return run_experiment(args, domain_dir, binding, plan, source.path, items)
+    if args.disturb is not None or args.variant is not None:
+        raise UsageError("--disturb belongs to --closed-loop, --variant to --learning-curve")
     use_filter = binding.refinement.filter if args.filter is None else args.filter
     if use_filter:  # a missing or bad meta model fails before any work
         from tailor.refinement.models.meta_model import load_meta_model
@@ -270,13 +298,15 @@ def _evaluate(args: argparse.Namespace) -> int:
         items = situations(plan.horizons, horizon_episodes)
         hrows = run_in_workers(horizon_episode, [(job, i, objects, HORIZONS) for job, i, objects in items],
                               args.jobs, "horizons 1..4", getattr(args, "progress", True))
+        shown = distinct_horizons(hrows, HORIZONS)  # h=3, 4 of two-action sequences are h=2: not listed
         report["horizon_situations"] = plan.horizons
-        report["horizons"] = summarize_horizons(hrows, HORIZONS)
-        report["horizons"]["situations"] = horizon_rows(hrows, {i: objects for _, i, objects in items}, HORIZONS)
+        report["horizons"] = summarize_horizons(hrows, shown)
+        report["horizons"]["situations"] = horizon_rows(hrows, {i: objects for _, i, objects in items}, shown)
     if args.json:
-        from tailor.outputs import json_text, versioned
+        from tailor.outputs import json_text, model_files, provenance, versioned
 
-        sys.stdout.write(json_text(versioned("evaluate", report)) + "\n")
+        origin = provenance(getattr(args, "argv", None), {"seed": args.seed}, model_files(source.path))
+        sys.stdout.write(json_text(versioned("evaluate", report, origin)) + "\n")
     else:
         _print_text(report)
     return 0

@@ -96,9 +96,10 @@ def run_assertion(args: argparse.Namespace, domain_dir, binding, plan, models_di
         report["plot"] = str(args.plot)
         report["plot_situations"] = [r["index"] for r in chosen]
     if args.json:
-        from tailor.outputs import json_text, versioned
+        from tailor.outputs import json_text, model_files, provenance, versioned
 
-        sys.stdout.write(json_text(versioned("evaluate_assertion", report)) + "\n")
+        origin = provenance(getattr(args, "argv", None), {"seed": args.seed}, model_files(models_dir))
+        sys.stdout.write(json_text(versioned("evaluate_assertion", report, origin)) + "\n")
     else:
         _print_text(report)
     return 0

@@ -70,6 +70,16 @@ def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, mode
     if args.plot:
         check_output_file(args.plot, ".png")
     rows = learning_stream(items, args.variant)
+    reference = None
+    if args.reference_episodes:
+        from tailor.refinement.evaluation.closed_loop import reference_error, reference_models
+        from tailor.refinement.situations import job_models, situation_sequence
+
+        job, _, objects = items[0]
+        models = job_models(job, situation_sequence(job, objects))
+        trained = reference_models(domain_dir, binding, dict(models), args.variant, args.reference_episodes, args.seed,
+                                   args.jobs)
+        reference = {"episodes": args.reference_episodes, "mae_last": reference_error(rows[-CURVE_WINDOW:], trained)}
     errors = [np.mean(r["relative_errors"]) if r["relative_errors"] else np.nan for r in rows]
     first = rows[:CURVE_WINDOW]
     last = rows[-CURVE_WINDOW:]
@@ -86,6 +96,10 @@ def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, mode
               "generator": plan.comparison, "variant": args.variant, "tasks": len(rows),
               "mae_first": mean_error(first), "mae_last": mean_error(last),
               "improvement_first": gain(first), "improvement_last": gain(last)}
+    if reference is not None:
+        report["reference"] = reference
+        report["mae_ratio_to_reference"] = (report["mae_last"] / reference["mae_last"]
+                                            if reference["mae_last"] and report["mae_last"] is not None else None)
     if args.plot:
         from tailor.refinement.evaluation.closed_loop_plots import draw_learning_curve
 
@@ -103,6 +117,10 @@ def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, mode
         f"{fmt(report['mae_last'], ' s')}\n")
     pct = lambda v: "-" if v is None else f"{100 * v:.1f}%"  # noqa: E731
     out(f"  refined vs greedy  first {pct(report['improvement_first'])}, last {pct(report['improvement_last'])}\n")
+    if reference is not None:
+        out(f"  models trained from scratch on {reference['episodes']} episodes of the variant per scenario: MAE "
+            f"{fmt(reference['mae_last'], ' s')} on the last {CURVE_WINDOW} tasks' actions (learning in operation "
+            f"{fmt(report['mae_ratio_to_reference'])} x that)\n")
     if args.plot:
         out(f"Wrote {args.plot}\n")
     return 0

@@ -187,9 +187,12 @@ def run_meta(args: argparse.Namespace, domain_dir: Path, binding, plan, source) 
               "episodes": {"training": _rows_json(train_rows), "fresh": _rows_json(fresh_rows)}}
     del report["training"]["training_confusion"]
     if args.json:
-        from tailor.outputs import json_text, versioned
+        from tailor.outputs import json_text, model_files, provenance, versioned
+        from tailor.refinement.models.action_models import META_FILE
 
-        sys.stdout.write(json_text(versioned("evaluate_meta", report)) + "\n")
+        read = [p for p in model_files(source.path) if p.name != META_FILE]  # (the meta model: written, not read)
+        origin = provenance(getattr(args, "argv", None), {"seed": args.seed}, read)
+        sys.stdout.write(json_text(versioned("evaluate_meta", report, origin)) + "\n")
         logging.getLogger(__name__).info("wrote %s", ", ".join(files))
     else:
         _print_text(report)

@@ -53,17 +53,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from tailor.refinement.execution import execute, summarize
+    from tailor.outputs import provenance, versioned
+    from tailor.refinement.execution import run as prepare_run
+    from tailor.refinement.execution import summarize
 
     if args.plot:
         check_output_file(args.plot, ".png")
-    events = execute(args.domain, args.problem, args.belief, horizon=args.horizon, optimizer=args.optimizer,
+    loop = prepare_run(args.domain, args.problem, args.belief, horizon=args.horizon, optimizer=args.optimizer,
                      seed=args.seed, models=args.models, closed_loop=not args.open_loop, replans=args.replans,
                      learn=args.learn, learn_every=args.learn_every, disturbance=args.disturb, variant=args.variant,
                      log=args.log, planner=args.planner, timeout=args.timeout)
     collected = []
     with showing_progress(False):
-        for event in events:
+        for event in loop.events():
             collected.append(event)
             if not args.json:
                 print(_line(event), flush=True)
@@ -74,7 +76,9 @@ def run(args: argparse.Namespace) -> int:
         written = draw_run(collected, args.domain, Path(args.plot))
         print(f"wrote {written}", file=sys.stderr)
     if args.json:
-        sys.stdout.write(json_text({"events": [e.to_json() for e in collected], "summary": summary.to_json()}))
+        origin = provenance(getattr(args, "argv", None), {"seed": args.seed}, loop.model_files())
+        data = {"events": [e.to_json() for e in collected], "summary": summary.to_json()}
+        sys.stdout.write(json_text(versioned("execute", data, origin)) + "\n")
     else:
         print(f"{'completed' if summary.completed else 'NOT completed'}: {summary.actions} action(s) executed in "
               f"{summary.duration:.2f} s, {summary.re_refinements} re-refinement(s), {summary.replans} replan(s), "

@@ -146,6 +146,7 @@ def main(argv: list[str] | None = None) -> int:
         log.prog = f"tailor {args.command}"
         set_verbosity(args.verbose - args.quiet)  # as argparse read it (also --qui, --verb)
         args.progress = args.quiet == 0  # progress bars (on a terminal only) unless -q
+        args.argv = argv  # the command line, for the outputs' provenance (tailor.outputs.provenance)
         return _run(args, program)
 
 

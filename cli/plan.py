@@ -6,10 +6,11 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 
 from tailor.cli.arguments import positive_seconds
-from tailor.outputs import versioned
-from tailor.planner_bridge import format_ipc, plan_files, render_text, resolve_problem
+from tailor.outputs import Provenance, provenance, versioned
+from tailor.planner_bridge import AbstractPlan, format_ipc, plan_files, render_text, resolve_problem
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -45,16 +46,17 @@ def format_json(data: dict) -> str:
     return "{\n" + ",\n".join(lines) + "\n}\n"
 
 
-# Each output format and what writes it; `--format` takes its choices from here.
-FORMATS = {
-    "text": render_text,
-    "json": lambda plan: format_json(versioned("plan", plan.to_json())),
-    "ipc": format_ipc,
+# Each output format and what writes it from the plan and its provenance (which the JSON carries); `--format`
+# takes its choices from here.
+FORMATS: dict[str, Callable[[AbstractPlan, Provenance], str]] = {
+    "text": lambda plan, origin: render_text(plan),
+    "json": lambda plan, origin: format_json(versioned("plan", plan.to_json(), origin)),
+    "ipc": lambda plan, origin: format_ipc(plan),
 }
 
 
 def run(args: argparse.Namespace) -> int:
     domain, problem = resolve_problem(args.domain, args.problem)
     plan = plan_files(domain, problem, planner=args.planner, timeout=args.timeout)
-    sys.stdout.write(FORMATS[args.format](plan))
+    sys.stdout.write(FORMATS[args.format](plan, provenance(getattr(args, "argv", None))))
     return 0

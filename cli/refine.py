@@ -11,12 +11,14 @@ import logging
 import math
 import sys
 import time
+from pathlib import Path
 
-from tailor.outputs import check_output_file, json_text, versioned
+from tailor.outputs import Provenance, check_output_file, json_text, provenance, versioned
 from tailor.planner_bridge import plan_from_ipc, render_text
 from tailor.progress import showing_progress
 from tailor.refinement import pipeline
-from tailor.refinement.models.meta_model import load_meta_model
+from tailor.refinement.models.action_models import COLLISION_SUFFIX
+from tailor.refinement.models.meta_model import load_meta_model, meta_model_path
 from tailor.refinement.optimizers import DEFAULT_OPTIMIZER, OPTIMIZERS
 from tailor.refinement.refine import predicted_success
 from tailor.refinement.refine_plots import cost_plot_names, draw_refinement
@@ -119,9 +121,18 @@ def window_json(window) -> dict:
             "note": window.note}
 
 
-def result_json(result, method: str, seed: int) -> dict:
+def models_read(result, meta) -> list[Path]:
+    """The model files a refinement read: the duration models of its actions, the success classifiers of its
+    guards, and the meta model where the filter judged with it."""
+    folder = result.models_dir
+    files = [folder / f"{action}.json" for action in result.models]
+    files += [folder / f"{name}{COLLISION_SUFFIX}" for name in result.success_models]
+    return files + ([meta_model_path(folder)] if meta is not None else [])
+
+
+def result_json(result, method: str, seed: int, origin: Provenance | None = None) -> dict:
     """Schema tailor.refine/1: the plan, the free parameters with their ranges and chosen values, and the
-    refined and greedy executions in the same structure."""
+    refined and greedy executions in the same structure; led by `origin` where given."""
     chosen = {p.id: p.value for a in result.refined.refined.sequence.actions for p in a.params}
     greedy_values = {p.id: p.value for a in result.greedy.refined.sequence.actions for p in a.params}
     data = {
@@ -139,7 +150,7 @@ def result_json(result, method: str, seed: int) -> dict:
         data["filter"] = result.decision.to_json()
     data["refined"] = _execution_json(result.refined, result.success_models)
     data["greedy"] = _execution_json(result.greedy, result.success_models)
-    return versioned("refine", data)
+    return versioned("refine", data, origin)
 
 
 def _gain(refined: float, greedy: float) -> str:
@@ -223,7 +234,7 @@ def _print_text(result) -> None:
 NOTHING_TO_REFINE = "the goal holds in the initial state: the plan is empty, nothing to refine or simulate"
 
 
-def _nothing_to_refine(result, args: argparse.Namespace) -> int:
+def _nothing_to_refine(result, args: argparse.Namespace, origin: Provenance) -> int:
     """An empty plan is a success in every mode: it is printed, with zero durations (and, asked to simulate,
     a trivially successful execution); no plot is drawn, since there is no trajectory."""
     plan = result.plan
@@ -241,7 +252,7 @@ def _nothing_to_refine(result, args: argparse.Namespace) -> int:
             "horizon": args.horizon, "seed": args.seed, "models": str(result.models_dir), "plan": plan.to_json(),
             "free_parameters": [], "refined": execution,
             "greedy": {**execution, "horizon": 1, "risk": 0.0, "neighbourhood": 0.0}, "note": NOTHING_TO_REFINE}
-    sys.stdout.write(json.dumps(versioned("refine", data), indent=1, allow_nan=False) + "\n")
+    sys.stdout.write(json.dumps(versioned("refine", data, origin), indent=1, allow_nan=False) + "\n")
     return 0
 
 
@@ -263,8 +274,9 @@ def run(args: argparse.Namespace) -> int:
         result = pipeline.run(inputs, options, plan=given, meta=meta)
     logging.getLogger(__name__).debug("planned and refined greedy and with h=%d in %.2f s", args.horizon,
                                       time.perf_counter() - started)
+    origin = provenance(getattr(args, "argv", None), {"seed": args.seed}, models_read(result, meta))
     if result.empty:
-        return _nothing_to_refine(result, args)
+        return _nothing_to_refine(result, args, origin)
     announce_models("refine", inputs.models)  # once the models have made their predictions: an error stays one line
     written = ()
     if args.plot:
@@ -273,7 +285,7 @@ def run(args: argparse.Namespace) -> int:
             executions = {"zero": result.zero, **executions}
         written = draw_refinement(args.plot, result, executions, inputs.binding.entry.views)
     if args.json:
-        sys.stdout.write(json_text(result_json(result, args.optimizer, args.seed)) + "\n")
+        sys.stdout.write(json_text(result_json(result, args.optimizer, args.seed, origin)) + "\n")
         if written:  # stdout holds the JSON only
             logging.getLogger(__name__).info("wrote %s", ", ".join(str(path) for path in written))
     else:

@@ -92,7 +92,7 @@ def _only(recipe, actions: tuple[str, ...]):
 
 def _companions(recipe, out: Path) -> dict:
     """With --only: the domain's other action models, which the subgoal experience of the models learned may
-    refine with (from OUT's models where it holds them, else the domain's own; loaded before any work)."""
+    refine with (from OUT's models where it holds them, else those refine would read; loaded before any work)."""
     if not recipe.subgoal_experience:
         return {}
     from tailor.refinement.model_store import MODELS, resolve_models
@@ -112,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
     from tailor.refinement.learning.recipe import load_recipe
     from tailor.refinement.learning.report import summary_lines
     from tailor.refinement.learning.training import REPORT_FILES, train_domain
-    from tailor.outputs import check_output_dir, json_text
+    from tailor.outputs import check_output_dir, json_text, provenance
     from tailor.sims.shards import experience_lock, stored_gather
 
     recipe = load_recipe(resolve_domain_dir(args.domain))
@@ -122,9 +122,13 @@ def run(args: argparse.Namespace) -> int:
     if episodes < MIN_EPISODES:  # the domain's own [training] episodes
         raise BindingError(f"[training] episodes must be at least {MIN_EPISODES} (a quarter of them is the test "
                            f"set), got {episodes}", file=str(recipe.domain_dir / BINDING_FILE))
-    from tailor.refinement.model_store import ENVIRONMENT_VARIABLE, default_training_out
+    from tailor.refinement.model_store import ENVIRONMENT_VARIABLE, USER_DATA, default_training_out
 
     out = default_training_out(recipe.domain_dir) if args.out is None else args.out
+    if args.only and args.out is None:  # refine would read this folder alone, before the bundled models
+        logging.getLogger(__name__).warning(
+            "--only without --out writes only %s into %s, which `tailor refine` then reads before the bundled "
+            "models: give --out DIR to keep them apart", ", ".join(args.only), out / "models")
     check_output_dir(out)  # before gathering anything: minutes of work must not end in an unwritable folder
     experience = out / "experience" if args.experience is None else args.experience
     check_output_dir(experience)
@@ -134,14 +138,16 @@ def run(args: argparse.Namespace) -> int:
         from tailor.sims import registry
 
         recorded = read_logs(args.log, registry.get(recipe.simulator), recipe.duration_actions)
+    companions = _companions(recipe, out) if args.only and not args.log else {}
+    origin = provenance(getattr(args, "argv", None), {"seed": args.seed},
+                        [model.source for model in companions.values()])  # the model files read
     gathering = experience_lock(experience) if recorded is None else contextlib.nullcontext()
     with backend_session(args), gathering:  # one run at a time gathers into an experience folder
         report = train_domain(recipe, episodes, args.seed, out, jobs=args.jobs, fresh_episodes=args.fresh_episodes,
                               n_i_candidates=args.n_i or N_I_CANDIDATES, progress=getattr(args, "progress", True),
                               own_episodes=args.episodes is None,
                               gather=functools.partial(stored_gather, experience),
-                              companions=_companions(recipe, out) if args.only and not args.log else None,
-                              compare=args.compare, recorded=recorded)
+                              companions=companions, compare=args.compare, recorded=recorded, provenance=origin)
     log = logging.getLogger(__name__)
     written = [Path(out) / name for name in report.get("files", ())]
     try:
@@ -157,8 +163,11 @@ def run(args: argparse.Namespace) -> int:
             for path in written:
                 what = REPORT_FILES.get(path.name, "the report as JSON" if path.name == "report.json" else "")
                 print(f"  {str(path):<{width}}  {what}".rstrip())
-            print(f"Use them with `tailor refine {args.domain} PROBLEM --models {out}`"
-                  + (f" or {ENVIRONMENT_VARIABLE}={out.parent}" if args.out is None else ""))
+            if args.out is None:  # found there before the bundled models (model_store.resolve_models)
+                print(f"`tailor refine {args.domain} PROBLEM` uses them from now on (the {USER_DATA} comes before "
+                      f"the bundled models; --models DIR or {ENVIRONMENT_VARIABLE} choose others)")
+            else:
+                print(f"Use them with `tailor refine {args.domain} PROBLEM --models {out}`")
     except KeyboardInterrupt:  # the models are written and complete: report what is on disk, not the interrupt
         print(f"tailor train: interrupted while printing the report; the models in {out / 'models'} are complete",
               file=sys.stderr)

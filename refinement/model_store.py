@@ -4,9 +4,11 @@ The models bundled with a domain (`domains/<name>/models/`) are read-only defaul
 writes into the installed package; it writes to `--out DIR` or, by default, to the user's data folder,
 `<user data>/<domain>/` (platformdirs; e.g. ~/.local/share/tailor/<domain> on Linux), as `models/` and
 `training/`, where <domain> is the folder's `domain_key`: a bundled domain's name, another folder's name with
-a digest of its path, so two folders of one name never share models or experience. Refinement reads, in this order: `--models DIR` (a folder of `<action>.json`, or a training
-output folder holding `models/`), then `$TAILOR_MODELS/<domain>/` when that folder exists (the variable names
-a root laid out like the user data folder), then the bundled models; commands say which in one line.
+a digest of its path, so two folders of one name never share models or experience. Refinement reads, in this
+order: `--models DIR` (a folder of `<action>.json`, or a training output folder holding `models/`), then
+`$TAILOR_MODELS/<domain>/` when that folder exists (the variable names a root laid out like the user data
+folder), then `<user data>/<domain>/models/` when training wrote model files there, then the bundled models;
+commands say which in one line.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from tailor.errors import ModelFileError
 ENVIRONMENT_VARIABLE = "TAILOR_MODELS"
 MODELS = "models"  # the folder of <action>.json inside a domain folder or a training output folder
 MODEL_SUFFIX = ".json"  # of every model file (<action>.json, <action>.collision.json, meta.json)
+USER_DATA = "user data folder"  # the origin of models `tailor train` wrote there without --out
 
 
 @dataclass(frozen=True)
@@ -28,7 +31,7 @@ class ModelSource:
     """The folder a command reads action models from, and why that one."""
 
     path: Path
-    origin: str  # "--models", "$TAILOR_MODELS" or "domain folder" (the bundled defaults)
+    origin: str  # "--models", "$TAILOR_MODELS", USER_DATA or "domain folder" (the bundled defaults)
 
     def describe(self) -> str:
         return f"action models: {self.path} ({self.origin})"
@@ -67,8 +70,9 @@ def models_folder(path: Path) -> Path:
 
 def resolve_models(domain_dir: Path, explicit: str | Path | None = None) -> ModelSource:
     """The model folder for the domain in `domain_dir`: `explicit` (must exist), else the environment
-    variable's folder for this domain where it exists, else the bundled one. Every model file name in it must
-    name a regular file (checked before any is opened: a named pipe would block its reader forever)."""
+    variable's folder for this domain where it exists, else the user data folder's models of this domain where
+    `tailor train` wrote model files (its default output), else the bundled one. Every model file name in it
+    must name a regular file (checked before any is opened: a named pipe would block its reader forever)."""
     if explicit is not None:
         folder = models_folder(Path(explicit))
         if not folder.is_dir():
@@ -79,7 +83,18 @@ def resolve_models(domain_dir: Path, explicit: str | Path | None = None) -> Mode
         candidate = Path(root).expanduser() / domain_key(domain_dir)
         if candidate.is_dir():
             return _checked(ModelSource(models_folder(candidate), f"${ENVIRONMENT_VARIABLE}"))
+    trained = default_training_out(domain_dir) / MODELS
+    if _holds_models(trained):
+        return _checked(ModelSource(trained, USER_DATA))
     return _checked(ModelSource(Path(domain_dir) / MODELS, "domain folder"))
+
+
+def _holds_models(folder: Path) -> bool:
+    """Whether `folder` is a folder with at least one model file in it (training wrote there)."""
+    try:
+        return any(entry.name.endswith(MODEL_SUFFIX) for entry in os.scandir(folder))
+    except OSError:  # no such folder, or one that cannot be listed: nothing trained there
+        return False
 
 
 def _checked(source: ModelSource) -> ModelSource:

@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 import os
 import stat
-import sys
 import tempfile
 import zipfile
 import zlib
@@ -20,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tailor.progress import stage_bar
 from tailor.sims import registry
 from tailor.sims.episode import Episode
 from tailor.errors import DataError, SimError
@@ -59,14 +59,12 @@ def _run_batch(simulator: str, name: str, seeds: list[int]) -> list[Episode]:
 
 def gather(simulator: str, name: str, episodes: int, seed: int, jobs: int = 1, progress: bool = True,
            first: int = 0, into: list[Episode] | None = None) -> list[Episode]:
-    """Execute episodes first .. first + episodes - 1 of a scenario's seed stream, with a progress bar, in
-    `jobs` worker processes (or the workers of the backend session in force, tailor.sims.parallel).
+    """Execute episodes first .. first + episodes - 1 of a scenario's seed stream, with a progress bar (log lines
+    where stderr is not a terminal, tailor.progress.stage_bar), in `jobs` worker processes (or the workers of the backend session in force, tailor.sims.parallel).
 
     The episodes are appended to `into` (a new list by default) in order as batches finish, so a caller
     interrupted by Ctrl-C keeps the complete prefix. With workers the simulator is found through its entry
     point (a simulator registered only in-process with `register()` runs with jobs = 1 on loky)."""
-    from tqdm import tqdm
-
     from tailor.sims.parallel import ordered_results
 
     scenario(simulator, name)
@@ -75,8 +73,7 @@ def gather(simulator: str, name: str, episodes: int, seed: int, jobs: int = 1, p
     seeds = episode_seeds(seed, episodes, first)
     batches = [(simulator, name, seeds[i:i + EPISODES_PER_TASK]) for i in range(0, episodes, EPISODES_PER_TASK)]
     out: list[Episode] = [] if into is None else into
-    bar = tqdm(total=episodes, desc=f"gather {name}", unit="ep", file=sys.stderr,
-               disable=None if progress else True)  # None: a bar on a terminal only
+    bar = stage_bar(episodes, f"gather {name}", "ep", progress)
     results = ordered_results(_run_batch, batches, jobs)
     try:
         for batch in results:  # in order, so the list is the same for any backend and number of workers

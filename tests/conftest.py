@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 
 os.environ.setdefault("MPLBACKEND", "Agg")  # plots are written to files; never open a window
 # A test run started as a background job inherits Ctrl-C ignored, and so would every process it starts: the
@@ -13,6 +14,19 @@ if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
 
 import pytest  # noqa: E402
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _session_user_folders(tmp_path_factory):
+    """Neither does a module- or session-scoped fixture (set up before the per-test fixture below), nor a command
+    it starts: the user data folder is a temporary one for the whole session, also where platformdirs derives
+    it from the home folder (macOS: ~/Library/Application Support) rather than from $XDG_DATA_HOME."""
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("XDG_DATA_HOME", str(tmp_path_factory.mktemp("session-user-data")))
+        patch.delenv("TAILOR_MODELS", raising=False)
+        if sys.platform == "darwin":
+            patch.setenv("HOME", str(tmp_path_factory.mktemp("home")))
+        yield
 
 
 @pytest.fixture(autouse=True)

@@ -4,12 +4,13 @@
     python tests/regenerate_golden.py --check   # only print the diff; exit status 1 when anything differs
 
 For every bundled pair domains/<domain>/problems/<problem>.pddl the golden file <domain>/<problem>.json holds
-exactly what `tailor plan <domain> <problem> --json` prints; <domain>/<problem>.txt holds the text rendering.
+exactly what `tailor plan <domain> <problem> --json` prints but its provenance (tailor's version, the command line); <domain>/<problem>.txt holds the text rendering.
 The golden file tests/golden/pocl/<domain>/<problem>.txt holds the text of `tailor plan <domain> <problem>
 --planner pocl` (our partial-order causal-link planner).
 For every bundled problem of a domain with an action library binding (actions.toml), the golden file
 tests/golden/refine/<domain>/<problem>.json holds what `tailor refine <domain> <problem> --simulate --json`
-prints with seed 0, without the optimizers' wall-clock times ("seconds"), which differ from run to run.
+prints with seed 0, without the optimizers' wall-clock times ("seconds"), which differ from run to run, and
+without its provenance.
 Files are written atomically (temporary file, then os.replace).
 """
 
@@ -51,7 +52,19 @@ def tailor_plan_output(domain: str, problem: str, extra: list[str]) -> str:
         status = main(["plan", domain, problem, *extra])
     if status != 0:
         raise SystemExit(f"tailor plan {domain} {problem} {' '.join(extra)} failed with status {status}")
-    return out.getvalue()
+    return without_provenance(out.getvalue()) if "--json" in extra else out.getvalue()
+
+
+def without_provenance(text: str) -> str:
+    """`tailor plan --json`'s output without its provenance (tailor's version and the command line change from
+    release to release and from call to call; the plan does not), in the same layout."""
+    import json
+
+    from tailor.cli.plan import format_json
+
+    data = json.loads(text)
+    data.pop("provenance", None)
+    return format_json(data)
 
 
 def pocl_golden_path(domain: str, problem: str) -> Path:
@@ -75,12 +88,13 @@ def refine_golden_path(domain: str, problem: str) -> Path:
     return REFINE_GOLDEN_DIR / domain / f"{problem}.json"
 
 
-MACHINE_DEPENDENT = ("seconds", "models")  # wall-clock times; the model folder's absolute path
+MACHINE_DEPENDENT = ("seconds", "models", "provenance")  # wall-clock times; the model folder's absolute path;
+# tailor's version and the command line
 
 
 def without_timings(value):
-    """The JSON value without "seconds" entries (wall-clock times are not reproducible) and without the
-    model folder's path (it depends on where tailor is installed)."""
+    """The JSON value without "seconds" entries (wall-clock times are not reproducible), without the
+    model folder's path (it depends on where tailor is installed) and without its provenance."""
     if isinstance(value, dict):
         return {k: without_timings(v) for k, v in value.items() if k not in MACHINE_DEPENDENT}
     if isinstance(value, list):

@@ -92,8 +92,10 @@ def test_json_and_format_ipc_together_are_a_usage_error(capsys):
 
 
 def test_json_flag_and_format_json_print_the_same(capsys):
-    assert tailor_plan(capsys, "soccer", "score", "--json") == tailor_plan(capsys, "soccer", "score", "--format",
-                                                                         "json")
+    from regenerate_golden import without_provenance  # (whose command lines differ)
+
+    assert without_provenance(tailor_plan(capsys, "soccer", "score", "--json")) == without_provenance(
+        tailor_plan(capsys, "soccer", "score", "--format", "json"))
 
 
 @pytest.mark.parametrize("domain, problem, planner", [

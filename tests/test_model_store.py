@@ -1,5 +1,6 @@
 """Where models are read from and written to: bundled models are never overwritten, `--models` and
-$TAILOR_MODELS choose others, and every command says which it used."""
+$TAILOR_MODELS choose others, models trained into the user data folder are found there, and every command says
+which it used."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import pytest
 
 from tailor.errors import ModelFileError
 from tailor.cli.main import main
-from tailor.refinement.model_store import default_training_out, domain_key, resolve_models, user_root
+from tailor.refinement.model_store import USER_DATA, default_training_out, domain_key, resolve_models, user_root
 
 DOMAINS = Path(__file__).resolve().parents[1] / "domains"
 
@@ -103,8 +104,62 @@ def test_train_without_out_writes_the_users_folder_and_never_the_bundled_models(
     out = tmp_path / "tailor" / "soccer"
     printed = capsys.readouterr().out
     assert f"  {out / 'models' / 'goToPosition.json'}" in printed  # every file named, in the user's folder
-    assert f"--models {out}` or TAILOR_MODELS={out.parent}" in printed
+    assert "`tailor refine soccer PROBLEM` uses them from now on" in printed
     assert {p.name for p in (out / "models").iterdir()} == {"goToPosition.json"}
     assert {p.name: p.read_bytes() for p in (DOMAINS / "soccer" / "models").iterdir()} == bundled
-    monkeypatch.setenv("TAILOR_MODELS", str(out.parent))  # what the printed hint says: refine now uses them
-    assert resolve_models(DOMAINS / "soccer").path == out / "models"
+    chosen = resolve_models(DOMAINS / "soccer")  # what the printed line says: refine finds them, no variable set
+    assert (chosen.path, chosen.origin) == (out / "models", "user data folder")
+
+
+@pytest.fixture(scope="module")
+def module_data_home():
+    """What a module-scoped fixture sees (set up before the per-test isolation of conftest.py)."""
+    import os
+
+    return os.environ.get("XDG_DATA_HOME"), os.environ.get("TAILOR_MODELS")
+
+
+def test_no_test_sees_the_developers_data_folder(module_data_home, tmp_path_factory):
+    """The user data folder of every test, and of every module fixture, is a temporary one (conftest.py)."""
+    base = tmp_path_factory.getbasetemp()
+    data_home, variable = module_data_home
+    assert variable is None and data_home is not None and base in Path(data_home).parents
+    assert base in user_root().parents
+
+
+def test_models_are_found_in_the_order_option_variable_user_data_folder_bundled(tmp_path, monkeypatch):
+    """Issue 32: `tailor train room` wrote to the user data folder and `tailor refine room tour` did not look
+    there. The order: --models, $TAILOR_MODELS/<domain>, <user data>/<domain>/models (where training wrote
+    model files), the bundled models."""
+    soccer = DOMAINS / "soccer"
+    trained = default_training_out(soccer) / "models"
+    trained.mkdir(parents=True)
+    assert resolve_models(soccer).origin == "domain folder"  # an empty folder: nothing trained there
+    (trained / "goToPosition.json").write_text("{}")
+    assert (resolve_models(soccer).path, resolve_models(soccer).origin) == (trained, USER_DATA)
+    assert resolve_models(DOMAINS / "arm").origin == "domain folder"  # trained for soccer only
+    monkeypatch.setenv("TAILOR_MODELS", str(tmp_path / "root"))
+    assert resolve_models(soccer).origin == USER_DATA  # the variable names no folder for soccer
+    (tmp_path / "root" / "soccer" / "models").mkdir(parents=True)
+    assert resolve_models(soccer).origin == "$TAILOR_MODELS"
+    (tmp_path / "mine").mkdir()
+    assert resolve_models(soccer, tmp_path / "mine").origin == "--models"
+
+
+def test_refine_uses_the_models_training_wrote_to_the_user_data_folder_and_says_so(capsys):
+    """The models `tailor train arm` (without --out) would write, made twice as slow: refine reads them without
+    being told, names the folder on stderr and in the JSON, and digests the file it read."""
+    import hashlib
+
+    folder = default_training_out(DOMAINS / "arm") / "models"
+    folder.mkdir(parents=True)
+    data = json.loads((DOMAINS / "arm" / "models" / "reach.json").read_text())
+    _scale_model(data, 2.0)
+    (folder / "reach.json").write_text(json.dumps(data))
+    assert main(["refine", "arm", "letter-f", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert f"action models: {folder} (user data folder)" in err
+    result = json.loads(out)
+    assert result["models"] == str(folder)
+    assert result["provenance"]["models"] == [
+        {"file": str(folder / "reach.json"), "sha256": hashlib.sha256((folder / "reach.json").read_bytes()).hexdigest()}]

@@ -167,6 +167,51 @@ def _evaluation(domain: str, name: str, e: dict) -> list[str]:
     return out
 
 
+def _closed_loop(domain: str, name: str, e: dict) -> list[str]:
+    command = (f"tailor evaluate {domain} --closed-loop --situations {e['generator']} --episodes {e['situations']}"
+               f"{' --disturb ' + e['disturbance'] if e.get('disturbance') else ''} --seed {e['seed']} --json")
+    out = [f"## Closed loop against open loop: `{name}`\n",
+           f"From `domains/{domain}/training/{name}`, the report of `{command}`: each random {code(e['generator'])} "
+           "situation refined once and executed open loop and closed loop (monitored, re-refined, replanned; "
+           "[Executing](../executing.md)) with the same simulator seed"
+           f"{', the disturbance ' + code(e['disturbance']) + ' in every run' if e.get('disturbance') else ''}. "
+           f"A failed run is charged its time + {_num(e['penalty'], 0)} s.\n"]
+    rows = []
+    for side in ("open_loop", "closed_loop"):
+        s = e[side]
+        rows.append([side.replace("_", " "), f"{s['failed_runs']} of {s['runs']}", f"{_num(s['mean_penalized'])} s",
+                     str(s["re_refinements"]), str(s["replans"])])
+    out.append(table(["", "failed runs", "mean time (failed +penalty)", "re-refinements", "replans"], rows,
+                     align="lrrrr"))
+    out.append(f"\nRecovered: {_pct(e['recovered_share'])} of the runs open loop fails. Closed minus open: "
+               f"{_num(e['closed_minus_open_mean'])} s on average (Wilcoxon signed-rank, one-sided p "
+               f"{_p(e['p_closed_faster'])}). Overhead (monitoring, re-refinement, replanning; wall clock on the "
+               f"machine that ran it): median {_pct(e['overhead_share'], 2)} of execution time.\n")
+    return out
+
+
+def _learning_curve(domain: str, name: str, e: dict) -> list[str]:
+    command = (f"tailor evaluate {domain} --learning-curve --situations {e['generator']} --episodes {e['tasks']}"
+               f"{' --variant ' + e['variant'] if e.get('variant') else ''}"
+               f"{' --reference-episodes ' + str(e['reference']['episodes']) if e.get('reference') else ''}"
+               f" --seed {e['seed']} --json")
+    out = [f"## Learning in operation: `{name}`\n",
+           f"From `domains/{domain}/training/{name}`, the report of `{command}`: {e['tasks']} tasks executed closed "
+           f"loop in turn{' on the changed robot ' + code(e['variant']) if e.get('variant') else ''}, the duration "
+           "models recalibrated on the executed actions every 5 of them. The error is each action's, predicted "
+           "before it ran.\n"]
+    rows = [["duration MAE, first 20 tasks / last 20", f"{_num(e['mae_first'], 3)} s / {_num(e['mae_last'], 3)} s"],
+            ["refined vs greedy, first 20 tasks / last 20",
+             f"{_pct(e['improvement_first'])} / {_pct(e['improvement_last'])}"]]
+    if e.get("reference"):
+        rows.append([f"models trained from scratch on {e['reference']['episodes']} episodes of the changed robot "
+                     "per scenario: MAE on the last 20 tasks' actions",
+                     f"{_num(e['reference']['mae_last'], 3)} s (learning in operation "
+                     f"{_num(e.get('mae_ratio_to_reference'))} x that)"])
+    out.append(table(["", "measured"], rows, align="ll"))
+    return out
+
+
 def domain_page(training: Path) -> str:
     domain = training.parent.name
     report = json.loads((training / "report.json").read_text(encoding="utf-8"))
@@ -179,6 +224,10 @@ def domain_page(training: Path) -> str:
         evaluation = json.loads(path.read_text(encoding="utf-8"))
         if "greedy_mean" in evaluation:
             out += ["\n"] + _evaluation(domain, path.name, evaluation)
+        elif "recovered_share" in evaluation:
+            out += ["\n"] + _closed_loop(domain, path.name, evaluation)
+        elif "mae_last" in evaluation:
+            out += ["\n"] + _learning_curve(domain, path.name, evaluation)
     for path in sorted(training.glob("*.txt")):
         if path.name in SKIPPED_TEXT:
             continue
@@ -208,6 +257,12 @@ def index_page(dirs: list[Path]) -> str:
             e = json.loads(path.read_text(encoding="utf-8"))
             if "improvement" in e:
                 kept.append(f"{code(path.name)}: refined {_pct(e['improvement'])} faster than greedy")
+            elif "recovered_share" in e:
+                kept.append(f"{code(path.name)}: closed loop failed {e['closed_loop']['failed_runs']} of "
+                            f"{e['closed_loop']['runs']} runs, open loop {e['open_loop']['failed_runs']}")
+            elif "mae_last" in e:
+                kept.append(f"{code(path.name)}: learning in operation, MAE {_num(e['mae_first'], 3)} -> "
+                            f"{_num(e['mae_last'], 3)} s")
         kept += [code(path.name) for path in sorted(training.glob("*.txt")) if path.name not in SKIPPED_TEXT]
         rows.append([f"[{domain}]({domain}.md)", escape(models), "; ".join(kept) or "-"])
     return "\n".join([

@@ -13,13 +13,14 @@ from statistics import median
 import numpy as np
 from scipy import stats
 
+from tailor.progress import stage_bar
 from tailor.refinement.belief import parse_belief
 from tailor.refinement.execution import FAILED_RUN_PENALTY, ClosedLoop, ExecuteOptions, OnlineLearner, summarize
 from tailor.refinement.execution.loop import _plan
 from tailor.refinement.pipeline import BELIEF_ARGUMENT, Options, read_task, prepare
 from tailor.refinement.refine import refine
 from tailor.refinement.evaluation.experiments import situation_seed
-from tailor.refinement.situations import Job
+from tailor.refinement.situations import Job, stream_seed
 
 _INPUTS: dict = {}  # per worker process: each problem's inputs, read once
 
@@ -92,28 +93,36 @@ def learning_stream(items: list[tuple[Job, int, dict]], variant: str | None, eve
     the executed time, and the greedy (h = 1) time with the same models on the same seed."""
     learner = None
     rows = []
-    for job, index, objects in items:
-        seed = situation_seed(job.seed, index)
-        base = _inputs(job)
-        if learner is None:
-            learner = OnlineLearner(base.binding.entry, every)
-        belief = parse_belief({"objects": objects}, BELIEF_ARGUMENT, None, base.binding.quantities)
-        inputs = replace(base, belief=belief)
-        before = len(learner.errors)
-        row = {"index": index, "seed": seed}
-        for name, h in (("refined", horizon), ("greedy", 1)):
-            options = Options(horizon=h, seed=seed, greedy=False)
-            settings = ExecuteOptions(closed_loop=True, variant=variant, learn=name == "refined")
-            use = learner if name == "refined" else _frozen(learner)
-            events = list(ClosedLoop(inputs, options, settings, learner=use).events())
-            summary = summarize(events)
-            row[name] = summary.duration + (0.0 if summary.completed else FAILED_RUN_PENALTY)
-            row[f"{name}_completed"] = summary.completed
-        errors = learner.errors[before:]
-        row["abs_errors"] = [abs(p - m) for _, p, m in errors]
-        row["relative_errors"] = [abs(p - m) / m for _, p, m in errors if m > 0]
-        rows.append(row)
+    with stage_bar(len(items), "tasks learning in operation", "task") as bar:
+        for job, index, objects in items:
+            row, learner = _learning_task(job, index, objects, variant, every, horizon, learner)
+            rows.append(row)
+            bar.update()
     return rows
+
+
+def _learning_task(job: Job, index: int, objects: dict, variant: str | None, every: int, horizon: int,
+                   learner: OnlineLearner | None) -> tuple[dict, OnlineLearner]:
+    """One task of the stream: refined (learning) and greedy (not), with the same simulator seed."""
+    seed = situation_seed(job.seed, index)
+    base = _inputs(job)
+    if learner is None:
+        learner = OnlineLearner(base.binding.entry, every)
+    inputs = replace(base, belief=parse_belief({"objects": objects}, BELIEF_ARGUMENT, None, base.binding.quantities))
+    before = len(learner.errors)
+    row = {"index": index, "seed": seed}
+    for name, h in (("refined", horizon), ("greedy", 1)):
+        options = Options(horizon=h, seed=seed, greedy=False)
+        settings = ExecuteOptions(closed_loop=True, variant=variant, learn=name == "refined")
+        use = learner if name == "refined" else _frozen(learner)
+        summary = summarize(list(ClosedLoop(inputs, options, settings, learner=use).events()))
+        row[name] = summary.duration + (0.0 if summary.completed else FAILED_RUN_PENALTY)
+        row[f"{name}_completed"] = summary.completed
+    errors = learner.errors[before:]
+    row["abs_errors"] = [abs(p - m) for _, p, m, _ in errors]
+    row["relative_errors"] = [abs(p - m) / m for _, p, m, _ in errors if m > 0]
+    row["executions"] = [{"action": a, "params": list(x), "duration": m} for a, _, m, x in errors]
+    return row, learner
 
 
 class _Frozen(OnlineLearner):

@@ -21,7 +21,6 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -149,11 +148,27 @@ def situation_rows(rows: list[dict], situations: dict[int, dict]) -> list[dict]:
 
 
 def horizon_rows(rows: list[dict], situations: dict[int, dict], horizons: tuple[int, ...]) -> list[dict]:
-    """Per situation of the horizon experiment: the situation and, per horizon, predicted and simulated (s)."""
+    """Per situation of the horizon experiment: the situation, its number of actions and, per horizon, the
+    horizon in effect (at most that number), predicted and simulated (s)."""
     return [{"index": r["index"], "seed": r["seed"], "problem": r["problem"], "situation": situations.get(r["index"]),
-             "horizons": [{"horizon": h, "predicted": r[f"h{h}_predicted"], "simulated": r[f"h{h}"],
+             "actions": r["actions"],
+             "horizons": [{"horizon": h, "effective": effective_horizon(h, r["actions"]),
+                           "predicted": r[f"h{h}_predicted"], "simulated": r[f"h{h}"],
                            "succeeded": r[f"h{h}_ok"], "optimizer": r[f"h{h}_methods"]} for h in horizons]}
             for r in rows]
+
+
+def effective_horizon(horizon: int, actions: int) -> int:
+    """The horizon refinement acts with on a sequence of `actions` actions: a window longer than the sequence
+    is the whole sequence, so h > n is h = n."""
+    return max(1, min(horizon, actions))
+
+
+def distinct_horizons(rows: list[dict], horizons: tuple[int, ...]) -> tuple[int, ...]:
+    """The horizons that differ from a shorter one in at least one situation of `rows` (the first always): a
+    horizon longer than every sequence refines as the longest sequence's length, and is not reported."""
+    longest = max((r["actions"] for r in rows), default=0)
+    return tuple(h for h in horizons if h == horizons[0] or h <= longest)
 
 
 def _axis(p) -> np.ndarray:
@@ -194,19 +209,22 @@ def _oracle(sequence: ActionSequence, seed: int, start: Mapping[str, float]) -> 
 
 
 def horizon_episode(job: Job, index: int, objects: dict, horizons: tuple[int, ...]) -> dict:
-    """One situation, executed with each horizon (same simulator seed for all)."""
+    """One situation, executed with each horizon (same simulator seed for all); a horizon longer than the
+    sequence is its length (effective_horizon): refined and simulated once, its results repeated."""
     seed = situation_seed(job.seed, index)
     sequence, success = asserted_situation(job, objects)
     models = job_models(job, sequence)
-    out = {"index": index, "seed": seed, "problem": job.plan.problem}
+    out = {"index": index, "seed": seed, "problem": job.plan.problem, "actions": len(sequence.actions)}
+    done: dict[int, dict] = {}  # effective horizon -> its results
     for h in horizons:
-        options = Options(horizon=h, seed=seed, risk=0.0, neighbourhood=0.0, greedy=False, simulate=True)
-        stage = refine_stage(sequence, models, success, options)
-        refined, result = stage.refined.refined, stage.refined.simulated
-        out[f"h{h}"] = result.duration
-        out[f"h{h}_ok"] = result.succeeded
-        out[f"h{h}_predicted"] = refined.predicted_total
-        out[f"h{h}_methods"] = sorted({w.method for w in refined.windows})
+        effective = effective_horizon(h, len(sequence.actions))
+        if effective not in done:
+            options = Options(horizon=effective, seed=seed, risk=0.0, neighbourhood=0.0, greedy=False, simulate=True)
+            stage = refine_stage(sequence, models, success, options)
+            refined, result = stage.refined.refined, stage.refined.simulated
+            done[effective] = {"": result.duration, "_ok": result.succeeded, "_predicted": refined.predicted_total,
+                               "_methods": sorted({w.method for w in refined.windows})}
+        out.update({f"h{h}{key}": value for key, value in done[effective].items()})
     return out
 
 
@@ -417,7 +435,8 @@ def _zero_summary(rows: list[dict]) -> dict:
 
 
 def summarize_horizons(rows: list[dict], horizons: tuple[int, ...]) -> dict:
-    """Table 5.3: mean duration per horizon over the situations where every horizon succeeded."""
+    """Table 5.3: mean duration per horizon over the situations where every horizon succeeded; per horizon also
+    how many situations have fewer actions than it (there it acts as their length)."""
     from scipy.stats import ttest_rel
 
     ok = [r for r in rows if all(r[f"h{h}_ok"] for h in horizons)]
@@ -435,6 +454,7 @@ def summarize_horizons(rows: list[dict], horizons: tuple[int, ...]) -> dict:
             "improvement_over_previous": _mean(1 - times / previous) if len(ok) else None,
             "p_value_vs_previous": p,
             "failed": sum(not r[f"h{h}_ok"] for r in rows),
+            "shorter": sum(r["actions"] < h for r in rows if "actions" in r),
             "methods": sorted({m for r in rows for m in r[f"h{h}_methods"]}),
         })
         previous = times

@@ -41,12 +41,18 @@ from tailor.refinement.execution.loop import (
 from tailor.refinement.optimizers import DEFAULT_OPTIMIZER
 
 
-def execute(domain, problem, belief=None, *, horizon: int = 2, optimizer: str = DEFAULT_OPTIMIZER, seed: int = 0,
+def execute(domain, problem, belief=None, **options) -> Iterator[Event]:
+    """Plan, refine and execute a task one action at a time; an iterator of `Event`s (see loop.Event). The keyword
+    arguments are `run`'s; planning, refining and executing start when iteration does."""
+    return run(domain, problem, belief, **options).events()
+
+
+def run(domain, problem, belief=None, *, horizon: int = 2, optimizer: str = DEFAULT_OPTIMIZER, seed: int = 0,
             models: str | Path | None = None, closed_loop: bool = True, replans: int = 2, learn: bool = False,
             learn_every: int = 5, disturbance: str | None = None, variant: str | None = None,
             executor: Executor | None = None, learner: OnlineLearner | None = None, log: str | Path | None = None,
-            planner: str = DEFAULT_PLANNER, timeout: float | None = None) -> Iterator[Event]:
-    """Plan, refine and execute a task one action at a time; an iterator of `Event`s (see loop.Event).
+            planner: str = DEFAULT_PLANNER, timeout: float | None = None) -> ClosedLoop:
+    """The run of a task, planned and refined, ready to execute (`.events()`; `execute` is that).
 
     `domain`, `problem`, `belief`, `horizon`, `optimizer`, `seed`, `models`, `planner`, `timeout`: as for
     `tailor.refine`. `closed_loop` False runs the refined plan open loop (no monitoring, the first failure ends
@@ -54,7 +60,7 @@ def execute(domain, problem, belief=None, *, horizon: int = 2, optimizer: str = 
     `learn_every` executed actions (or pass a `learner` kept across calls). `executor`: a robot adapter (default:
     the domain's simulator with `seed`, `disturbance` and `variant`). `log`: a folder where every executed
     action is added to `<action>.csv` (and, with `learn`, the executions there recalibrate the models first).
-    Planning, refining and executing start when iteration does."""
+    The task is read, planned and refined here; nothing is executed until `.events()` is iterated."""
     seed, horizon = _refine_arguments(domain, problem, belief, seed, horizon, models, True, None, None, None,
                                       optimizer, timeout)
     for name, value in (("closed_loop", closed_loop), ("learn", learn)):
@@ -83,9 +89,9 @@ def execute(domain, problem, belief=None, *, horizon: int = 2, optimizer: str = 
                                          f"{', '.join(known) or 'none'})")
     options = pipeline.Options(horizon=horizon, optimizer=optimizer, seed=seed, greedy=False, planner=planner,
                                timeout=timeout)
-    return execute_task(inputs, options, settings, executor, learner, None if log is None else Path(log))
+    return ClosedLoop(inputs, options, settings, executor, learner, log=None if log is None else Path(log))
 
 
-__all__ = ["execute", "execute_task", "ClosedLoop", "Event", "ExecuteOptions", "RunSummary", "summarize", "Executed",
+__all__ = ["execute", "run", "execute_task", "ClosedLoop", "Event", "ExecuteOptions", "RunSummary", "summarize", "Executed",
            "Executor", "SimulatedRobot", "ReplayRobot", "Recorder", "TraceStep", "OnlineLearner", "recalibrated",
            "FAILED_RUN_PENALTY"]

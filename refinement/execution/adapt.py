@@ -36,7 +36,8 @@ class OnlineLearner:
         self.entry = entry
         self.every = every
         self.episodes: dict[str, list[Episode]] = {}
-        self.errors: list[tuple[str, float, float]] = []  # (action, predicted before it ran, measured)
+        # (action, predicted before it ran, measured, its parameters) of each successful execution, in order
+        self.errors: list[tuple[str, float, float, tuple[float, ...]]] = []
         self.count = 0
         self.refits = 0
         self._trained: dict[str, ActionModel] = {}  # the models as trained, per action
@@ -46,7 +47,8 @@ class OnlineLearner:
         """One executed action; every `every` of them the models are recalibrated."""
         self.episodes.setdefault(episode.action, []).append(episode)
         if predicted is not None and episode.succeeded:
-            self.errors.append((episode.action, float(predicted), float(episode.duration)))
+            self.errors.append((episode.action, float(predicted), float(episode.duration),
+                                tuple(float(v) for v in episode.params)))
         self.count += 1
         if self.count % self.every == 0:
             self._refit()
@@ -74,7 +76,7 @@ class OnlineLearner:
         """Mean absolute error (s) of the predictions made before each executed action ran (prequential)."""
         if not self.errors:
             return None
-        return float(np.mean([abs(p - m) for _, p, m in self.errors]))
+        return float(np.mean([abs(p - m) for _, p, m, _ in self.errors]))
 
     def _refit(self) -> None:
         for action in self.episodes:

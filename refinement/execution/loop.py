@@ -193,6 +193,11 @@ class ClosedLoop:
         self.replans_left = execute.replans
         self._stop_reason = ""
 
+    def model_files(self) -> list[Path]:
+        """The model files the run read (duration models and success classifiers), for provenance."""
+        models = [*self.prepared.models.values(), *self.prepared.success_models.values()]
+        return sorted({Path(m.source) for m in models if getattr(m, "source", None)})
+
     # --- the run --------------------------------------------------------------------------------------------
     def events(self) -> Iterator[Event]:
         """The run, event by event; every executed action is kept in the log (where one is named) however the

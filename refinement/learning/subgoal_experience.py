@@ -13,9 +13,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tqdm import tqdm
-
 from tailor.errors import DataError, ModelFileError
+from tailor.progress import stage_bar
 from tailor.refinement.binding import load_domain_binding
 from tailor.refinement.refine import refine
 from tailor.refinement.situations import Job, draw_situations, job_binding, situation_sequence, stream_seed
@@ -60,8 +59,7 @@ def gather_subgoal_experience(domain_dir: Path, generator: str, action: str, mod
     drawn = draw_situations(domain_dir, load_domain_binding(domain_dir), generator, seeds, seed, planned)
     chunks = [drawn[k:k + CHUNK] for k in range(0, len(drawn), CHUNK)]
     out: list[Episode] = []
-    with tqdm(total=situations, desc=f"{generator} subgoals ({action})", unit="situation",
-              disable=None if progress else True) as bar:
+    with stage_bar(situations, f"{generator} subgoals ({action})", "situation", progress) as bar:
         results = ordered_results(_episodes, [(chunk, models, action) for chunk in chunks], jobs)
         try:
             for count, episodes in results:

@@ -9,6 +9,7 @@ is renamed over the target once all are complete: an interrupted run leaves the 
 from __future__ import annotations
 
 import errno
+import html
 import logging
 import os
 import signal
@@ -17,8 +18,6 @@ import time
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
-
-from tqdm import tqdm
 
 from tailor.errors import DataError
 from tailor.refinement.learning.classifiers import train_collision_model
@@ -39,7 +38,9 @@ from tailor.refinement.models.expression_space import AUTO
 from tailor.refinement.models.features import resolve
 from tailor.sims import registry
 from tailor.refinement.models.uncertainty import FOLDS
-from tailor.outputs import check_output_dir, json_text, staged_file, write_error
+from tailor import __version__
+from tailor.outputs import Provenance, check_output_dir, json_text, provenance_lines, staged_file, write_error
+from tailor.progress import finish, stage_bar
 from tailor.sims.episode import Episode
 
 FRESH_SEED_OFFSET = 7_919_000  # the fresh test episodes of a classifier use seed + this: no shared episode
@@ -64,6 +65,7 @@ def train_domain(
     companions: dict | None = None,
     compare: bool = False,
     recorded: dict[str, list[Episode]] | None = None,
+    provenance: Provenance | None = None,
 ) -> dict:
     """Gather, train and write `out/models/*.json` and `out/training/` (report and plots); return the report.
 
@@ -75,7 +77,8 @@ def train_domain(
     `compare`, each duration model's report holds Fig. 4.3's comparison of feature spaces (space_comparison).
     `recorded` (action -> episodes, e.g. read from logs, learning.logs) replaces gathering: the duration models
     learn from those executions only; success classifiers and subgoal experience, which need the simulator, are
-    not learned then."""
+    not learned then. `provenance` (the command's: its line, seeds and the model files it read) leads the report;
+    by default it names this call's seed and no command line."""
     if gather is None:
         from tailor.sims.experience import gather
     if episodes < 1:
@@ -126,7 +129,7 @@ def train_domain(
 
     timings: dict[str, dict] = {}
     fits = len(recipe.models) * _fits_per_model(n_i_candidates, episode_fractions) + 2 * len(recipe.classifiers)
-    with tqdm(total=fits, desc="training", unit="fit", disable=None if progress else True) as bar:
+    with stage_bar(fits, "training", "fit", progress) as bar:
         def step(label: str) -> None:
             bar.set_postfix_str(label, refresh=False)
             bar.update(1)
@@ -139,8 +142,7 @@ def train_domain(
         classifiers = {c.action: train_collision_model(c.action, experience_of(c), fresh[c.action], seed,
                                                        c.feature_space, step=step).model
                        for c in recipe.classifiers}
-        bar.n = bar.total
-        bar.refresh()
+        finish(bar)  # (fits are shared: fewer than the most there may be)
     experience = {m.action: experience_of(m) for m in recipe.models}
     subgoal = []
     for chain in recipe.subgoal_experience:
@@ -149,8 +151,11 @@ def train_domain(
                                           jobs, progress, n_i_candidates, episode_fractions))
         models[chain.action] = refining[chain.action]
 
+    if provenance is None:  # a library call: no command line
+        provenance = Provenance(__version__, (), (("seed", seed),))
     report = {
         "schema": REPORT_SCHEMA,
+        "provenance": provenance.to_json(),
         "domain": recipe.domain,
         "simulator": recipe.simulator,
         "seed": seed,
@@ -239,7 +244,7 @@ def _learn_at_subgoals(recipe: TrainingRecipe, chain: SubgoalExperience, models:
                                            bounds[k + 1] - bounds[k], seed, jobs=jobs, progress=progress,
                                            first=bounds[k], planned=planned)
         label = f"retraining {chain.action} ({k + 1}/{rounds})"
-        with tqdm(total=fits, desc=label, unit="fit", disable=None if progress else True) as bar:
+        with stage_bar(fits, label, "fit", progress) as bar:
             before = getattr(models[chain.action], "report", None) or {}
             models[chain.action] = train_action(
                 recipe, chain.action, model_recipe.feature_space, experience[chain.action] + extra, seed,
@@ -250,8 +255,7 @@ def _learn_at_subgoals(recipe: TrainingRecipe, chain: SubgoalExperience, models:
                 after["space_comparison"] = {**before["space_comparison"], "experience": "scenarios"}
             if "feature_selection" in before and "feature_selection" not in after:
                 after["feature_selection"] = before["feature_selection"]
-            bar.n = bar.total
-            bar.refresh()
+            finish(bar)
     return {"generator": chain.situations, "action": chain.action, "situations": situations, "episodes": len(extra),
             "rounds": rounds, "succeeded": sum(e.succeeded for e in extra)}
 
@@ -283,10 +287,13 @@ def training_files(out: Path, recipe: TrainingRecipe, models: dict, classifiers:
                for name, draw in plots.training_plots(recipe.simulator, models, classifiers).items()}
     warnings = report.get("warnings", [])
     files[training_dir / "report.json"] = _json_writer(report)
+    origin = provenance_lines(report.get("provenance", {}))
     files[training_dir / "report.html"] = lambda p: p.write_text(
-        html_report(report, rules_sections(models, classifiers), figures, warnings), "utf-8")
+        html_report(report, rules_sections(models, classifiers), figures, warnings).replace(
+            "\n</body>", "\n<footer><p class=\"note\">" + "<br>".join(html.escape(line) for line in origin)
+            + "</p></footer>\n</body>", 1), "utf-8")
     files[training_dir / "report.txt"] = lambda p: p.write_text(
-        format_report(report, models, classifiers, warnings), "utf-8")
+        format_report(report, models, classifiers, warnings) + "\n".join(["Provenance:", *origin, ""]), "utf-8")
     for name, (png, _) in figures.items():
         files[training_dir / name] = lambda p, png=png: p.write_bytes(png)
     return files

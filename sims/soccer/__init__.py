@@ -25,7 +25,7 @@ from tailor.sims.soccer.pose import POSE_DELTA_SPACE, POSE_SPACE, POSITION_SPACE
 from tailor.sims.soccer.scenarios import RANGES, SITUATIONS, subgoal_episode
 from tailor.sims.soccer.team import TEAM
 from tailor.sims.soccer.walls import POSE_WALLS
-from tailor.sims.soccer.world import NUDGE, NUDGE_ROLL, NUDGE_WINDOW, WEAK_MOTOR_FACTOR, variant_dynamics
+from tailor.sims.soccer.world import NUDGE, NUDGE_ROLL, NUDGE_WINDOW, WEAK_MOTOR_FACTOR, WEAK_TOP_SPEED, variant_dynamics
 
 if TYPE_CHECKING:
     from tailor.sims.soccer.simulator import Noise, SoccerSim
@@ -69,8 +69,8 @@ DISTURBANCES = {
 }
 VARIANTS = {
     "weak_motors": f"the robot's motors are {1.0 - WEAK_MOTOR_FACTOR:.0%} weaker: its accelerations (a_max, "
-                   f"alpha_max) are {WEAK_MOTOR_FACTOR:g} times the modelled robot's, its speed limits the "
-                   f"same",
+                   f"alpha_max) are {WEAK_MOTOR_FACTOR:g} times the modelled robot's, its top speeds (v_max, "
+                   f"w_max) {WEAK_TOP_SPEED:g} times",
 }
 
 

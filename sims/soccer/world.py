@@ -110,11 +110,16 @@ def wrap(angle: float) -> float:
 WEAK_MOTOR_FACTOR = 0.75  # the weak motors' share of the accelerations (25% weaker)
 
 
+WEAK_TOP_SPEED = 0.8  # the weak motors' share of the top speeds, v_max and w_max (0.8 m/s: every way-point and
+# ball speed the soccer binding allows, up to 0.6 m/s, stays reachable)
+
+
 def weak_motors(dynamics: Dynamics) -> Dynamics:
-    """The robot with motors WEAK_MOTOR_FACTOR as strong: a_max and alpha_max scaled, v_max and w_max kept, so
-    every speed a subgoal may ask for is still reachable (only later)."""
+    """The robot with motors 25% weaker: a_max and alpha_max WEAK_MOTOR_FACTOR as large, the top speeds v_max and
+    w_max WEAK_TOP_SPEED as large (a start faster than the weak robot drives is taken at its top speed)."""
     return replace(dynamics, a_max=WEAK_MOTOR_FACTOR * dynamics.a_max,
-                   alpha_max=WEAK_MOTOR_FACTOR * dynamics.alpha_max)
+                   alpha_max=WEAK_MOTOR_FACTOR * dynamics.alpha_max, v_max=WEAK_TOP_SPEED * dynamics.v_max,
+                   w_max=WEAK_TOP_SPEED * dynamics.w_max)
 
 
 VARIANTS: dict[str, Callable[[Dynamics], Dynamics]] = {"weak_motors": weak_motors}
