@@ -2,7 +2,8 @@
 
 `SIMULATOR` is what the package registers (entry point `tailor.simulators: arm`): the reach action in joint
 space (Table 2.1), the simulator factory, the experience scenario and the random letters, its own feature
-space, and its quantities' units (joint angles are angles, but within their limits: never a full circle).
+space, its quantities' units (joint angles are angles, but within their limits: never a full circle), and for
+the closed loop (Ch. 8.1) its disturbance "bump" and its variant "payload" (sims.arm.disturbances).
 
 Declaring the robot loads no physics: the simulator module (sims.arm.simulator, which imports pymunk) is
 imported when a simulator is first created or an episode first runs, so that `tailor domains` and
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from tailor.sims.arm.disturbances import DISTURBANCES, VARIANTS
 from tailor.sims.arm.features import RAMPS
 from tailor.sims.arm.scenarios import SITUATIONS, run_reach, run_stroke_leg, subgoal_episode
 from tailor.sims.registry import deferred_names
@@ -27,11 +29,12 @@ UNITS = {"theta_a": _ANGLE, "theta_b": _ANGLE, "omega_a": _SPEED, "omega_b": _SP
          "tip_y": _METRES}
 
 
-def _create(seed: int, noise: Noise | None = None) -> ArmSim:
+def _create(seed: int, noise: Noise | None = None, disturbance: str | None = None,
+            variant: str | None = None) -> ArmSim:
     # deferred: the simulator module loads pymunk, which declaring the robot must not
     from tailor.sims.arm.simulator import ArmSim, Noise
 
-    return ArmSim(seed, Noise() if noise is None else noise)
+    return ArmSim(seed, Noise() if noise is None else noise, disturbance, variant)
 
 
 SIMULATOR = SimulatorEntry(
@@ -48,6 +51,8 @@ SIMULATOR = SimulatorEntry(
     views=(("tip_x", "tip_y"), ("theta_a", "theta_b")),
     feature_spaces=(RAMPS,),
     units=UNITS,
+    disturbances=DISTURBANCES,
+    variants=VARIANTS,
     description="PowerCube-like planar arm (shoulder, elbow), ramp velocity profiles tracked by PID (pymunk)",
 )
 

@@ -8,6 +8,8 @@ Scenario "stroke": one leg of a random stroke (letters.random_stroke: way-points
 letters' workspace), start and goal joint velocities uniform in [-OMEGA_MAX, OMEGA_MAX]: the short reaches a
 letter is made of, at every way-point velocity refinement may choose.
 The situations are random strokes of 4-6 way-points (letters.random_stroke), problems stroke-4/5/6.
+Both scenarios' runs and subgoal_episode take `variant` (None, or one of the arm's VARIANTS): the same episode
+on the changed arm, for experience of it.
 """
 
 from __future__ import annotations
@@ -47,31 +49,31 @@ def sample_stroke_leg(rng: np.random.Generator) -> tuple[tuple[float, float, flo
 
 
 def _episode(seed: int, start: tuple[float, float, float, float], call: ActionCall,
-             noise: Noise | None = None) -> Episode:
+             noise: Noise | None = None, variant: str | None = None) -> Episode:
     """One reach from `start` in a fresh ArmSim."""
     from tailor.sims.arm.simulator import ArmSim, Noise  # deferred: pymunk loads when an episode runs
 
-    sim = ArmSim(seed, Noise() if noise is None else noise)
+    sim = ArmSim(seed, Noise() if noise is None else noise, variant=variant)
     sim.place(*start)
     return sim.run(call)
 
 
-def run_stroke_leg(seed: int, noise: Noise | None = None) -> Episode:
+def run_stroke_leg(seed: int, noise: Noise | None = None, *, variant: str | None = None) -> Episode:
     """One random stroke leg (see the module doc)."""
     start, call = sample_stroke_leg(np.random.default_rng((seed, SAMPLING_STREAM)))
-    return _episode(seed, start, call, noise)
+    return _episode(seed, start, call, noise, variant)
 
 
-def run_reach(seed: int, noise: Noise | None = None) -> Episode:
+def run_reach(seed: int, noise: Noise | None = None, *, variant: str | None = None) -> Episode:
     """One random reach: start and goal within the joint limits, any joint velocities (see the module doc)."""
     start, call = sample_reach(np.random.default_rng((seed, SAMPLING_STREAM)))
-    return _episode(seed, start, call, noise)
+    return _episode(seed, start, call, noise, variant)
 
 
-def subgoal_episode(action: str, params: np.ndarray, seed: int) -> Episode:
+def subgoal_episode(action: str, params: np.ndarray, seed: int, variant: str | None = None) -> Episode:
     """An episode of `action` from a refined subgoal: `params` are one reach's start and goal states."""
     p = [float(v) for v in params]
-    return _episode(seed, (p[0], p[1], p[2], p[3]), ActionCall(action, tuple(p[4:8])))
+    return _episode(seed, (p[0], p[1], p[2], p[3]), ActionCall(action, tuple(p[4:8])), variant=variant)
 
 
 def letters(rng: np.random.Generator) -> tuple[str, dict[str, dict[str, float]]]:

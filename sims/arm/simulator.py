@@ -15,6 +15,10 @@ A reach ends (Episode.outcome), judged on the true state at each control tick, w
   SPEED_TOL of the goal velocities (with a moving goal the arm passes it: a sequence goes on from there);
 - "joint_limit": a joint angle is outside its limits (world.THETA_A_LIMITS, THETA_B_LIMITS);
 - "timeout": TIMEOUT simulated seconds passed.
+
+Closed loop (Ch. 8.1): `observe("reach")` and `scene()` measure the arm between reaches without advancing it;
+the disturbance "bump" kicks the joints once, the variant "payload" lowers the ramps' acceleration (both in
+sims.arm.disturbances).
 """
 
 from __future__ import annotations
@@ -27,6 +31,8 @@ import numpy as np
 import pymunk
 
 from tailor.sims.arm import world as W
+from tailor.sims.arm.disturbances import (BUMP_WINDOW, DISTURBANCE_STREAM, DISTURBANCES, PAYLOAD_FACTOR,
+                                          VARIANTS, Bump, bump_kick)
 from tailor.sims.arm.profile import synchronize
 from tailor.sims.episode import ActionCall, Episode, SequenceResult, run_in_sequence
 from tailor.sims.noise import NormalRows
@@ -73,15 +79,32 @@ class Noise:
 
 
 class ArmSim:
-    """The arm on its base; `run` executes one reach as an Episode, `run_sequence` several back to back."""
+    """The arm on its base; `run` executes one reach as an Episode, `run_sequence` several back to back.
+
+    `disturbance` ("bump") and `variant` ("payload") name one of sims.arm.disturbances' DISTURBANCES and
+    VARIANTS, None for none; what a disturbance did is appended to `events` (Bump)."""
 
     state_columns = STATE_COLUMNS
 
-    def __init__(self, seed: int, noise: Noise = Noise()):
+    def __init__(self, seed: int, noise: Noise = Noise(), disturbance: str | None = None,
+                 variant: str | None = None):
+        for kind, name, known in (("disturbance", disturbance, DISTURBANCES), ("variant", variant, VARIANTS)):
+            if name is not None and name not in known:
+                raise SimError(f"the arm has no {kind} {name!r} (known: {', '.join(known)})")
         self.noise = noise
         self.seed = int(seed)
         self.rng = np.random.default_rng(seed)
         self._noise = NormalRows(self.rng, 6)  # 4 sensing + 2 motor values per control tick
+        self._peeked: list[float] | None = None  # the next noise row, drawn by observe() before run() uses it
+        self.disturbance, self.variant = disturbance, variant
+        # the ramps' acceleration limit: the payload's is lower (the speed limit stays)
+        self.alpha_max = W.ALPHA_MAX if variant != "payload" else PAYLOAD_FACTOR * W.ALPHA_MAX
+        self.events: list[Bump] = []
+        self._reach_ticks = 0  # control ticks spent reaching, over every reach of this simulator
+        self._bump: tuple[int, float, tuple[float, float]] | None = None  # (tick, moment, kick) still to come
+        if disturbance == "bump":
+            moment, kick = bump_kick(np.random.default_rng((self.seed, DISTURBANCE_STREAM)))
+            self._bump = (math.ceil(moment * CONTROL_HZ - 1e-9), moment, kick)
         self.time = 0.0
         self.place(0.0, 0.0, 0.0, 0.0)
 
@@ -131,9 +154,51 @@ class ArmSim:
         theta_b, omega_b = b.angle - theta_a, b.angular_velocity - omega_a
         return (theta_a, omega_a, theta_b, omega_b, *W.forward(theta_a, theta_b))
 
+    def observe(self, action: str) -> tuple[float, float, float, float]:
+        """The observed parameters of `action` (theta_a, omega_a, theta_b, omega_b) measured now: exactly what
+        `run` of it logs first in Episode.params. It draws the noise row that run will measure its start with
+        and keeps it for run (consuming nothing: a closed loop that observes stays on the open loop's noise
+        stream); the simulation does not advance."""
+        if action not in ACTIONS:
+            raise SimError(f"unknown arm action {action!r}; known: {', '.join(ACTIONS)}")
+        return self._believe(self.true_state(), self._peek())
+
+    def scene(self) -> dict[str, tuple[float, ...]]:
+        """The scene measured now, in reset's form: {"arm": observe("reach")} (no further draw)."""
+        return {"arm": self.observe("reach")}
+
     def _draw(self) -> list[float]:
         """Six standard normal numbers for one control tick (4 sensing, 2 motor), drawn in blocks."""
-        return self._noise.next()
+        row = self._peeked
+        if row is None:
+            return self._noise.next()
+        self._peeked = None
+        return row
+
+    def _peek(self) -> list[float]:
+        """The noise row the next _draw returns."""
+        if self._peeked is None:
+            self._peeked = self._noise.next()
+        return self._peeked
+
+    def _kick(self, kick: tuple[float, float]) -> None:
+        """Add joint velocities (rad/s) to the links, keeping them rigid about the shoulder and the elbow."""
+        a, b = self.link_a, self.link_b
+        ka, kb = kick
+        ex, ey = W.elbow(a.angle)
+        (ax, ay), (bx, by) = a.position, b.position
+        a.angular_velocity += ka
+        a.velocity += (-ka * ay, ka * ax)
+        b.angular_velocity += ka + kb
+        b.velocity += (-ka * by - kb * (by - ey), ka * bx + kb * (bx - ex))
+
+    def _strike(self, ticks: int) -> None:
+        """The "bump" disturbance strikes now, `ticks` control periods into the running reach."""
+        _, moment, kick = self._bump
+        self._bump = None
+        self._kick(kick)
+        self.events.append(Bump(kick, self.time, ticks / CONTROL_HZ, self._reach_ticks / CONTROL_HZ, moment,
+                                BUMP_WINDOW))
 
     def _believe(self, true: Sequence[float], e: Sequence[float]) -> tuple[float, float, float, float]:
         n = self.noise
@@ -202,7 +267,8 @@ class ArmSim:
                 break
             t = (ticks - plan_tick) * DT_CONTROL
             if pa is None or t > pa.duration + REPLAN_AFTER:
-                pa, pb = synchronize(((ta, wa), (tb, wb)), ((ga, gwa), (gb, gwb)), W.OMEGA_MAX, W.ALPHA_MAX)
+                pa, pb = synchronize(((ta, wa), (tb, wb)), ((ga, gwa), (gb, gwb)), W.OMEGA_MAX,
+                                     self.alpha_max)
                 plan_tick, t, ia, ib = ticks, 0.0, 0.0, 0.0
             ra, rwa = pa.at(t)
             rb, rwb = pb.at(t)
@@ -212,6 +278,9 @@ class ArmSim:
             ib = max(-INTEGRAL_LIMIT, min(INTEGRAL_LIMIT, ib + eb * DT_CONTROL))
             self.command((na - ra) * CONTROL_HZ + KP * ea + KI * ia + KD * (rwa - wa),
                          (nb - rb) * CONTROL_HZ + KP * eb + KI * ib + KD * (rwb - wb), e[4:])
+            if self._bump is not None and self._reach_ticks >= self._bump[0]:  # during this control period
+                self._strike(ticks)
+            self._reach_ticks += 1
             for _ in range(STEPS_PER_CONTROL):
                 self.space.step(DT)
             self.time += DT_CONTROL
@@ -236,8 +305,9 @@ def _check_call(call: ActionCall) -> tuple[float, float, float, float]:
 
 
 def simulate_sequence(arm: tuple[float, float, float, float], calls: Sequence[ActionCall], seed: int,
-                      noise: Noise | None = None) -> SequenceResult:
+                      noise: Noise | None = None, disturbance: str | None = None,
+                      variant: str | None = None) -> SequenceResult:
     """Execute reaches in a fresh simulator: place the arm at `arm`, then run_sequence."""
-    sim = ArmSim(seed, Noise() if noise is None else noise)
+    sim = ArmSim(seed, Noise() if noise is None else noise, disturbance, variant)
     sim.place(*arm)
     return sim.run_sequence(list(calls))

@@ -2,7 +2,8 @@
 
 `SIMULATOR` is what the package registers (entry point `tailor.simulators: kitchen`): navigate, grip and put
 (Table 2.1), the simulator factory, the experience scenarios, the random situations of scenarios 1 and 2, the
-kitchen's feature spaces, and its quantities' units.
+kitchen's feature spaces, its quantities' units, and for the closed loop (Ch. 8.1) its disturbance "cup" and
+its variant "slow_floor" (sims.kitchen.disturbances).
 
 Declaring the robot loads no physics: the simulator module (sims.kitchen.simulator, which imports pymunk) is
 imported when a simulator is first created or an episode first runs, so that `tailor domains` and
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from tailor.sims.kitchen.disturbances import DISTURBANCES, VARIANTS
 from tailor.sims.kitchen.drawing import draw_scene
 from tailor.sims.kitchen.features import GRASP, ROUTE, SPOT
 from tailor.sims.kitchen.scenarios import SITUATIONS, run_goto, run_grip, run_put, subgoal_episode
@@ -29,11 +31,12 @@ UNITS = {**{q: _METRES for q in _LENGTHS}, **{q: _ANGLE for q in ("ophi", "headi
          "v": Quantity("m/s")}
 
 
-def _create(seed: int, noise: Noise | None = None) -> KitchenSim:
+def _create(seed: int, noise: Noise | None = None, disturbance: str | None = None,
+            variant: str | None = None) -> KitchenSim:
     # deferred: the simulator module loads pymunk, which declaring the robot must not
     from tailor.sims.kitchen.simulator import KitchenSim, Noise
 
-    return KitchenSim(seed, Noise() if noise is None else noise)
+    return KitchenSim(seed, Noise() if noise is None else noise, disturbance, variant)
 
 
 SIMULATOR = SimulatorEntry(
@@ -57,6 +60,8 @@ SIMULATOR = SimulatorEntry(
     units=UNITS,
     scene_objects=("robot", "table {object}", "cup {object}"),
     draw_scene=draw_scene,
+    disturbances=DISTURBANCES,
+    variants=VARIANTS,
     description="B21-like base with a pan/extend arm among tables (pymunk), routes through a visibility graph",
 )
 

@@ -11,6 +11,8 @@ Experience scenarios (the instant environment modification of Sec. 4.1):
 - "grip": the base at a random pickup spot, gripping the cup there;
 - "put": the base at a random dropoff spot with a cup in the gripper, putting it at the put location.
 Situations "scenario1" and "scenario2" give the belief values of the problems of the same names.
+Every scenario's run and subgoal_episode take `variant` (None, or one of the kitchen's VARIANTS): the same
+episode on the changed robot, for experience of it.
 """
 
 from __future__ import annotations
@@ -70,10 +72,11 @@ def _offsets(rng: np.random.Generator) -> tuple[float, float, float]:
     return (float(rng.uniform(*W.SPOT_ALONG)), float(rng.uniform(*W.SPOT_DIST)), float(rng.uniform(*W.SPOT_HEADING)))
 
 
-def _sim(seed: int, layout: dict, pose, holding: str | None = None, noise: Noise | None = None) -> KitchenSim:
+def _sim(seed: int, layout: dict, pose, holding: str | None = None, noise: Noise | None = None,
+         variant: str | None = None) -> KitchenSim:
     from tailor.sims.kitchen.simulator import KitchenSim, Noise  # deferred: pymunk loads when an episode runs
 
-    sim = KitchenSim(seed, Noise() if noise is None else noise)
+    sim = KitchenSim(seed, Noise() if noise is None else noise, variant=variant)
     cups = {f"cup{i}": c for i, c in enumerate(layout["cups"], start=1)}
     sim.place(pose, {"table1": layout["table1"], "table2": layout["table2"]}, cups, holding)
     return sim
@@ -90,33 +93,34 @@ def sample_goto(rng: np.random.Generator) -> tuple[dict, tuple[float, float, flo
     return layout, start, goal
 
 
-def run_goto(seed: int, noise: Noise | None = None) -> Episode:
+def run_goto(seed: int, noise: Noise | None = None, *, variant: str | None = None) -> Episode:
     """One random navigate leg (see the module doc)."""
     layout, start, goal = sample_goto(np.random.default_rng((seed, SAMPLING_STREAM)))
-    return _sim(seed, layout, start, noise=noise).run(ActionCall("navigate", goal))
+    return _sim(seed, layout, start, noise=noise, variant=variant).run(ActionCall("navigate", goal))
 
 
-def run_grip(seed: int, noise: Noise | None = None) -> Episode:
+def run_grip(seed: int, noise: Noise | None = None, *, variant: str | None = None) -> Episode:
     """One random grip from a pickup spot (see the module doc)."""
-    return _at_table(seed, noise, "grip", "table1", "cups")
+    return _at_table(seed, noise, "grip", "table1", "cups", variant=variant)
 
 
-def run_put(seed: int, noise: Noise | None = None) -> Episode:
+def run_put(seed: int, noise: Noise | None = None, *, variant: str | None = None) -> Episode:
     """One random put from a dropoff spot, the cup in the gripper (see the module doc)."""
-    return _at_table(seed, noise, "put", "table2", "puts", holding="cup1")
+    return _at_table(seed, noise, "put", "table2", "puts", holding="cup1", variant=variant)
 
 
 def _at_table(seed: int, noise: Noise | None, action: str, table: str, places: str,
-              holding: str | None = None) -> Episode:
+              holding: str | None = None, variant: str | None = None) -> Episode:
     """`action` at the first of a random layout's `places` on `table`, from a random spot before it."""
     rng = np.random.default_rng((seed, SAMPLING_STREAM))
     layout = random_layout(rng, 1)
     place = layout[places][0]
     pose = W.spot_pose(*W.serving_frame(layout[table], *place), *_offsets(rng))
-    return _sim(seed, layout, pose, holding=holding, noise=noise).run(ActionCall(action, place))
+    sim = _sim(seed, layout, pose, holding=holding, noise=noise, variant=variant)
+    return sim.run(ActionCall(action, place))
 
 
-def subgoal_episode(action: str, params: np.ndarray, seed: int) -> Episode:
+def subgoal_episode(action: str, params: np.ndarray, seed: int, variant: str | None = None) -> Episode:
     """An episode of `action` from a refined subgoal: params = start spot (6), then the action's goal.
     The layout around it is drawn from the seed (only the furniture near the path matters)."""
     p = [float(v) for v in params]
@@ -124,14 +128,14 @@ def subgoal_episode(action: str, params: np.ndarray, seed: int) -> Episode:
     layout = random_layout(rng, 1)
     pose = W.spot_pose(*p[:6])
     if action == "navigate":
-        return _sim(seed, layout, pose).run(ActionCall(action, tuple(p[6:12])))
+        return _sim(seed, layout, pose, variant=variant).run(ActionCall(action, tuple(p[6:12])))
     point = (p[6], p[7])
     table = "table1" if action == "grip" else "table2"
     layout[table] = _table_under(point, layout[table])
     if action == "grip":
         layout["cups"] = [point]
-        return _sim(seed, layout, pose).run(ActionCall(action, point))
-    return _sim(seed, layout, pose, holding="cup1").run(ActionCall(action, point))
+        return _sim(seed, layout, pose, variant=variant).run(ActionCall(action, point))
+    return _sim(seed, layout, pose, holding="cup1", variant=variant).run(ActionCall(action, point))
 
 
 def _table_under(point, table):

@@ -22,6 +22,9 @@ Outcomes (Episode.outcome), judged on the true state:
 - "cup_dropped": put released the cup off every table;
 - "timeout": TIMEOUT simulated seconds passed.
 Timing: physics at PHYSICS_HZ, control at CONTROL_HZ, believed state logged at LOG_HZ.
+
+Closed loop (Ch. 8.1): `observe(action)` and `scene()` measure the world between actions without advancing it;
+a disturbance ("cup") and a variant ("slow_floor") change the world and the robot (sims.kitchen.disturbances).
 """
 
 from __future__ import annotations
@@ -37,6 +40,9 @@ import pymunk
 from tailor.errors import SimError
 from tailor.sims.episode import ActionCall, Episode, SequenceResult, run_in_sequence
 from tailor.sims.kitchen import world as W
+from tailor.sims.kitchen.disturbances import (DISTURBANCE_STREAM, DISTURBANCES, NOMINAL_LIMITS,
+                                              SENSING_STREAM, SLOW_LIMITS, VARIANTS, CupDisplacement,
+                                              cup_moment, displace, on_slow_floor, standing_cups)
 from tailor.sims.kitchen.navigation import RouteMap
 from tailor.sims.noise import NormalRows
 
@@ -77,6 +83,8 @@ _set_angular_velocity = pymunk.Body.angular_velocity.fset
 _set_position = pymunk.Body.position.fset
 _A_STEP = W.A_MAX * DT
 _ALPHA_STEP = W.ALPHA_MAX * DT
+# (a_step, alpha_step) of variant "slow_floor", off and on the carpet
+_SLOW_STEPS = {False: (_A_STEP, _ALPHA_STEP), True: (SLOW_LIMITS[2] * DT, SLOW_LIMITS[3] * DT)}
 
 
 @dataclass(frozen=True)
@@ -104,15 +112,29 @@ def _ramp(q: float, qd: float, goal: float, v_max: float, a_max: float) -> float
 
 
 class KitchenSim:
-    """The kitchen with the robot; `run` executes one action as an Episode, `run_sequence` several."""
+    """The kitchen with the robot; `run` executes one action as an Episode, `run_sequence` several.
+
+    `disturbance` ("cup") and `variant` ("slow_floor") name one of sims.kitchen.disturbances' DISTURBANCES and
+    VARIANTS, None for none; what a disturbance did is appended to `events` (CupDisplacement)."""
 
     state_columns = STATE_COLUMNS
 
-    def __init__(self, seed: int, noise: Noise = Noise()):
+    def __init__(self, seed: int, noise: Noise = Noise(), disturbance: str | None = None,
+                 variant: str | None = None):
+        for kind, name, known in (("disturbance", disturbance, DISTURBANCES), ("variant", variant, VARIANTS)):
+            if name is not None and name not in known:
+                raise SimError(f"the kitchen has no {kind} {name!r} (known: {', '.join(known)})")
         self.noise = noise
         self.seed = int(seed)
         self.rng = np.random.default_rng(seed)
         self._noise = NormalRows(self.rng, 8)
+        self._peeked: list[float] | None = None  # the next noise row, drawn by observe() before run() uses it
+        self._sensing = np.random.default_rng((self.seed, SENSING_STREAM))  # scene()'s cup measurements
+        self.disturbance, self.variant = disturbance, variant
+        self._disturbances = np.random.default_rng((self.seed, DISTURBANCE_STREAM))
+        self._cup_pending = disturbance == "cup"
+        self.events: list[CupDisplacement] = []
+        self._slow_floor = variant == "slow_floor"
         self.space = pymunk.Space()
         self.space.damping = 0.05  # cups pushed over the floor or table come to rest
         self.fixed = [*W.walls(), W.island()]
@@ -143,10 +165,11 @@ class KitchenSim:
     # --- state ------------------------------------------------------------------------------------------
     def reset(self, scene: Mapping[str, Sequence[float]]) -> None:
         """The protocol's reset: {"robot": (ox, oy, ophi, along, dist, heading) (a spot), "table NAME": (x, y,
-        phi), "cup NAME": (x, y)}; the robot at rest, the arm tucked, the gripper empty."""
+        phi), "cup NAME": (x, y)}, and optionally "held NAME": () (no values: cup NAME in the gripper, as
+        scene() reports it); the robot at rest, the arm tucked, the gripper empty unless a cup is held."""
         if not isinstance(scene, Mapping) or "robot" not in scene:
             raise SimError("the kitchen scene needs a robot (ox, oy, ophi, along, dist, heading)")
-        tables, cups = {}, {}
+        tables, cups, held = {}, {}, None
         for key, values in scene.items():
             values = tuple(float(v) for v in values)
             kind, _, name = key.partition(" ")
@@ -157,10 +180,12 @@ class KitchenSim:
                 tables[name] = values
             elif kind == "cup" and name and len(values) == 2:
                 cups[name] = values
+            elif kind == "held" and name and not values and held is None:
+                held = name
             else:
                 raise SimError(f"unknown kitchen scene object {key!r} with {len(values)} values (expected robot, "
-                               "'table NAME' (x, y, phi), 'cup NAME' (x, y))")
-        self.place(W.spot_pose(*scene["robot"]), tables, cups)
+                               "'table NAME' (x, y, phi), 'cup NAME' (x, y), one 'held NAME' ())")
+        self.place(W.spot_pose(*scene["robot"]), tables, cups, held)
 
     def place(self, pose: tuple[float, float, float], tables: Mapping[str, Sequence[float]],
               cups: Mapping[str, Sequence[float]], holding: str | None = None) -> None:
@@ -208,8 +233,45 @@ class KitchenSim:
         x, y = self._xy
         return (x, y, W.wrap(self.phi), self.v, self.pan, self.ext, *self.gripper())
 
+    def observe(self, action: str) -> tuple[float, ...]:
+        """The observed parameters of `action` (the base pose as a spot with zero offsets: ox, oy, ophi,
+        along, dist, heading) measured now: exactly what `run` of it logs first in Episode.params. It draws the
+        noise row that run will measure its start with and keeps it for run (consuming nothing: a closed loop
+        that observes stays on the open loop's noise stream); the simulation does not advance."""
+        if action not in ACTIONS:
+            raise SimError(f"unknown kitchen action {action!r}; known: {', '.join(ACTIONS)}")
+        return (*self._believe(self.true_state(), self._peek()), 0.0, 0.0, 0.0)
+
+    def scene(self) -> dict[str, tuple[float, ...]]:
+        """Every scene object measured now, in reset's form: the robot as observe() measures it, each table
+        as placed (x, y, phi: the map, known exactly), each cup (x, y) with the position noise, and
+        "held NAME": () for a cup in the gripper (the cup at the gripper). The cups' noise comes from the
+        generator (seed, SENSING_STREAM), two draws per cup and call, never from the motor and sensor noise; the
+        simulation does not advance. Not in the scene: the arm's pose (reset tucks it) and the base's residual
+        speed (reset places it at rest)."""
+        out: dict[str, tuple[float, ...]] = {"robot": self.observe("navigate")}
+        out.update({f"table {name}": (box.cx, box.cy, box.angle) for name, box in self.tables.items()})
+        for name, body in self.cups.items():
+            e = self._sensing.standard_normal(2)
+            x, y = body.position
+            sigma = self.noise.position
+            out[f"cup {name}"] = (x + sigma * float(e[0]), y + sigma * float(e[1]))
+        if self.held is not None:
+            out[f"held {self.held}"] = ()
+        return out
+
     def _draw(self) -> list[float]:
-        return self._noise.next()
+        row = self._peeked
+        if row is None:
+            return self._noise.next()
+        self._peeked = None
+        return row
+
+    def _peek(self) -> list[float]:
+        """The noise row the next _draw returns."""
+        if self._peeked is None:
+            self._peeked = self._noise.next()
+        return self._peeked
 
     def _believe(self, true: Sequence[float], e: Sequence[float]) -> tuple[float, float, float]:
         n = self.noise
@@ -220,10 +282,16 @@ class KitchenSim:
         return self.space.point_query_nearest(self._xy, W.BASE_RADIUS - 1e-6, _FURNITURE_QUERY) is not None
 
     # --- dynamics ---------------------------------------------------------------------------------------
+    def limits(self) -> tuple[float, float, float, float]:
+        """The base's limits where it stands now (v, phidot, their accelerations): world's V_MAX, W_MAX,
+        A_MAX, ALPHA_MAX, or SLOW_FACTOR of them on the carpet of variant "slow_floor"."""
+        return SLOW_LIMITS if self._slow_floor and on_slow_floor(*self._xy) else NOMINAL_LIMITS
+
     def command(self, v_cmd: float, w_cmd: float, e: Sequence[float] = (0.0, 0.0)) -> None:
         m = self.noise.motor
-        self.v_cmd = max(-W.V_MAX, min(W.V_MAX, v_cmd * (1.0 + m * e[0])))
-        self.w_cmd = max(-W.W_MAX, min(W.W_MAX, w_cmd * (1.0 + m * e[1])))
+        v_max, w_max = self.limits()[:2]
+        self.v_cmd = max(-v_max, min(v_max, v_cmd * (1.0 + m * e[0])))
+        self.w_cmd = max(-w_max, min(w_max, w_cmd * (1.0 + m * e[1])))
 
     def _advance(self) -> None:
         """One control period of physics steps: the base accelerates toward its command within the limits.
@@ -243,10 +311,11 @@ class KitchenSim:
             return
         stepped = self._contacts_possible()
         v_cmd, w_cmd = self.v_cmd, self.w_cmd
+        a_step, alpha_step = _SLOW_STEPS[self._slow_floor and on_slow_floor(x, y)]
         for _ in range(STEPS_PER_CONTROL):
             dv, dw = v_cmd - v, w_cmd - w
-            v += _A_STEP if dv > _A_STEP else max(dv, -_A_STEP)
-            w += _ALPHA_STEP if dw > _ALPHA_STEP else max(dw, -_ALPHA_STEP)
+            v += a_step if dv > a_step else max(dv, -a_step)
+            w += alpha_step if dw > alpha_step else max(dw, -alpha_step)
             vx, vy = v * math.cos(phi), v * math.sin(phi)
             if stepped:
                 _set_velocity(base, (vx, vy))
@@ -326,8 +395,15 @@ class KitchenSim:
         lengths = [math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in pairwise(path)]
         k, arrived = 0, False
         max_ticks = round(TIMEOUT * CONTROL_HZ)
+        cup_moves = None  # (moment, window) of the "cup" disturbance, if it strikes during this navigate
+        if self._cup_pending and standing_cups(self._cup_positions(), self.tables, self.held):
+            self._cup_pending = False
+            cup_moves = cup_moment(self._disturbances, math.hypot(gx - x0, gy - y0))
         while True:
             true, e, (x, y, phi) = self._tick()
+            if cup_moves is not None and self._ticks >= cup_moves[0] * CONTROL_HZ:
+                self._displace_cup(self._ticks / CONTROL_HZ, cup_moves[1])
+                cup_moves = None
             if self.collides():
                 return "collision"
             if (math.hypot(true[0] - gx, true[1] - gy) <= POS_TOL and abs(W.wrap(true[2] - gphi)) <= HEADING_TOL
@@ -337,9 +413,10 @@ class KitchenSim:
                 return "timeout"
             if not arrived and math.hypot(gx - x, gy - y) <= ARRIVE_TOL:
                 arrived = True
+            v_max, w_max, a_max, alpha_max = self.limits()
             if arrived:
                 err = W.wrap(gphi - phi)
-                rate = min(W.W_MAX, K_TURN * abs(err), math.sqrt(2.0 * BRAKE * W.ALPHA_MAX * abs(err)))
+                rate = min(w_max, K_TURN * abs(err), math.sqrt(2.0 * BRAKE * alpha_max * abs(err)))
                 self.command(0.0, math.copysign(rate, err), e[3:5])
             else:
                 # project onto the current leg, move on to the next leg once past this one's end
@@ -360,12 +437,27 @@ class KitchenSim:
                 f = min(1.0, ahead / lengths[j]) if lengths[j] > 0 else 1.0
                 cx, cy = ax + f * (bx - ax), ay + f * (by - ay)
                 err = W.wrap(math.atan2(cy - y, cx - x) - phi)
-                rate = max(-W.W_MAX, min(W.W_MAX, K_TURN * err))
-                speed = W.V_MAX * max(0.0, 1.0 - abs(err) / TURN_IN_PLACE)
-                speed = min(speed, max(V_CREEP, math.sqrt(2.0 * BRAKE * W.A_MAX * math.hypot(gx - x, gy - y))))
+                rate = max(-w_max, min(w_max, K_TURN * err))
+                speed = v_max * max(0.0, 1.0 - abs(err) / TURN_IN_PLACE)
+                speed = min(speed, max(V_CREEP, math.sqrt(2.0 * BRAKE * a_max * math.hypot(gx - x, gy - y))))
                 self.command(speed, rate, e[3:5])
             self._advance()
             self._ticks += 1
+
+    def _cup_positions(self) -> dict[str, tuple[float, float]]:
+        return {name: tuple(body.position) for name, body in self.cups.items()}
+
+    def _displace_cup(self, elapsed: float, window: tuple[float, float]) -> None:
+        """The "cup" disturbance strikes: a standing cup slides on its table (sims.kitchen.disturbances)."""
+        moved = displace(self._disturbances, self._cup_positions(), self.tables, self.held)
+        if moved is None:
+            return
+        name, after = moved
+        body = self.cups[name]
+        before = tuple(body.position)
+        body.position, body.velocity = after, (0.0, 0.0)
+        self.space.reindex_shapes_for_body(body)
+        self.events.append(CupDisplacement(name, before, after, self.time, elapsed, window))
 
     def _arm(self, action: str, goal: Sequence[float], base: tuple[float, float, float]) -> str:
         """grip / put: reach the point, close / open the gripper, tuck the arm."""
@@ -453,8 +545,9 @@ def _check_call(call: ActionCall) -> tuple[float, ...]:
 
 def simulate_sequence(pose: tuple[float, float, float], tables: Mapping[str, Sequence[float]],
                       cups: Mapping[str, Sequence[float]], calls: Sequence[ActionCall], seed: int,
-                      noise: Noise | None = None) -> SequenceResult:
+                      noise: Noise | None = None, disturbance: str | None = None,
+                      variant: str | None = None) -> SequenceResult:
     """Execute actions in a fresh simulator placed at (pose, tables, cups)."""
-    sim = KitchenSim(seed, Noise() if noise is None else noise)
+    sim = KitchenSim(seed, Noise() if noise is None else noise, disturbance, variant)
     sim.place(pose, tables, cups)
     return sim.run_sequence(list(calls))
