@@ -25,7 +25,8 @@ from tailor.sims.episode import Episode
 from tailor.errors import DataError, SimError
 from tailor.sims.protocol import Scenario
 
-SCHEMA = 3  # version of the .npz episode file (2: named state columns; 3: the origin, optional)
+# version of the .npz episode file (2: named state columns; 3: the origin, optional; 4: measures, optional)
+SCHEMA = 4
 EPISODES_PER_TASK = 10  # episodes one worker runs per joblib task
 MAX_EPISODES = 1_000_000  # the most episodes a command or a binding asks of one scenario (a bound, not a hang)
 MAX_SEED = 2**63 - 1  # the largest seed (or episode index) an episode file stores: as a 64-bit integer
@@ -88,7 +89,10 @@ def gather(simulator: str, name: str, episodes: int, seed: int, jobs: int = 1, p
 # --- storage -------------------------------------------------------------------------------------------
 _KEYS = ("schema", "action", "params", "outcome", "duration", "seed", "offsets", "t", "state", "columns")
 _ORIGIN_KEYS = ("simulator", "scenario", "stream_seed", "first", "stop")
-READABLE_SCHEMAS = (2, 3)  # 2 had no origin; both hold the same episode arrays
+# the episodes' measures (Episode.measures): the names (k,), the values (n, k), NaN where an episode has none
+_MEASURE_KEYS = ("measure_names", "measures")
+# 2 had no origin, 2 and 3 no measures (their episodes load with none); all hold the same episode arrays
+READABLE_SCHEMAS = (2, 3, 4)
 # no episode file may declare more bytes than the machine has memory (unknown: no bound)
 _MEMORY_BYTES = (os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
                  if hasattr(os, "sysconf") and "SC_PHYS_PAGES" in os.sysconf_names else math.inf)
@@ -122,6 +126,7 @@ def save_episodes(path: str | os.PathLike, episodes: list[Episode], origin: Orig
     columns = episodes[0].columns if episodes else ()
     n_params = len(episodes[0].params) if episodes else 0
     lengths = [len(e.t) for e in episodes]
+    measures = list(dict.fromkeys(name for e in episodes for name in e.measures))  # in order of appearance
     arrays = dict(
         schema=np.array(SCHEMA),
         action=np.array([e.action for e in episodes], dtype=str),
@@ -134,6 +139,9 @@ def save_episodes(path: str | os.PathLike, episodes: list[Episode], origin: Orig
         state=np.concatenate([e.state for e in episodes]) if episodes else np.zeros((0, 0)),
         columns=np.array(columns, dtype=str),
     )
+    if measures:
+        values = [[e.measures.get(m, np.nan) for m in measures] for e in episodes]
+        arrays.update(measure_names=np.array(measures, dtype=str), measures=np.array(values, dtype=float))
     if origin is not None:
         arrays.update(simulator=np.array(origin.simulator), scenario=np.array(origin.scenario),
                       stream_seed=np.array(origin.seed, dtype=np.int64), first=np.array(origin.first, dtype=np.int64),
@@ -228,6 +236,11 @@ def load_episodes(path: str | os.PathLike) -> list[Episode]:
     try:
         with _open(path) as data:
             a = {k: data[k] for k in _KEYS}
+            stored = [k for k in _MEASURE_KEYS if k in data.files]
+            if len(stored) == 1:
+                missing = ({*_MEASURE_KEYS} - {*stored}).pop()
+                raise DataError(f"it holds {stored[0]} without {missing}", file=name)
+            a.update({k: data[k] for k in stored})
     except DataError:
         raise
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
@@ -246,6 +259,23 @@ def load_episodes(path: str | os.PathLike) -> list[Episode]:
             raise DataError(f"its {key} hold values that are not finite (NaN or infinity)", file=name)
     if np.any(a["duration"] < 0):
         raise DataError(f"episode {int(np.argmin(a['duration']))} has a negative duration", file=name)
+    measures = _measures(a, n, name)
     return [Episode(str(a["action"][i]), a["params"][i].copy(), a["t"][off[i]:off[i + 1]].copy(),
                     a["state"][off[i]:off[i + 1]].copy(), columns, str(a["outcome"][i]), float(a["duration"][i]),
-                    int(a["seed"][i])) for i in range(n)]
+                    int(a["seed"][i]), measures[i]) for i in range(n)]
+
+
+def _measures(a: dict, n: int, name: str) -> list[dict[str, float]]:
+    """Each of the n episodes' measures from a file's arrays (none where the file has none); a DataError
+    naming the file for names that are not distinct, or values of the wrong shape or infinite."""
+    if "measure_names" not in a:
+        return [{} for _ in range(n)]
+    names, values = [str(m) for m in a["measure_names"].reshape(-1)], a["measures"]
+    if a["measure_names"].ndim != 1 or not all(names) or len(set(names)) != len(names):
+        raise DataError(f"its measure_names are not distinct names: {names}", file=name)
+    if values.dtype.kind not in "fiu" or values.shape != (n, len(names)):
+        raise DataError(f"its measures are not {n} x {len(names)} numbers ({values.dtype}, shape "
+                        f"{values.shape})", file=name)
+    if np.any(np.isinf(values)):
+        raise DataError("its measures hold infinite values", file=name)
+    return [{m: float(v) for m, v in zip(names, row) if not math.isnan(v)} for row in values]

@@ -1,4 +1,5 @@
-"""Persisted experience: a folder of shards, each a compressed .npz of consecutive episodes of one scenario.
+"""Persisted experience: a folder of shards, each a compressed .npz of consecutive episodes of one scenario (with
+their measures, sims.experience: a shard written before measures existed loads with none).
 
 A shard holds episodes first .. stop - 1 of a scenario's seed stream (episode i's seed depends only on the
 stream's seed and i, tailor.sims.experience.episode_seeds), so shards gathered apart, on other machines or

@@ -16,7 +16,6 @@ from scipy import stats
 from tailor.progress import stage_bar
 from tailor.refinement.belief import parse_belief
 from tailor.refinement.execution import FAILED_RUN_PENALTY, ClosedLoop, ExecuteOptions, OnlineLearner, summarize
-from tailor.refinement.execution.loop import _plan
 from tailor.refinement.pipeline import BELIEF_ARGUMENT, Options, read_task, prepare
 from tailor.refinement.refine import refine
 from tailor.refinement.evaluation.experiments import situation_seed
@@ -138,4 +137,48 @@ def _frozen(learner: OnlineLearner) -> OnlineLearner:
     return frozen
 
 
-__all__ = ["closed_loop_episode", "summarize_closed_loop", "learning_stream", "_plan"]
+def reference_models(domain_dir, binding, models: dict, variant: str | None, episodes: int, seed: int, jobs: int = 1
+                     ) -> dict:
+    """Duration models of `models`' actions trained from scratch on `episodes` episodes per experience scenario of
+    the robot `variant` (the training recipe's scenarios, each model's own feature space, the protocol of Fig.
+    4.9): what learning in operation is measured against."""
+    from tailor.refinement.learning.duration_protocol import train_duration_model
+    from tailor.refinement.learning.recipe import load_recipe
+    from tailor.sims.parallel import run_in_workers
+
+    recipe = load_recipe(domain_dir)
+    entry = binding.entry
+    out = {}
+    for action, model in models.items():
+        scenarios = next((m.scenarios for m in recipe.models if m.action == action), ())
+        if not scenarios:
+            continue
+        items = [(entry.name, name, stream_seed(seed, k, i), variant) for k, name in enumerate(scenarios)
+                 for i in range(episodes)]
+        gathered = run_in_workers(variant_episode, items, jobs, f"{action} on {variant or 'the modelled robot'}")
+        space = model.expressions if model.expressions is not None else model.feature_space
+        out[action] = train_duration_model(action, gathered, seed, space, entry.action(action).observed).model
+    return out
+
+
+def variant_episode(simulator: str, scenario: str, seed: int, variant: str | None):
+    """One experience episode of a scenario on the robot `variant` (None: the modelled robot)."""
+    from tailor.sims import registry
+
+    run = registry.get(simulator).scenarios[scenario].run
+    return run(seed, variant=variant) if variant is not None else run(seed)
+
+
+def reference_error(rows: list[dict], models: dict) -> float | None:
+    """Mean absolute error (s) of `models` on the successful executions of `rows`."""
+    errors = []
+    for row in rows:
+        for e in row.get("executions", ()):
+            model = models.get(e["action"])
+            if model is not None:
+                predicted = float(model.predict_duration(np.array([e["params"]], dtype=float))[0])
+                errors.append(abs(predicted - e["duration"]))
+    return float(np.mean(errors)) if errors else None
+
+
+__all__ = ["closed_loop_episode", "summarize_closed_loop", "learning_stream", "reference_models", "reference_error"]

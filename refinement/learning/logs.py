@@ -2,10 +2,12 @@
 models learn from without a simulator: format `tailor.action_log/1`, documented in docs/logs.md.
 
 One row per executed action: its name, its parameters by name (observed, then internal: the values at its
-start), its duration and outcome, a run id and a source; optionally, rows of the state logged while it ran
-(column `t`, seconds since it started: the observed parameters and `state.*` columns at that time), which give
-the intermediate examples of Sec. 4.1.2. Numeric columns name their unit, `x [m]`, which must be the one the
-domain's simulator declares. CSV always; Parquet where pyarrow is installed (`pip install 'tailor[logs]'`).
+start), its duration and outcome, a run id and a source, and optionally its measures (`measure.energy [J]`,
+Episode.measures); optionally, rows of the state logged while it ran (column `t`, seconds since it started:
+the observed parameters and `state.*` columns at that time), which give the intermediate examples of
+Sec. 4.1.2.
+Numeric columns name their unit, `x [m]`, which must be the one the domain's simulator declares. CSV always;
+Parquet where pyarrow is installed (`pip install 'tailor[logs]'`).
 
 Reading checks every row before anything is trained: an unknown action, a missing or non-finite value, a unit
 other than the declared one, a column that is no parameter of the domain's actions: one DataError naming
@@ -35,6 +37,7 @@ REQUIRED = ("log_format", "action", "run", "source", "duration", "outcome")
 TEXT = ("log_format", "action", "run", "source", "execution", "outcome")
 SECONDS = ("t", "duration")
 STATE = "state."
+MEASURE = "measure."  # an execution row's measure (Episode.measures), e.g. `measure.energy [J]`
 HEADER = re.compile(r"^(?P<name>[^\[\]]+?)\s*(\[(?P<unit>[^\[\]]*)\])?$")
 
 
@@ -77,8 +80,10 @@ def episode_rows(episodes: Sequence[Episode], entry: SimulatorEntry, run: str, s
     units = parameter_units(entry)
     observed = tuple(spec.observed)
     extra = [c for c in episodes[0].columns if c not in observed]
+    measures = {m: header(MEASURE + m, entry.quantity(m).unit)  # every episode's, in order of appearance
+                for m in dict.fromkeys(m for e in episodes for m in e.measures)}
     columns = ["log_format", "action", "run", "source", "execution", "t [s]", "duration [s]", "outcome",
-               *(header(p, units.get(p, "")) for p in spec.parameters),
+               *(header(p, units.get(p, "")) for p in spec.parameters), *measures.values(),
                *(header(STATE + c, entry.quantity(c).unit) for c in extra)]
     rows = []
     for e in episodes:
@@ -87,6 +92,7 @@ def episode_rows(episodes: Sequence[Episode], entry: SimulatorEntry, run: str, s
         base = {"log_format": FORMAT, "action": e.action, "run": run, "source": source, "execution": str(e.seed)}
         row = {**base, "t [s]": "", "duration [s]": e.duration, "outcome": e.outcome}
         row.update({header(p, units.get(p, "")): float(v) for p, v in zip(spec.parameters, e.params)})
+        row.update({measures[m]: float(v) for m, v in e.measures.items()})
         rows.append(row)
         index = {c: k for k, c in enumerate(e.columns)}
         for k, t in enumerate(e.t):
@@ -193,8 +199,11 @@ def _episodes(path: Path, entry: SimulatorEntry, units: Mapping[str, str]) -> li
         elif c.name in SECONDS:
             if c.unit != "s":
                 raise fail(f"durations and times are in seconds: write '{c.name} [s]'")
-        elif c.name.startswith(STATE):
-            declared = entry.quantity(c.name[len(STATE):]).unit
+        elif c.name.startswith((STATE, MEASURE)):
+            prefix = STATE if c.name.startswith(STATE) else MEASURE
+            if c.name == MEASURE:
+                raise fail(f"names no measure ({MEASURE}NAME)")
+            declared = entry.quantity(c.name[len(prefix):]).unit
             if (c.unit or "") != declared:
                 raise fail(f"unit {c.unit or 'none'!r}, simulator {entry.name!r} declares {declared or 'none'!r}")
         elif c.name in units:
@@ -203,8 +212,9 @@ def _episodes(path: Path, entry: SimulatorEntry, units: Mapping[str, str]) -> li
                            f" for {c.name}")
         else:
             raise fail(f"is no parameter of an action of simulator {entry.name!r} (another domain's log?), nor a "
-                       f"column of {FORMAT} ({', '.join(FIXED)}, {STATE}NAME)")
+                       f"column of {FORMAT} ({', '.join(FIXED)}, {STATE}NAME, {MEASURE}NAME)")
     index = {c.name: k for k, c in enumerate(columns)}
+    measures = [c.name for c in columns if c.name.startswith(MEASURE)]
     for name in REQUIRED:
         if name not in index:
             raise DataError(f"no column {name!r}: not a {FORMAT} log (docs/logs.md)", file=where, line=1)
@@ -246,10 +256,16 @@ def _episodes(path: Path, entry: SimulatorEntry, units: Mapping[str, str]) -> li
             outcome = str(value("outcome") or "")
             if not outcome:
                 raise fail("outcome", "missing: 'success' or the failure's name")
+            measured = {m[len(MEASURE):]: _number(value(m), m, fail)  # an empty cell: not measured
+                        for m in measures if value(m) not in ("", None)}
             current = {"action": action, "params": params, "duration": duration, "outcome": outcome,
                        "execution": str(value("execution") or ""), "spec": spec, "t": [], "state": [],
-                       "extra": [c.name for c in columns if c.name.startswith(STATE)], "number": len(episodes)}
+                       "extra": [c.name for c in columns if c.name.startswith(STATE)],
+                       "number": len(episodes), "measures": measured}
             continue
+        filled = next((m for m in measures if value(m) not in ("", None)), None)
+        if filled is not None:
+            raise fail(filled, "a measure belongs on its execution's row, not on a state row")
         if current is None or current["action"] != action or (
                 "execution" in index and str(value("execution") or "") != current["execution"]):
             raise fail("t", "a state row must follow the row of the execution it belongs to (same action and "
@@ -290,5 +306,6 @@ def _episode(e: dict) -> Episode:
         state = np.concatenate([e["params"][:k], np.full(len(e["extra"]), np.nan)])[None, :]
     execution = e["execution"]
     seed = int(execution) if execution.isdigit() and int(execution) < 2 ** 63 else e["number"]
-    return Episode(e["action"], e["params"], t, state, columns, e["outcome"], e["duration"], seed)
+    return Episode(e["action"], e["params"], t, state, columns, e["outcome"], e["duration"], seed,
+                   e["measures"])
 

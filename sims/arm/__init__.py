@@ -2,8 +2,9 @@
 
 `SIMULATOR` is what the package registers (entry point `tailor.simulators: arm`): the reach action in joint
 space (Table 2.1), the simulator factory, the experience scenario and the random letters, its own feature
-space, its quantities' units (joint angles are angles, but within their limits: never a full circle), and for
-the closed loop (Ch. 8.1) its disturbance "bump" and its variant "payload" (sims.arm.disturbances).
+space, its quantities' and measures' units (joint angles are angles, but within their limits: never a full
+circle), and for the closed loop (Ch. 8.1) its disturbance "bump" and its variant "payload"
+(sims.arm.disturbances).
 
 Declaring the robot loads no physics: the simulator module (sims.arm.simulator, which imports pymunk) is
 imported when a simulator is first created or an episode first runs, so that `tailor domains` and
@@ -26,7 +27,10 @@ if TYPE_CHECKING:
 _JOINTS = ("theta_a", "omega_a", "theta_b", "omega_b")
 _ANGLE, _SPEED, _METRES = Quantity("rad", angle=True), Quantity("rad/s"), Quantity("m")
 UNITS = {"theta_a": _ANGLE, "theta_b": _ANGLE, "omega_a": _SPEED, "omega_b": _SPEED, "tip_x": _METRES,
-         "tip_y": _METRES}
+         "tip_y": _METRES,
+         # the measures of a reach besides its duration (sims.arm.simulator: what each one is; a reach has no
+         # heading, so no heading_error)
+         "energy": Quantity("J"), "error": _METRES}
 
 
 def _create(seed: int, noise: Noise | None = None, disturbance: str | None = None,

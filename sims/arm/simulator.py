@@ -16,6 +16,17 @@ A reach ends (Episode.outcome), judged on the true state at each control tick, w
 - "joint_limit": a joint angle is outside its limits (world.THETA_A_LIMITS, THETA_B_LIMITS);
 - "timeout": TIMEOUT simulated seconds passed.
 
+Measures (Episode.measures, sims.episode), on the true state, none of them changing the simulation:
+- "energy" (J): the work of the two joint motors on the links (the physics' bodies: world.LINK_A_MASS and
+  LINK_B_MASS, each a rod of moment m l^2 / 12 about its centre). Each physics step motor k applies the
+  angular impulse j_k (pymunk's SimpleMotor: torque j_k / DT) while its joint's rate goes from w0 to w1: the
+  work |j_k| |w0 + w1| / 2 (for one body exactly its change of kinetic energy), summed over both joints and
+  the action's steps. Braking costs as much as speeding up (nothing is recovered); the bump's kick is not the
+  motors' work. No gravity acts (the plane is horizontal), so an arm at rest costs nothing;
+- "error" (m): the distance between the tip at the action's end and the tip at the goal angles
+  (world.forward(theta_ga, theta_gb)): where the pen is against where it was sent. The goal velocities are not
+  part of it, and a reach has no heading.
+
 Closed loop (Ch. 8.1): `observe("reach")` and `scene()` measure the arm between reaches without advancing it;
 the disturbance "bump" kicks the joints once, the variant "payload" lowers the ramps' acceleration (both in
 sims.arm.disturbances).
@@ -34,7 +45,7 @@ from tailor.sims.arm import world as W
 from tailor.sims.arm.disturbances import (BUMP_WINDOW, DISTURBANCE_STREAM, DISTURBANCES, PAYLOAD_FACTOR,
                                           VARIANTS, Bump, bump_kick)
 from tailor.sims.arm.profile import synchronize
-from tailor.sims.episode import ActionCall, Episode, SequenceResult, run_in_sequence
+from tailor.sims.episode import ENERGY, ERROR, ActionCall, Episode, SequenceResult, run_in_sequence
 from tailor.sims.noise import NormalRows
 from tailor.errors import SimError
 
@@ -55,6 +66,9 @@ KP = 8.0  # 1/s, rad/s commanded per rad of position error
 KI = 2.0  # 1/s^2, rad/s commanded per rad s of integrated position error
 KD = 0.2  # rad/s commanded per rad/s of velocity error
 INTEGRAL_LIMIT = 0.05  # rad s, anti-windup bound of the integrated position error
+
+_impulse = pymunk.Constraint.impulse.fget  # (the getters called directly: cheaper than the attributes)
+_angular_velocity = pymunk.Body.angular_velocity.fget
 
 ACTIONS = ("reach",)
 STATE_COLUMNS = ("theta_a", "omega_a", "theta_b", "omega_b", "tip_x", "tip_y")  # logged believed state
@@ -244,6 +258,7 @@ class ArmSim:
         outcome = "timeout"
         plan_tick, pa, pb = 0, None, None
         ia = ib = 0.0  # integrated position errors
+        work = 0.0  # twice the motors' work so far (the energy measure, module doc)
         while True:
             true = self.true_state()
             if trajectory is not None and self.time >= self._next_sample - 1e-9:
@@ -281,12 +296,28 @@ class ArmSim:
             if self._bump is not None and self._reach_ticks >= self._bump[0]:  # during this control period
                 self._strike(ticks)
             self._reach_ticks += 1
-            for _ in range(STEPS_PER_CONTROL):
-                self.space.step(DT)
+            work += self._steps(STEPS_PER_CONTROL)
             self.time += DT_CONTROL
             ticks += 1
+        x, y = self.true_state()[4:]
+        gx, gy = W.forward(ga, gb)
+        measures = {ENERGY: 0.5 * work, ERROR: math.hypot(x - gx, y - gy)}
         return Episode(call.action, params, np.array(log_t), np.array(log_state, dtype=float).reshape(-1, 6),
-                       STATE_COLUMNS, outcome, ticks / CONTROL_HZ, self.seed)
+                       STATE_COLUMNS, outcome, ticks / CONTROL_HZ, self.seed, measures)
+
+    def _steps(self, steps: int) -> float:
+        """`steps` physics steps; twice the joint motors' work in them, sum of |j| |w0 + w1| (module doc)."""
+        a, b, motor_a, motor_b, space = self.link_a, self.link_b, self.motor_a, self.motor_b, self.space
+        work = 0.0
+        wa0 = _angular_velocity(a)
+        wb0 = _angular_velocity(b) - wa0
+        for _ in range(steps):
+            space.step(DT)
+            wa1 = _angular_velocity(a)
+            wb1 = _angular_velocity(b) - wa1
+            work += abs(_impulse(motor_a) * (wa0 + wa1)) + abs(_impulse(motor_b) * (wb0 + wb1))
+            wa0, wb0 = wa1, wb1
+        return work
 
 
 def _check_call(call: ActionCall) -> tuple[float, float, float, float]:

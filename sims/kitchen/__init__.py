@@ -2,8 +2,8 @@
 
 `SIMULATOR` is what the package registers (entry point `tailor.simulators: kitchen`): navigate, grip and put
 (Table 2.1), the simulator factory, the experience scenarios, the random situations of scenarios 1 and 2, the
-kitchen's feature spaces, its quantities' units, and for the closed loop (Ch. 8.1) its disturbance "cup" and
-its variant "slow_floor" (sims.kitchen.disturbances).
+kitchen's feature spaces, its quantities' and measures' units, and for the closed loop (Ch. 8.1) its
+disturbance "cup" and its variant "slow_floor" (sims.kitchen.disturbances).
 
 Declaring the robot loads no physics: the simulator module (sims.kitchen.simulator, which imports pymunk) is
 imported when a simulator is first created or an episode first runs, so that `tailor domains` and
@@ -28,7 +28,9 @@ _METRES, _ANGLE = Quantity("m"), Quantity("rad", angle=True)
 # a spot's frame and offsets, a cup's and a put location's position, and the logged and drawn state
 _LENGTHS = ("ox", "oy", "along", "dist", "x", "y", "tx", "ty", "ext", "gripper_x", "gripper_y")
 UNITS = {**{q: _METRES for q in _LENGTHS}, **{q: _ANGLE for q in ("ophi", "heading", "phi", "pan")},
-         "v": Quantity("m/s")}
+         "v": Quantity("m/s"),
+         # the measures of its actions besides the duration (sims.kitchen.simulator: what each one is)
+         "energy": Quantity("J"), "error": _METRES, "heading_error": _ANGLE}
 
 
 def _create(seed: int, noise: Noise | None = None, disturbance: str | None = None,

@@ -23,6 +23,23 @@ Outcomes (Episode.outcome), judged on the true state:
 - "timeout": TIMEOUT simulated seconds passed.
 Timing: physics at PHYSICS_HZ, control at CONTROL_HZ, believed state logged at LOG_HZ.
 
+Measures (Episode.measures, sims.episode), on the true state, none of them changing the simulation:
+- "energy" (J): the work of the motors, braking as much as speeding up (nothing is recovered), of
+  - the base, BASE_MASS m and BASE_MOMENT I about its centre: each physics step changes v from v0 to v1 (and
+    phidot from w0 to w1) at constant acceleration, which takes the integral of |F v| = m/2 |v1^2 - v0^2|
+    (m/2 (v0^2 + v1^2) where v reverses within the step), and likewise I/2 for phidot (no friction: driving at
+    constant speed costs nothing);
+  - the arm, a point mass m = GRIPPER_MASS (plus CUP_MASS while it holds a cup) at the gripper, r = ext
+    from the shoulder, pan psi: each control period the joint rates jump from (psi'0, r'0) to (psi'1, r'1)
+    (taken as a ramp at constant r: m r^2/2 |psi'1^2 - psi'0^2| for the pan, m/2 |r'1^2 - r'0^2| for the
+    extension, the sum of squares where a rate reverses), then hold while r goes from r0 to r1: the pan's
+    Coriolis torque 2 m r r' psi' does m psi'^2 |r1^2 - r0^2|, the extension's centripetal force m r psi'^2
+    half that; the arm stops (its rates jump to 0) when it arrives or the action ends;
+- "error" (m): navigate, the base centre's distance to the goal spot's position (world.spot_pose); grip and
+  put, the gripper's distance to the commanded point (cx, cy) / (tx, ty) where the gripper closed / opened
+  (where it stands at the action's end if it never did: out of reach, not holding, a timeout);
+- "heading_error" (rad, [0, pi]): navigate, |heading - the goal spot's heading| wrapped, at the action's end.
+
 Closed loop (Ch. 8.1): `observe(action)` and `scene()` measure the world between actions without advancing it;
 a disturbance ("cup") and a variant ("slow_floor") change the world and the robot (sims.kitchen.disturbances).
 """
@@ -38,7 +55,8 @@ import numpy as np
 import pymunk
 
 from tailor.errors import SimError
-from tailor.sims.episode import ActionCall, Episode, SequenceResult, run_in_sequence
+from tailor.sims.episode import (ENERGY, ERROR, HEADING_ERROR, ActionCall, Episode, SequenceResult,
+                                 run_in_sequence)
 from tailor.sims.kitchen import world as W
 from tailor.sims.kitchen.disturbances import (DISTURBANCE_STREAM, DISTURBANCES, NOMINAL_LIMITS,
                                               SENSING_STREAM, SLOW_LIMITS, VARIANTS, CupDisplacement,
@@ -70,6 +88,12 @@ GRIP_TOLERANCE = 0.06  # m, gripper to cup centre for a successful grip (the ope
 CUP_SEARCH = 0.1  # m, grip finds a cup this close to its goal point with the arm's camera
 REACH_TOLERANCE = 0.05  # m, slack of the 40-80 cm precondition
 TIMEOUT = 60.0  # s
+
+# what the motors move, for the energy measure only (the physics never reads them: the base is kinematic, the
+# arm's joints are integrated directly)
+BASE_MASS = 120.0  # kg, the B21-like robot with its arm and batteries
+BASE_MOMENT = 0.5 * BASE_MASS * W.BASE_RADIUS ** 2  # kg m^2, a uniform disc of BASE_RADIUS (4.06)
+GRIPPER_MASS = 1.0  # kg, the gripper with the extension's moving tube, a point mass at the arm's end
 
 ACTIONS = ("navigate", "grip", "put")
 GOAL_SIZES = {"navigate": 6, "grip": 2, "put": 2}
@@ -155,6 +179,10 @@ class KitchenSim:
         self.v_cmd = self.w_cmd = 0.0
         self.pan, self.ext = 0.0, W.EXT_REST
         self._next_sample = 0.0
+        # the energy measure (module doc) of the running action: the base's sums over physics steps of
+        # |v1^2 - v0^2| (v0^2 + v1^2 where v reverses) and the same of phidot, and the arm's work in J
+        self._speed_work = self._turn_work = self._arm_work = 0.0
+        self._released_at: tuple[float, float] | None = None  # where grip / put closed / opened the gripper
 
     def _add_box(self, box: W.Box) -> pymunk.Shape:
         shape = pymunk.Poly(self.space.static_body, box.corners())
@@ -312,10 +340,16 @@ class KitchenSim:
         stepped = self._contacts_possible()
         v_cmd, w_cmd = self.v_cmd, self.w_cmd
         a_step, alpha_step = _SLOW_STEPS[self._slow_floor and on_slow_floor(x, y)]
+        speed_work, turn_work = self._speed_work, self._turn_work
         for _ in range(STEPS_PER_CONTROL):
             dv, dw = v_cmd - v, w_cmd - w
+            v0, w0 = v, w
             v += a_step if dv > a_step else max(dv, -a_step)
             w += alpha_step if dw > alpha_step else max(dw, -alpha_step)
+            if v != v0:  # the energy measure (module doc); never read by the physics
+                speed_work += abs(v * v - v0 * v0) if v * v0 >= 0.0 else v * v + v0 * v0
+            if w != w0:
+                turn_work += abs(w * w - w0 * w0) if w * w0 >= 0.0 else w * w + w0 * w0
             vx, vy = v * math.cos(phi), v * math.sin(phi)
             if stepped:
                 _set_velocity(base, (vx, vy))
@@ -327,6 +361,7 @@ class KitchenSim:
         if not stepped:
             _set_position(base, (x, y))
         self.v, self.w, self.phi, self._xy = v, w, phi, (x, y)
+        self._speed_work, self._turn_work = speed_work, turn_work
         self.time += DT_CONTROL
         self._carry()
 
@@ -364,6 +399,8 @@ class KitchenSim:
         self._log: list[tuple[float, ...]] = []
         self._ticks = 0
         self._trajectory = trajectory
+        self._speed_work = self._turn_work = self._arm_work = 0.0
+        self._released_at = None
         true = self.true_state()
         believed = self._believe(true, self._draw())
         params = np.array([*believed, 0.0, 0.0, 0.0, *goal], dtype=float)
@@ -373,7 +410,18 @@ class KitchenSim:
             outcome = self._arm(call.action, goal, believed)
         return Episode(call.action, params, np.array(self._log_t),
                        np.array(self._log, dtype=float).reshape(-1, len(STATE_COLUMNS)), STATE_COLUMNS, outcome,
-                       self._ticks / CONTROL_HZ, self.seed)
+                       self._ticks / CONTROL_HZ, self.seed, self._measures(call.action, goal))
+
+    def _measures(self, action: str, goal: Sequence[float]) -> dict[str, float]:
+        """The measures of the action that ends now, toward `goal` (see the module doc)."""
+        energy = 0.5 * (BASE_MASS * self._speed_work + BASE_MOMENT * self._turn_work) + self._arm_work
+        if action == "navigate":
+            gx, gy, gphi = W.spot_pose(*goal)
+            x, y = self._xy
+            return {ENERGY: energy, ERROR: math.hypot(x - gx, y - gy),
+                    HEADING_ERROR: abs(W.wrap(self.phi - gphi))}
+        px, py = self._released_at if self._released_at is not None else self.gripper()
+        return {ENERGY: energy, ERROR: math.hypot(px - goal[0], py - goal[1])}
 
     def _tick(self) -> tuple[tuple[float, ...], list[float], tuple[float, float, float]]:
         """Record the start of a control period: trajectory sample, believed state, log row."""
@@ -488,6 +536,7 @@ class KitchenSim:
             self._advance()
             self._ticks += 1
         gx, gy = self.gripper()
+        self._released_at = (gx, gy)
         if action == "grip":
             near = [(math.hypot(b.position[0] - gx, b.position[1] - gy), n) for n, b in self.cups.items()]
             gap, name = min(near, default=(math.inf, None), key=lambda g: g[0])
@@ -516,22 +565,49 @@ class KitchenSim:
     def _move_arm(self, pan_goal: float, ext_goal: float) -> str | None:
         """Both joints along velocity ramps to the goal; None once there, "timeout" otherwise."""
         pan_rate = ext_rate = 0.0
+        moved = (0.0, 0.0)  # the joint rates executed in the last control period (the energy measure's)
         max_ticks = round(TIMEOUT * CONTROL_HZ)
-        while True:
-            _, e, _ = self._tick()
-            if (abs(self.pan - pan_goal) <= PAN_TOL and abs(self.ext - ext_goal) <= EXT_TOL
-                    and abs(pan_rate) <= W.PAN_ACCELERATION * DT_CONTROL
-                    and abs(ext_rate) <= W.EXT_ACCELERATION * DT_CONTROL):
-                return None
-            if self._ticks >= max_ticks:
-                return "timeout"
-            pan_rate = _ramp(self.pan, pan_rate, pan_goal, W.PAN_SPEED, W.PAN_ACCELERATION)
-            ext_rate = _ramp(self.ext, ext_rate, ext_goal, W.EXT_SPEED, W.EXT_ACCELERATION)
-            m = self.noise.motor
-            self.pan += pan_rate * (1.0 + m * e[5]) * DT_CONTROL
-            self.ext += ext_rate * (1.0 + m * e[6]) * DT_CONTROL
-            self._advance()
-            self._ticks += 1
+        try:
+            while True:
+                _, e, _ = self._tick()
+                if (abs(self.pan - pan_goal) <= PAN_TOL and abs(self.ext - ext_goal) <= EXT_TOL
+                        and abs(pan_rate) <= W.PAN_ACCELERATION * DT_CONTROL
+                        and abs(ext_rate) <= W.EXT_ACCELERATION * DT_CONTROL):
+                    return None
+                if self._ticks >= max_ticks:
+                    return "timeout"
+                pan_rate = _ramp(self.pan, pan_rate, pan_goal, W.PAN_SPEED, W.PAN_ACCELERATION)
+                ext_rate = _ramp(self.ext, ext_rate, ext_goal, W.EXT_SPEED, W.EXT_ACCELERATION)
+                m = self.noise.motor
+                pan_moved, ext_moved = pan_rate * (1.0 + m * e[5]), ext_rate * (1.0 + m * e[6])
+                r0 = self.ext
+                self.pan += pan_moved * DT_CONTROL
+                self.ext += ext_moved * DT_CONTROL
+                self._arm_work += _arm_work(self._arm_mass(), r0, self.ext, moved, (pan_moved, ext_moved))
+                moved = (pan_moved, ext_moved)
+                self._advance()
+                self._ticks += 1
+        finally:  # the arm stops
+            self._arm_work += _arm_work(self._arm_mass(), self.ext, self.ext, moved, (0.0, 0.0))
+
+    def _arm_mass(self) -> float:
+        """kg the arm's joints move: the gripper, and the cup it holds."""
+        return GRIPPER_MASS + (W.CUP_MASS if self.held is not None else 0.0)
+
+
+def _ramp_work(before: float, after: float) -> float:
+    """2/m times the work of changing a speed from `before` to `after` at constant acceleration (braking to
+    rest and speeding up again where it reverses: nothing is recovered); `_advance` inlines it, per step."""
+    return abs(after * after - before * before) if after * before >= 0.0 else after * after + before * before
+
+
+def _arm_work(mass: float, r0: float, r1: float, before: tuple[float, float],
+              after: tuple[float, float]) -> float:
+    """J the arm's motors spend on a point mass at the gripper over one control period (module doc): its joint
+    rates (pan, extension) jump from `before` to `after` at extension r0, then hold while it goes to r1."""
+    pan, ext = after
+    return (0.5 * mass * (r0 * r0 * _ramp_work(before[0], pan) + _ramp_work(before[1], ext))
+            + 1.5 * mass * pan * pan * abs(r1 * r1 - r0 * r0))
 
 
 def _check_call(call: ActionCall) -> tuple[float, ...]:

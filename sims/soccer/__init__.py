@@ -4,8 +4,8 @@ of them for the coordination experiments (sims.soccer.team).
 `SIMULATOR` is what the package registers (entry point `tailor.simulators: soccer`): the three actions with
 their pose parameters (Table 2.1), the simulator factory, the experience scenarios and the random situations,
 the feature spaces of a navigation to a pose (sims.soccer.pose) and the actions' own (sims.soccer.features,
-sims.soccer.walls), its quantities' units, the pictures of its learned models (Figs. 4.7, 4.8), and what a
-closed loop may meet (Ch. 8.1): the disturbance "nudge" and the robot variant "weak_motors".
+sims.soccer.walls), its quantities' and measures' units, the pictures of its learned models (Figs. 4.7,
+4.8), and what a closed loop may meet (Ch. 8.1): the disturbance "nudge" and the robot variant "weak_motors".
 
 Declaring the robot loads no physics: the simulator module (sims.soccer.simulator, which imports pymunk) is
 imported when a simulator is first created or an episode first runs, so that `tailor domains` and
@@ -35,7 +35,9 @@ _POSE = dict(observed=("x", "y", "phi", "v"), internal=("xg", "yg", "phig", "vg"
 
 
 METRES, RADIANS = Quantity("m"), Quantity("rad", angle=True)
-UNITS = {"x": METRES, "y": METRES, "phi": RADIANS, "v": Quantity("m/s"), "ball_x": METRES, "ball_y": METRES}
+UNITS = {"x": METRES, "y": METRES, "phi": RADIANS, "v": Quantity("m/s"), "ball_x": METRES, "ball_y": METRES,
+         # the measures of its actions besides the duration (sims.soccer.simulator: what each one is)
+         "energy": Quantity("J"), "error": METRES, "heading_error": RADIANS}
 
 # Fig. 4.7's situation: goal 1.5 m straight ahead of a robot standing at the origin facing +x, arriving at rest;
 # the bearing to the goal is 0, so the goal heading phig is the angle of approach angle_at

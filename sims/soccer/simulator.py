@@ -21,6 +21,16 @@ An action the nudge made fail ("ball_moved", or "ball_lost" with the push during
 robot, braking to a stop, and the ball lie at rest (NUDGE_FAILURES). Termination is judged on the true state;
 the action sees (and the Episode logs) the believed state.
 
+Measures (Episode.measures, sims.episode), on the true state, none of them changing the simulation:
+- "energy" (J): the work of the drive on the robot's body, W.ROBOT_MASS m and W.ROBOT_MOMENT I about the axle:
+  each physics step changes v from v0 to v1 (and phidot from w0 to w1) at constant acceleration, which takes
+  the integral of |F v| = m/2 |v1^2 - v0^2| (m/2 (v0^2 + v1^2) where v reverses within the step), and likewise
+  I/2 for phidot. Rolling at constant speed costs nothing (no friction is modelled), braking costs as much as
+  speeding up (nothing is recovered); the work done on the ball (pushed, dribbled) is not counted;
+- "error" (m): the ball point's distance to the goal position (xg, yg) at the action's end;
+- "heading_error" (rad, [0, pi]): |heading - phig| wrapped, at the action's end; absent for goToPosition (its
+  goal has no heading, HEADING_FREE).
+
 Closed-loop execution (Ch. 8.1, tailor.execution) reads between two actions what the robot measures now:
 `observe(action)` (the action's observed parameters) and `scene()` (every scene object). Both read the
 believed state without drawing from the noise stream: they return exactly the reading the next action starts
@@ -40,7 +50,8 @@ from dataclasses import dataclass
 import numpy as np
 import pymunk
 
-from tailor.sims.episode import ActionCall, Episode, SequenceResult, run_in_sequence
+from tailor.sims.episode import (ENERGY, ERROR, HEADING_ERROR, ActionCall, Episode, SequenceResult,
+                                 run_in_sequence)
 from tailor.errors import SimError
 from tailor.sims.soccer import world as W
 from tailor.sims.soccer.actions import ACTION_FUNCTIONS, HEADING_FREE
@@ -207,6 +218,9 @@ class SoccerSim:
         self.v = self.w = 0.0  # true translational / rotational velocity
         self.phi = 0.0  # true heading (mirrors the body's angle)
         self.v_cmd = self.w_cmd = 0.0
+        # sums over physics steps of |v1^2 - v0^2| (v0^2 + v1^2 where v reverses) and the same of phidot,
+        # since the running action began: its energy is m/2 and I/2 times them (see the module doc)
+        self._speed_work = self._turn_work = 0.0
         self.steps = 0  # physics steps in this simulator's life: the clock of a disturbance (reset keeps it)
         self.nudge = Nudge.draw(seed) if disturbance == W.NUDGE else None  # the push to come (or that came)
         self.nudged: tuple[float, float] | None = None  # where the push found the ball (NaN: none), once done
@@ -369,6 +383,7 @@ class SoccerSim:
         v_cmd, w_cmd, a, alpha = self.v_cmd, self.w_cmd, self._a_step, self._alpha_step
         v_sent = phi_sent = w_sent = None  # what pymunk holds (None: send it again)
         has_ball, callback, damping_sent = self.has_ball, self._friction_callback, self._damping
+        speed_work, turn_work = self._speed_work, self._turn_work
         try:
             for _ in range(steps):
                 if has_ball:
@@ -383,8 +398,13 @@ class SoccerSim:
                         _set_damping(space, damping)
                         damping_sent = damping
                 dv, dw = v_cmd - v, w_cmd - w
+                v0, w0 = v, w
                 v += a if dv > a else -a if dv < -a else dv
                 w += alpha if dw > alpha else -alpha if dw < -alpha else dw
+                if v != v0:  # the energy measure (module doc); never read by the physics
+                    speed_work += abs(v * v - v0 * v0) if v * v0 >= 0.0 else v * v + v0 * v0
+                if w != w0:
+                    turn_work += abs(w * w - w0 * w0) if w * w0 >= 0.0 else w * w + w0 * w0
                 if v != v_sent or phi != phi_sent:
                     vx, vy = v * math.cos(phi), v * math.sin(phi)
                     _set_velocity(robot, (vx, vy))
@@ -398,6 +418,7 @@ class SoccerSim:
         finally:
             self.v, self.w, self.phi, self.time = v, w, phi, time
             self._friction_callback, self._damping = callback, damping_sent
+            self._speed_work, self._turn_work = speed_work, turn_work
 
     def _restore_friction(self) -> None:
         """Install the rolling-friction callback and a damping of 1 again (see `_physics`)."""
@@ -454,6 +475,7 @@ class SoccerSim:
         params = None
         max_ticks = int(round(TIMEOUT * CONTROL_HZ))
         outcome = "timeout"
+        self._speed_work = self._turn_work = 0.0
         try:
             while True:
                 true = self.true_state()
@@ -490,9 +512,18 @@ class SoccerSim:
                 ticks += 1
         finally:
             self._restore_friction()
-        episode = Episode(call.action, params, np.array(log_t), np.array(log_state, dtype=float).reshape(-1, 6),
-                          STATE_COLUMNS, outcome, ticks / CONTROL_HZ, self.seed)
-        return episode
+        return Episode(call.action, params, np.array(log_t), np.array(log_state, dtype=float).reshape(-1, 6),
+                       STATE_COLUMNS, outcome, ticks / CONTROL_HZ, self.seed,
+                       self._measures(call.action, xg, yg, phig))
+
+    def _measures(self, action: str, xg: float, yg: float, phig: float) -> dict[str, float]:
+        """The measures of the action that ends now, toward goal (xg, yg, phig) (see the module doc)."""
+        x, y, phi = self.true_state()[:3]
+        measures = {ENERGY: 0.5 * (W.ROBOT_MASS * self._speed_work + W.ROBOT_MOMENT * self._turn_work),
+                    ERROR: math.hypot(x - xg, y - yg)}
+        if action not in HEADING_FREE:
+            measures[HEADING_ERROR] = abs(W.wrap(phi - phig))
+        return measures
 
     def _judge(self, true: tuple[float, float, float, float, float, float], action: str, dribbling: bool,
                ball_start, xg: float, yg: float, phig: float, vg: float) -> str | None:

@@ -15,6 +15,9 @@ of the V-shaped guide on its front, where a dribbled ball sits, BALL_POINT_OFFSE
 sharp for the rolling friction that presses the ball into the V loses it, and so does braking harder than
 the ball decelerates by itself (ROLL_DECELERATION).
 
+Energy (the "energy" measure of an action, sims.episode): the robot is given a mass ROBOT_MASS and a moment of
+inertia ROBOT_MOMENT about its axle; the physics never reads them (the body is kinematic).
+
 Ball: a RoboCup ball (BALL_RADIUS) that slides without spin (infinite moment) and loses speed at the
 constant rolling-friction deceleration mu_r * g, so it stops after v0^2 / (2 mu_r g).
 
@@ -66,6 +69,11 @@ SPARROW = Dynamics(v_max=0.6, w_max=2.0, a_max=0.5, alpha_max=3.0)
 
 ROBOT_HALF_LENGTH = 0.2  # m, body: 0.4 x 0.4 m square centred on the wheel axle
 ROBOT_HALF_WIDTH = 0.2  # m
+# The robot's inertia, for the energy measure only (its body is kinematic: the physics never reads them). Both
+# kinds of robot (PIONEER, SPARROW) and the variants have it: a Pioneer-class base with its guide.
+ROBOT_MASS = 9.0  # kg
+# kg m^2, about the wheel axle (its centre of mass): a uniform 0.4 x 0.4 m square, m (l^2 + w^2) / 12 (0.24)
+ROBOT_MOMENT = ROBOT_MASS * ((2 * ROBOT_HALF_LENGTH) ** 2 + (2 * ROBOT_HALF_WIDTH) ** 2) / 12.0
 
 # --- ball ------------------------------------------------------------------------------------------------
 BALL_RADIUS = 0.11  # m, FIFA size-5 ball used in the mid-size league
