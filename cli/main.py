@@ -191,7 +191,7 @@ def _run(args: argparse.Namespace, program: bool = False) -> int:
     if sys.stdout is None:  # started with standard output closed
         sys.stdout = _ClosedOutput()
     try:
-        code = _status(args)
+        code = _status(args, keep=program and previous is not None)
         return code
     finally:
         if previous is not None:
@@ -211,21 +211,28 @@ def _keep_status(code: int) -> None:
         signal.signal(signum, signal.SIG_IGN)
 
 
-def _status(args: argparse.Namespace) -> int:
-    """Run the command; the status it ends with, each error said in one line on stderr."""
+def _status(args: argparse.Namespace, keep: bool = False) -> int:
+    """Run the command; the status it ends with, each error said in one line on stderr. Once the command has
+    returned, its status stands: with `keep` (the program) signals are ignored from then on (_keep_status),
+    and one that arrives before (or, without `keep`, while standard output is flushed) changes nothing."""
+    returned = None
     try:
-        code = int(args.run(args) or 0)
+        returned = args.run(args) or 0  # (nothing between the return and this store lets a signal handler run)
+        if keep:
+            _keep_status(returned)
         sys.stdout.flush()  # a full disk shows here, not in the interpreter's last flush
-        return code
+        return int(returned)
     except TailorError as exc:
         print(f"tailor {args.command}: error: {exc}", file=sys.stderr)
         return exc.exit_code
-    except Terminated:
-        print(f"tailor {args.command}: terminated", file=sys.stderr)
-        return EXIT_TERMINATED
-    except KeyboardInterrupt:
-        print(f"tailor {args.command}: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM (Terminated)
+        if returned is not None:  # the command was done: a signal before _keep_status took hold
+            if keep:
+                _keep_status(returned)
+            return int(returned)
+        terminated = isinstance(exc, Terminated)
+        print(f"tailor {args.command}: {'terminated' if terminated else 'interrupted'}", file=sys.stderr)
+        return EXIT_TERMINATED if terminated else EXIT_INTERRUPTED
     except BrokenPipeError:
         _stdout_failed()
         return 0

@@ -110,9 +110,8 @@ def run(args: argparse.Namespace) -> int:
     from tailor.errors import BindingError
     from tailor.refinement.learning.duration_protocol import N_I_CANDIDATES
     from tailor.refinement.learning.recipe import load_recipe
-    from tailor.refinement.learning.report import summary_lines
-    from tailor.refinement.learning.training import REPORT_FILES, train_domain
-    from tailor.outputs import check_output_dir, json_text, provenance
+    from tailor.refinement.learning.training import RenameHold, train_domain
+    from tailor.outputs import check_output_dir, provenance
     from tailor.sims.shards import experience_lock, stored_gather
 
     recipe = load_recipe(resolve_domain_dir(args.domain))
@@ -122,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
     if episodes < MIN_EPISODES:  # the domain's own [training] episodes
         raise BindingError(f"[training] episodes must be at least {MIN_EPISODES} (a quarter of them is the test "
                            f"set), got {episodes}", file=str(recipe.domain_dir / BINDING_FILE))
-    from tailor.refinement.model_store import ENVIRONMENT_VARIABLE, USER_DATA, default_training_out
+    from tailor.refinement.model_store import default_training_out
 
     out = default_training_out(recipe.domain_dir) if args.out is None else args.out
     if args.only and args.out is None:  # refine would read this folder alone, before the bundled models
@@ -142,33 +141,49 @@ def run(args: argparse.Namespace) -> int:
     origin = provenance(getattr(args, "argv", None), {"seed": args.seed},
                         [model.source for model in companions.values()])  # the model files read
     gathering = experience_lock(experience) if recorded is None else contextlib.nullcontext()
-    with backend_session(args), gathering:  # one run at a time gathers into an experience folder
-        report = train_domain(recipe, episodes, args.seed, out, jobs=args.jobs, fresh_episodes=args.fresh_episodes,
-                              n_i_candidates=args.n_i or N_I_CANDIDATES, progress=getattr(args, "progress", True),
-                              own_episodes=args.episodes is None,
-                              gather=functools.partial(stored_gather, experience),
-                              companions=companions, compare=args.compare, recorded=recorded, provenance=origin)
-    log = logging.getLogger(__name__)
-    written = [Path(out) / name for name in report.get("files", ())]
+    # Once training renames its first finished file into place the run is done: Ctrl-C and SIGTERM are dropped
+    # from then until the workers are stopped (the session's end), and the run ends with 0 (docs/exit-statuses.md)
+    hold, report = RenameHold(), None
     try:
-        for warning in report.get("warnings", ()):  # diagnostics: stderr, also under --json (and in the reports)
-            log.warning("this run is too small to trust: %s", warning)
-        if args.json:
-            sys.stdout.write(json_text(report) + "\n")  # the report, led by its own schema
-            log.info("wrote %s", ", ".join(str(path) for path in written))
-        else:
-            print("\n".join(summary_lines(report)))
-            print(f"\nWrote {len(written)} files:")
-            width = max((len(str(path)) for path in written), default=0)
-            for path in written:
-                what = REPORT_FILES.get(path.name, "the report as JSON" if path.name == "report.json" else "")
-                print(f"  {str(path):<{width}}  {what}".rstrip())
-            if args.out is None:  # found there before the bundled models (model_store.resolve_models)
-                print(f"`tailor refine {args.domain} PROBLEM` uses them from now on (the {USER_DATA} comes before "
-                      f"the bundled models; --models DIR or {ENVIRONMENT_VARIABLE} choose others)")
-            else:
-                print(f"Use them with `tailor refine {args.domain} PROBLEM --models {out}`")
-    except KeyboardInterrupt:  # the models are written and complete: report what is on disk, not the interrupt
+        with hold, backend_session(args), gathering:  # one run at a time gathers into an experience folder
+            report = train_domain(recipe, episodes, args.seed, out, jobs=args.jobs,
+                                  fresh_episodes=args.fresh_episodes, n_i_candidates=args.n_i or N_I_CANDIDATES,
+                                  progress=getattr(args, "progress", True), own_episodes=args.episodes is None,
+                                  gather=functools.partial(stored_gather, experience), companions=companions,
+                                  compare=args.compare, recorded=recorded, provenance=origin, hold=hold)
+        _print_report(args, report, out)
+    except KeyboardInterrupt:
+        if not hold.begun and report is None:  # interrupted before any file was put in place
+            raise
+        # the models are written and complete (printing the report stays interruptible, should its reader stall)
         print(f"tailor train: interrupted while printing the report; the models in {out / 'models'} are complete",
               file=sys.stderr)
     return 0
+
+
+def _print_report(args: argparse.Namespace, report: dict, out: Path) -> None:
+    """The warnings (stderr), then the report: its summary and the files written, or the report as JSON."""
+    from tailor.outputs import json_text
+    from tailor.refinement.learning.report import summary_lines
+    from tailor.refinement.learning.training import REPORT_FILES
+    from tailor.refinement.model_store import ENVIRONMENT_VARIABLE, USER_DATA
+
+    log = logging.getLogger(__name__)
+    written = [Path(out) / name for name in report.get("files", ())]
+    for warning in report.get("warnings", ()):  # diagnostics: stderr, also under --json (and in the reports)
+        log.warning("this run is too small to trust: %s", warning)
+    if args.json:
+        sys.stdout.write(json_text(report) + "\n")  # the report, led by its own schema
+        log.info("wrote %s", ", ".join(str(path) for path in written))
+        return
+    print("\n".join(summary_lines(report)))
+    print(f"\nWrote {len(written)} files:")
+    width = max((len(str(path)) for path in written), default=0)
+    for path in written:
+        what = REPORT_FILES.get(path.name, "the report as JSON" if path.name == "report.json" else "")
+        print(f"  {str(path):<{width}}  {what}".rstrip())
+    if args.out is None:  # found there before the bundled models (model_store.resolve_models)
+        print(f"`tailor refine {args.domain} PROBLEM` uses them from now on (the {USER_DATA} comes before "
+              f"the bundled models; --models DIR or {ENVIRONMENT_VARIABLE} choose others)")
+    else:
+        print(f"Use them with `tailor refine {args.domain} PROBLEM --models {out}`")

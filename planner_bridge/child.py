@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import os
 import select
+import signal
 import sys
 import threading
 import time
@@ -16,7 +17,14 @@ from tailor import errors
 from tailor.planner_bridge.in_process import plan_pddl_here
 from tailor.planner_bridge.reading import PDDLTask
 from tailor.planner_bridge.solving import oneshot_planners
-from tailor.planner_bridge.worker import LIFELINE_ENV, PARENT_ENV, error_json, out_of_memory, resident_gb
+from tailor.planner_bridge.worker import (
+    LIFELINE_ENV,
+    PARENT_ENV,
+    end_descendants,
+    error_json,
+    out_of_memory,
+    resident_gb,
+)
 
 WATCH_PARENT_S = 1.0  # how often the watcher also checks that the parent's pid is still this process's parent
 # CPython (3.11 and later) keeps Python frames in chunks of 16 kB and frees a chunk as soon as the frame at its
@@ -36,7 +44,7 @@ def _die_with_parent() -> None:
     pipe, then ends this process. (Linux's PR_SET_PDEATHSIG is no substitute: it fires when the parent *thread*
     that forked the child ends, and the Python API keeps one child for a whole session, for all its threads.)
     The watcher also checks that the parent's pid is still our parent's, should another process it forked
-    hold a copy of the write end."""
+    hold a copy of the write end. Either way the engines this process started go with it (_end)."""
     parent = int(os.environ.get(PARENT_ENV, "0") or 0)
     lifeline = int(os.environ.get(LIFELINE_ENV, "-1") or -1)
 
@@ -45,15 +53,26 @@ def _die_with_parent() -> None:
             if lifeline >= 0:
                 ready, _, _ = select.select([lifeline], [], [], WATCH_PARENT_S)
                 if ready:  # end of file (or an error): the parent's end is closed
-                    os._exit(1)
+                    _end()
             else:
                 time.sleep(WATCH_PARENT_S)
             if parent and os.getppid() != parent:
-                os._exit(1)
+                _end()
 
     if parent and os.getppid() != parent:  # the parent died before we looked
-        os._exit(1)
+        _end()
     threading.Thread(target=watch, name="tailor-parent-watch", daemon=True).start()
+
+
+def _end(signum: int | None = None, frame=None) -> None:
+    """End this process now, and first every engine it started: unified-planning runs an engine binary (Fast
+    Downward) in a session of its own, which would otherwise search on, orphaned, for minutes. Also the
+    handler of SIGTERM, which then ends the process as it would have without one."""
+    end_descendants(os.getpid())
+    if signum is not None:
+        signal.signal(signum, signal.SIG_DFL)
+        os.kill(os.getpid(), signum)
+    os._exit(1)
 
 
 def _limit_memory(limit_gb: float | None) -> None:
@@ -73,6 +92,7 @@ def _limit_memory(limit_gb: float | None) -> None:
 def main() -> int:
     """Plan each request line in this process, answer on the original stdout, until stdin ends."""
     _die_with_parent()
+    signal.signal(signal.SIGTERM, _end)
     answer = os.fdopen(os.dup(1), "w", encoding="utf-8")
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, 1)  # from here on, anything printed by the engines is discarded

@@ -146,7 +146,11 @@ def _reap(pid: int) -> None:
 
 
 def _kill(pid: int) -> None:
-    """Kill the forked planner and reap it."""
+    """Kill the forked planner, with every process it started (an engine such as Fast Downward runs in a session
+    of its own, which killing the fork would not reach), and reap it."""
+    from tailor.planner_bridge.worker import end_descendants
+
+    end_descendants(pid)
     try:
         os.kill(pid, signal.SIGKILL)
     except ProcessLookupError:

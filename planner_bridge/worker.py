@@ -15,7 +15,13 @@ Why a child process:
   "lifeline"); a thread in the child ends it when that end closes, which the kernel does when the parent process
   ends, however it ends. The child's lifetime is tied to the process, not to the thread that started it (Linux's
   PR_SET_PDEATHSIG fires when that *thread* ends: the Python API's child, kept for the session, died with the
-  first thread that planned). The parent kills it on every way out of PlannerProcess.plan_pddl but an answer.
+  first thread that planned). The parent kills it on every way out of PlannerProcess.plan_pddl but an answer;
+- no engine left running: unified-planning starts an engine binary (Fast Downward's driver, then its search) in a
+  session of its own, which no signal to the child reaches and which would search on for minutes after the child
+  is gone. Whoever ends the child ends its descendants first, each with the process group it leads
+  (end_descendants): the parent when it kills the child (the child is stopped meanwhile, so it starts nothing
+  more), the child itself when its lifeline closes. The engines' temporary files go in the child's folder
+  (TMPDIR), removed with it.
 
 The parent reads and checks the pair (planner_bridge.reading.read_pddl) and sends the child what it read: the
 child neither opens the files nor checks them again.
@@ -32,6 +38,7 @@ from __future__ import annotations
 import json
 import os
 import select
+import signal
 import subprocess
 import sys
 import tempfile
@@ -79,6 +86,43 @@ def raise_error(data: dict) -> None:
 
 def out_of_memory(limit_gb: float | None) -> str:
     return "planner ran out of memory" + ("" if limit_gb is None else f" (limit {limit_gb:g} GB)")
+
+
+def descendants(pid: int) -> list[int]:
+    """The live processes started by process `pid`, directly or not, parents before children (from Linux's
+    /proc; elsewhere none are found)."""
+    children: dict[int, list[int]] = {}
+    try:
+        entries = [entry.name for entry in os.scandir("/proc") if entry.name.isdigit()]
+    except OSError:
+        return []
+    for name in entries:
+        try:
+            with open(f"/proc/{name}/stat", "rb") as stat:
+                state, parent = stat.read().rsplit(b")", 1)[1].split()[:2]  # after the command's name
+        except (OSError, ValueError):
+            continue  # it ended meanwhile
+        if state != b"Z":
+            children.setdefault(int(parent), []).append(int(name))
+    found, queue = [], list(children.get(pid, ()))
+    while queue:
+        found.append(queue.pop(0))
+        queue.extend(children.get(found[-1], ()))
+    return found
+
+
+def end_descendants(pid: int) -> None:
+    """Kill (SIGKILL) every process descended from process `pid` (not `pid` itself), with the whole process
+    group of each one that leads a group: an engine unified-planning started in a session of its own (Fast
+    Downward) then goes with whatever it started meanwhile."""
+    for descendant in descendants(pid):
+        try:
+            if os.getpgid(descendant) == descendant:
+                os.killpg(descendant, signal.SIGKILL)
+            else:
+                os.kill(descendant, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):  # it ended meanwhile
+            pass
 
 
 def resident_gb(pid: int) -> float | None:
@@ -155,11 +199,12 @@ class PlannerProcess:
         given, held = os.pipe()  # the child's read end and our write end; both close on exec (pass_fds gives
         # the child its end), so no other program this process starts holds the lifeline
         env = {**os.environ, "PYTHONHASHSEED": HASH_SEED, PARENT_ENV: str(os.getpid()),
-               LIFELINE_ENV: str(given)}
-        try:
+               LIFELINE_ENV: str(given), "TMPDIR": self._room.name}
+        try:  # a process group of its own, so that _end stops and kills it with what it started in its group
             child = subprocess.Popen(
                 [sys.executable, "-m", CHILD_MODULE], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                 stderr=self._stderr, env=env, text=True, pass_fds=(given,), cwd=self._room.name,
+                process_group=0,
             )
         except BaseException:
             os.close(held)
@@ -211,10 +256,8 @@ class PlannerProcess:
     def _fail(self, message: dict, problem: Path) -> None:
         """The child ended without an answer: say why in one line."""
         child = self._child
-        if child is not None and child.poll() is None:
-            child.kill()
         if child is not None:
-            child.wait(KILL_WAIT_S)
+            _end(child)
         self._stderr.seek(0)
         lines = self._stderr.read().decode(errors="replace").strip().splitlines() or ["no message"]
         if self.memory_gb is not None and any("MemoryError" in line for line in lines[-3:]):
@@ -226,9 +269,7 @@ class PlannerProcess:
         """End the child (it is killed: nothing it holds needs a clean shutdown)."""
         child, self._child = self._child, None
         if child is not None:
-            if child.poll() is None:
-                child.kill()
-            child.wait(KILL_WAIT_S)
+            _end(child)
             for stream in (child.stdin, child.stdout):
                 try:
                     stream.close()
@@ -249,6 +290,20 @@ class PlannerProcess:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _end(child: subprocess.Popen) -> None:
+    """Kill the child and every process it started (see "no engine left running" above), and reap it. It is
+    stopped first, so that it starts nothing while its descendants are found; its own group (it leads one) goes
+    last, with whatever of it started meanwhile."""
+    if child.poll() is None:  # not reaped, so its pid (and its group's) still names it
+        try:
+            os.killpg(child.pid, signal.SIGSTOP)
+            end_descendants(child.pid)
+            os.killpg(child.pid, signal.SIGKILL)
+        except ProcessLookupError:  # it has just ended
+            pass
+    child.wait(KILL_WAIT_S)
 
 
 def plan_in_worker(

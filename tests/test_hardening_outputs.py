@@ -5,6 +5,11 @@ after `tailor train` has put its files in place does not change its status (0)."
 
 from __future__ import annotations
 
+import argparse
+import contextlib
+import importlib
+import io
+import json
 import os
 import re
 import signal
@@ -223,3 +228,100 @@ def test_a_sigterm_once_the_files_are_in_place_ends_with_0(delay, tmp_path):
         if process.poll() is None:
             process.kill()
     assert (out / "models" / "goToPosition.json").exists()
+
+
+# A `tailor train` whose backend session takes this long to stop its workers once the files are in place
+# (tests/test_hardening_outputs.py runs it with backend_session slowed; the marker file says when it is stopping)
+SLOW_TRAIN = """
+import contextlib, sys, time
+from pathlib import Path
+import tailor.sims.parallel as parallel
+
+marker, stop_s = Path(sys.argv[1]), float(sys.argv[2])
+real = parallel.backend_session
+
+@contextlib.contextmanager
+def slow_session(*args, **kwargs):
+    with real(*args, **kwargs) as session:
+        yield session
+        marker.write_text("stopping the workers")
+        time.sleep(stop_s)
+
+parallel.backend_session = slow_session
+from tailor.cli.main import main
+sys.argv = ["tailor", *sys.argv[3:]]
+sys.exit(main())
+"""
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGTERM") or sys.platform == "win32", reason="POSIX signals")
+def test_a_sigterm_while_the_workers_stop_after_the_files_ends_with_0(tmp_path):
+    """The files are in place, the backend session stops its workers (slowed here to 3 s): a SIGTERM then lets
+    it finish and end with 0, every file complete."""
+    out, marker = tmp_path / "out", tmp_path / "stopping"
+    process = subprocess.Popen([sys.executable, "-c", SLOW_TRAIN, str(marker), "3", "-q", "train", "soccer",
+                                "--only", "goToPosition", "--episodes", "8", "--jobs", "1", "--out", str(out)],
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not marker.exists() and process.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert marker.exists(), process.stderr.read()
+        time.sleep(0.1)
+        process.send_signal(signal.SIGTERM)
+        assert process.wait(30) == 0, process.stderr.read()
+    finally:
+        if process.poll() is None:
+            process.kill()
+    report = json.loads((out / "training" / "report.json").read_text())
+    assert [p for p in out.rglob(".*") if p.is_file()] == []  # no staged file left
+    for name in report["files"]:
+        assert (out / name).stat().st_size > 0
+    json.loads((out / "models" / "goToPosition.json").read_text())
+
+
+def test_a_sigterm_once_training_has_renamed_its_files_leaves_status_0(tmp_path, monkeypatch, capsys):
+    """In this process: a SIGTERM as the backend session ends, after the renames began (the fake training
+    below), is dropped; one before them still stops the run (143)."""
+    from tailor.refinement.learning import training
+    from tailor.sims import parallel
+
+    real = parallel.backend_session
+
+    @contextlib.contextmanager
+    def terminated_session(*args, **kwargs):
+        with real(*args, **kwargs) as session:
+            yield session
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.2)  # (the handler runs here)
+
+    def trained(recipe, episodes, seed, out, hold=None, **kwargs):  # a training run that renamed its files
+        training._rename_all([], hold)
+        return {"models": {}, "files": []}
+
+    monkeypatch.setattr(parallel, "backend_session", terminated_session)
+    monkeypatch.setattr(training, "train_domain", trained)
+    assert main(["-q", "train", "soccer", "--only", "goToPosition", "--out", str(tmp_path), "--json"]) == 0
+    assert capsys.readouterr().err == ""
+
+    def stopped(*args, **kwargs):  # a training run stopped before its renames
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5)
+
+    monkeypatch.setattr(training, "train_domain", stopped)
+    assert main(["-q", "train", "soccer", "--only", "goToPosition", "--out", str(tmp_path), "--json"]) == 143
+    assert capsys.readouterr().err == "tailor train: terminated\n"
+
+
+def test_a_sigterm_once_the_command_has_returned_leaves_its_status(monkeypatch):
+    """The command has returned 0; a SIGTERM while its results are flushed (before the program ignores signals,
+    cli.main._keep_status) leaves the status as it was."""
+    cli = importlib.import_module("tailor.cli.main")  # (tailor.cli.main is also the name of its function)
+
+    class SlowFlush(io.StringIO):
+        def flush(self):
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.2)  # (the handler runs here)
+
+    monkeypatch.setattr(sys, "stdout", SlowFlush())
+    assert cli._run(argparse.Namespace(run=lambda args: 0, command="train")) == 0

@@ -18,6 +18,7 @@ import time
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
+from typing import Self
 
 from tailor.errors import DataError
 from tailor.refinement.learning.classifiers import train_collision_model
@@ -46,6 +47,7 @@ from tailor.sims.episode import Episode
 FRESH_SEED_OFFSET = 7_919_000  # the fresh test episodes of a classifier use seed + this: no shared episode
 REPORT_SCHEMA = "tailor.training_report/3"  # 3: classifiers by action, the simulator named (+ warnings, files)
 
+HELD_SIGNALS = (signal.SIGINT, signal.SIGTERM)  # held back once the finished files are renamed (RenameHold)
 Gather = Callable[..., list[Episode]]
 log = logging.getLogger(__name__)
 
@@ -66,6 +68,7 @@ def train_domain(
     compare: bool = False,
     recorded: dict[str, list[Episode]] | None = None,
     provenance: Provenance | None = None,
+    hold: RenameHold | None = None,
 ) -> dict:
     """Gather, train and write `out/models/*.json` and `out/training/` (report and plots); return the report.
 
@@ -78,7 +81,8 @@ def train_domain(
     `recorded` (action -> episodes, e.g. read from logs, learning.logs) replaces gathering: the duration models
     learn from those executions only; success classifiers and subgoal experience, which need the simulator, are
     not learned then. `provenance` (the command's: its line, seeds and the model files it read) leads the report;
-    by default it names this call's seed and no command line."""
+    by default it names this call's seed and no command line. `hold`: Ctrl-C and SIGTERM are held back from the
+    first rename of the files written until the caller ends it (RenameHold), else until the last rename."""
     if gather is None:
         from tailor.sims.experience import gather
     if episodes < 1:
@@ -171,7 +175,7 @@ def train_domain(
     log.debug("trained %s in %.1f s", ", ".join([*models, *(f"{a} classifier" for a in classifiers)]),
               report["train_seconds"])
     report["warnings"] = trust_warnings(report)
-    write_outputs(out, recipe, models, classifiers, report)
+    write_outputs(out, recipe, models, classifiers, report, hold)
     return report
 
 
@@ -299,9 +303,10 @@ def training_files(out: Path, recipe: TrainingRecipe, models: dict, classifiers:
     return files
 
 
-def write_outputs(out: Path, recipe: TrainingRecipe, models: dict, classifiers: dict, report: dict) -> list[Path]:
-    """Stage every file beside its target, then rename them all into place; `report["files"]` lists them
-    (relative to `out`). Returns the files written."""
+def write_outputs(out: Path, recipe: TrainingRecipe, models: dict, classifiers: dict, report: dict,
+                  hold: RenameHold | None = None) -> list[Path]:
+    """Stage every file beside its target, then rename them all into place (signals held: _rename_all);
+    `report["files"]` lists them (relative to `out`). Returns the files written."""
     files = training_files(out, recipe, models, classifiers, report)
     report["files"] = [target.relative_to(Path(out)).as_posix() for target in files]
     staged: list[tuple[Path, Path]] = []
@@ -315,7 +320,7 @@ def write_outputs(out: Path, recipe: TrainingRecipe, models: dict, classifiers: 
             tmp = staged_file(target)  # the permissions of a new file (0666 less the umask), not mkstemp's 0600
             staged.append((tmp, target))
             write(tmp)
-        _rename_all(staged)
+        _rename_all(staged, hold)
     except OSError as exc:
         raise write_error(target, exc) from None
     finally:
@@ -324,25 +329,52 @@ def write_outputs(out: Path, recipe: TrainingRecipe, models: dict, classifiers: 
     return list(files)
 
 
-def _rename_all(staged: list[tuple[Path, Path]]) -> None:
-    """Rename every staged file over its target with Ctrl-C (and SIGTERM) held back: once the renames begin they
-    all complete, and the run ends as done, so the status reported matches what is on disk. A signal that
-    arrives meanwhile is dropped (the work it would have interrupted is finished); before and after, the
-    handlers in place apply. Python runs signal handlers in the main thread only, so swapping them there
-    holds the signal back whichever thread the kernel delivers it to."""
-    held = (signal.SIGINT, signal.SIGTERM)
-    in_main = threading.current_thread() is threading.main_thread()
-    previous = {signum: signal.signal(signum, _hold) for signum in held} if in_main else {}
-    try:
-        for tmp, target in staged:
-            os.replace(tmp, target)
-    finally:
+def _rename_all(staged: list[tuple[Path, Path]], hold: RenameHold | None = None) -> None:
+    """Rename every staged file over its target with Ctrl-C and SIGTERM held back (RenameHold): once the renames
+    begin they all complete, and the run ends as done, so the status reported matches what is on disk. Held
+    until `hold` ends, the caller's (which may have more to finish: the CLI stops its workers); without one,
+    until the last rename."""
+    if hold is None:
+        with RenameHold() as own:
+            _rename_all(staged, own)
+        return
+    hold.begin()
+    for tmp, target in staged:
+        os.replace(tmp, target)
+
+
+class RenameHold:
+    """Ctrl-C and SIGTERM dropped from begin() (the first rename of the finished files) until end() (or the end of
+    the `with`): a signal then would interrupt work that is done, or the shutting down after it, and report as
+    interrupted a run whose files are all in place. Before and after, the handlers in place apply. Python runs
+    signal handlers in the main thread only, so swapping them there holds a signal back whichever thread the
+    kernel delivers it to; in another thread begin() only records that the renames began (`begun`)."""
+
+    def __init__(self) -> None:
+        self.begun = False
+        self._previous: dict[int, object] = {}
+
+    def begin(self) -> None:
+        if not self.begun and threading.current_thread() is threading.main_thread():
+            for signum in HELD_SIGNALS:  # each handler noted before it is swapped: end() puts back whatever was
+                self._previous[signum] = signal.getsignal(signum)  # swapped, should a signal cut this short
+                signal.signal(signum, _hold)
+        self.begun = True
+
+    def end(self) -> None:
+        previous, self._previous = self._previous, {}
         for signum, handler in previous.items():
-            signal.signal(signum, handler)
+            signal.signal(signum, signal.SIG_DFL if handler is None else handler)  # (None: set outside Python)
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.end()
 
 
 def _hold(signum, frame) -> None:
-    """A signal arriving while the finished files are renamed into place: let the renames complete."""
+    """A signal arriving while the finished files are renamed into place (or after, see RenameHold): dropped."""
 
 
 def _json_writer(data: dict) -> Callable[[Path], None]:
