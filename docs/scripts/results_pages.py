@@ -167,9 +167,16 @@ def _evaluation(domain: str, name: str, e: dict) -> list[str]:
     return out
 
 
+def _command(e: dict, fallback: str) -> str:
+    """The command line that wrote a report, as its provenance records it (else `fallback`)."""
+    argv = (e.get("provenance") or {}).get("argv")
+    return " ".join(argv) if argv else fallback
+
+
 def _closed_loop(domain: str, name: str, e: dict) -> list[str]:
-    command = (f"tailor evaluate {domain} --closed-loop --situations {e['generator']} --episodes {e['situations']}"
-               f"{' --disturb ' + e['disturbance'] if e.get('disturbance') else ''} --seed {e['seed']} --json")
+    command = _command(e, f"tailor evaluate {domain} --closed-loop --situations {e['generator']} --episodes "
+                          f"{e['situations']}{' --disturb ' + e['disturbance'] if e.get('disturbance') else ''} "
+                          f"--seed {e['seed']} --json")
     out = [f"## Closed loop against open loop: `{name}`\n",
            f"From `domains/{domain}/training/{name}`, the report of `{command}`: each random {code(e['generator'])} "
            "situation refined once and executed open loop and closed loop (monitored, re-refined, replanned; "
@@ -191,10 +198,10 @@ def _closed_loop(domain: str, name: str, e: dict) -> list[str]:
 
 
 def _learning_curve(domain: str, name: str, e: dict) -> list[str]:
-    command = (f"tailor evaluate {domain} --learning-curve --situations {e['generator']} --episodes {e['tasks']}"
-               f"{' --variant ' + e['variant'] if e.get('variant') else ''}"
-               f"{' --reference-episodes ' + str(e['reference']['episodes']) if e.get('reference') else ''}"
-               f" --seed {e['seed']} --json")
+    command = _command(e, f"tailor evaluate {domain} --learning-curve --situations {e['generator']} --episodes "
+                          f"{e['tasks']}{' --variant ' + e['variant'] if e.get('variant') else ''}"
+                          f"{' --reference-episodes ' + str(e['reference']['episodes']) if e.get('reference') else ''}"
+                          f" --seed {e['seed']} --json")
     out = [f"## Learning in operation: `{name}`\n",
            f"From `domains/{domain}/training/{name}`, the report of `{command}`: {e['tasks']} tasks executed closed "
            f"loop in turn{' on the changed robot ' + code(e['variant']) if e.get('variant') else ''}, the duration "
@@ -208,6 +215,8 @@ def _learning_curve(domain: str, name: str, e: dict) -> list[str]:
                      "per scenario: MAE on the last 20 tasks' actions",
                      f"{_num(e['reference']['mae_last'], 3)} s (learning in operation "
                      f"{_num(e.get('mae_ratio_to_reference'))} x that)"])
+        rows.append(["refined vs greedy with those models, last 20 tasks",
+                     _pct(e["reference"].get("improvement_last"))])
     out.append(table(["", "measured"], rows, align="ll"))
     return out
 
