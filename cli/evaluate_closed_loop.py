@@ -72,14 +72,16 @@ def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, mode
     rows = learning_stream(items, args.variant)
     reference = None
     if args.reference_episodes:
-        from tailor.refinement.evaluation.closed_loop import reference_error, reference_models
+        from tailor.refinement.evaluation.closed_loop import (reference_error, reference_improvement,
+                                                              reference_models)
         from tailor.refinement.situations import job_models, situation_sequence
 
         job, _, objects = items[0]
         models = job_models(job, situation_sequence(job, objects))
         trained = reference_models(domain_dir, binding, dict(models), args.variant, args.reference_episodes, args.seed,
                                    args.jobs)
-        reference = {"episodes": args.reference_episodes, "mae_last": reference_error(rows[-CURVE_WINDOW:], trained)}
+        reference = {"episodes": args.reference_episodes, "mae_last": reference_error(rows[-CURVE_WINDOW:], trained),
+                     "improvement_last": reference_improvement(items[-CURVE_WINDOW:], args.variant, trained)}
     errors = [np.mean(r["relative_errors"]) if r["relative_errors"] else np.nan for r in rows]
     first = rows[:CURVE_WINDOW]
     last = rows[-CURVE_WINDOW:]
@@ -120,7 +122,8 @@ def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, mode
     if reference is not None:
         out(f"  models trained from scratch on {reference['episodes']} episodes of the variant per scenario: MAE "
             f"{fmt(reference['mae_last'], ' s')} on the last {CURVE_WINDOW} tasks' actions (learning in operation "
-            f"{fmt(report['mae_ratio_to_reference'])} x that)\n")
+            f"{fmt(report['mae_ratio_to_reference'])} x that); refined vs greedy with them on the last "
+            f"{CURVE_WINDOW} tasks {pct(reference['improvement_last'])}\n")
     if args.plot:
         out(f"Wrote {args.plot}\n")
     return 0

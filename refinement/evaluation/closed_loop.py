@@ -169,6 +169,29 @@ def variant_episode(simulator: str, scenario: str, seed: int, variant: str | Non
     return run(seed, variant=variant) if variant is not None else run(seed)
 
 
+def reference_improvement(items: list[tuple[Job, int, dict]], variant: str | None, models: dict,
+                          horizon: int = 2) -> float | None:
+    """Refined vs greedy improvement on `items` executed closed loop on the robot `variant` with `models` (the
+    models trained from scratch on it; no learning in operation): what learning in operation is measured against."""
+    fixed = _Frozen(None, 1)
+    fixed._adapted = dict(models)
+    times = {"refined": [], "greedy": []}
+    for job, index, objects in items:
+        seed = situation_seed(job.seed, index)
+        base = _inputs(job)
+        inputs = replace(base, belief=parse_belief({"objects": objects}, BELIEF_ARGUMENT, None, base.binding.quantities))
+        for name, h in (("refined", horizon), ("greedy", 1)):
+            fixed._trained = {}
+            settings = ExecuteOptions(closed_loop=True, variant=variant, learn=True)
+            summary = summarize(list(ClosedLoop(inputs, Options(horizon=h, seed=seed, greedy=False), settings,
+                                                learner=fixed).events()))
+            times[name].append(summary.duration + (0.0 if summary.completed else FAILED_RUN_PENALTY))
+    if not items:
+        return None
+    greedy = float(np.mean(times["greedy"]))
+    return (greedy - float(np.mean(times["refined"]))) / greedy
+
+
 def reference_error(rows: list[dict], models: dict) -> float | None:
     """Mean absolute error (s) of `models` on the successful executions of `rows`."""
     errors = []
