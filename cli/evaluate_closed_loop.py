@@ -27,8 +27,16 @@ def _check(args, binding) -> None:
                              f"{', '.join(known) or 'none'})")
 
 
-def run_closed_loop(args: argparse.Namespace, domain_dir, binding, plan, models_dir, items) -> int:
+def _write_json(kind: str, report: dict, rows: list[dict], args, models_dir) -> int:
+    """The report and its rows as JSON, with the provenance of the command that made them."""
     from tailor.outputs import json_text, model_files, provenance, versioned
+
+    origin = provenance(getattr(args, "argv", None), {"seed": args.seed}, model_files(models_dir))
+    sys.stdout.write(json_text(versioned(kind, {**report, "rows": rows}, origin)) + "\n")
+    return 0
+
+
+def run_closed_loop(args: argparse.Namespace, domain_dir, binding, plan, models_dir, items) -> int:
     from tailor.refinement.evaluation.closed_loop import closed_loop_episode, summarize_closed_loop
     from tailor.sims.parallel import run_in_workers
 
@@ -41,9 +49,7 @@ def run_closed_loop(args: argparse.Namespace, domain_dir, binding, plan, models_
               "generator": plan.comparison, "disturbance": args.disturb, "situations": len(rows)}
     report.update(summarize_closed_loop(rows))
     if args.json:
-        origin = provenance(getattr(args, "argv", None), {"seed": args.seed}, model_files(models_dir))
-        sys.stdout.write(json_text(versioned("evaluate_closed_loop", {**report, "rows": rows}, origin)) + "\n")
-        return 0
+        return _write_json("evaluate_closed_loop", report, rows, args, models_dir)
     out = sys.stdout.write
     out(f"Domain {report['domain']}: {len(rows)} random '{plan.comparison}' situations (seed {args.seed}), each "
         f"refined once and executed open and closed loop with the same simulator seed"
@@ -63,7 +69,7 @@ def run_closed_loop(args: argparse.Namespace, domain_dir, binding, plan, models_
 
 
 def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, models_dir, items) -> int:
-    from tailor.outputs import check_output_file, json_text, model_files, provenance, versioned
+    from tailor.outputs import check_output_file
     from tailor.refinement.evaluation.closed_loop import learning_stream
 
     _check(args, binding)
@@ -108,9 +114,7 @@ def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, mode
         draw_learning_curve(args.plot, rows, errors, report, CURVE_WINDOW)
         report["plot"] = str(args.plot)
     if args.json:
-        origin = provenance(getattr(args, "argv", None), {"seed": args.seed}, model_files(models_dir))
-        sys.stdout.write(json_text(versioned("evaluate_learning_curve", {**report, "rows": rows}, origin)) + "\n")
-        return 0
+        return _write_json("evaluate_learning_curve", report, rows, args, models_dir)
     out = sys.stdout.write
     out(f"Domain {report['domain']}: {len(rows)} tasks executed closed loop, learning in operation"
         f"{' on variant ' + args.variant if args.variant else ''} (seed {args.seed})\n")

@@ -17,7 +17,13 @@ class NormalRows:
         self._rows: list[list[float]] = []
 
     def next(self) -> list[float]:
+        self.peek()
+        return self._rows.pop()
+
+    def peek(self) -> list[float]:
+        """The row `next` returns next, without taking it (what a closed loop's observe() measures with, so that
+        observing consumes nothing)."""
         if not self._rows:
             self._rows = self.rng.standard_normal((BLOCK, self.width)).tolist()
             self._rows.reverse()
-        return self._rows.pop()
+        return self._rows[-1]

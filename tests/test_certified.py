@@ -191,12 +191,42 @@ def guarded(seed: int) -> Objective:
     return Objective(objective.free, (guarded_term, objective.terms[1]))
 
 
+def with_margin(objective: Objective, share: float) -> Objective:
+    """The guard of `guarded` asked also `share` of each range to either side (Term.valid with a guard margin,
+    as refine.action_term builds it: the moved point kept within the ranges)."""
+    term = objective.terms[0]
+    margin = tuple(share * (p.high - p.low) for p in objective.free)
+
+    def valid(theta):
+        theta = np.atleast_2d(theta)
+        ok = np.asarray(term.valid(theta), dtype=bool)
+        for j, m in enumerate(margin):
+            for sign in (-1.0, 1.0):
+                moved = theta.copy()
+                moved[:, j] = np.clip(moved[:, j] + sign * m, objective.low[j], objective.high[j])
+                ok &= np.asarray(term.valid(moved), dtype=bool)
+        return ok
+
+    return Objective(objective.free, (replace(term, valid=valid, region_margin=margin),) + objective.terms[1:])
+
+
 @pytest.mark.parametrize("seed", range(4))
 def test_boxes_predicted_to_fail_are_dropped_only_where_the_bound_proves_it(seed):
     objective = guarded(seed)
     result = certified.minimize(objective)
     assert objective.valid(np.array([result.values]))[0]
     assert bound_holds(result, objective)  # against the valid points only
+    assert result.gap <= certified.tolerance_of(result.cost)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_boxes_whose_guard_margin_fails_are_dropped_only_where_the_bound_proves_it(seed):
+    """With a guard margin a valid choice needs success that far to either side too: boxes moved by it are
+    tested as well, and the bound stays below every valid sampled cost (and closes)."""
+    objective = with_margin(guarded(seed), 0.03)
+    result = certified.minimize(objective)
+    assert objective.valid(np.array([result.values]))[0]
+    assert bound_holds(result, objective)
     assert result.gap <= certified.tolerance_of(result.cost)
 
 
@@ -302,3 +332,12 @@ def test_refine_certifies_windows_of_a_chain_learned_in_the_line_space():
     for by_ga, by_bound in zip(ga.windows, ga.compared):  # the same windows: never above the GA's choice
         assert by_bound.cost <= by_ga.cost * (1 + certified.TOLERANCE)
         assert by_bound.lower_bound <= by_ga.cost + SLACK
+
+
+def test_auto_budget_is_boxes_fewer_for_each_free_parameter_beyond_four():
+    """auto's budget counts boxes, not seconds (the same window gets the same choice on any machine), and shrinks
+    where a window has more free parameters than any bundled window certified."""
+    from tailor.refinement.optimizers import AUTO_BUDGET, AUTO_WIDE, auto_budget
+
+    assert auto_budget(2) == auto_budget(4) == AUTO_BUDGET
+    assert auto_budget(6) == AUTO_BUDGET // AUTO_WIDE ** 2 < auto_budget(5) < AUTO_BUDGET

@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
+from processes import processes_naming
 
 from tailor.cli.main import main
 from tailor.planner_bridge import plan_from_ipc, read_pddl
@@ -67,18 +68,6 @@ def test_an_unsolvable_problem_fast_downward_proves_so_is_status_6(capsys):
 TIMEOUT_S = 4  # Fast Downward's optimal configuration (A* with LM-cut) does not finish 50 blocks in hours
 
 
-def _processes_naming(text: str) -> dict[int, str]:
-    """pid -> command line of the live (not zombie) processes whose command line contains `text`, from /proc."""
-    found = {}
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            state = stat.read_text().rsplit(")", 1)[1].split()[0]
-            cmdline = (stat.parent / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace").strip()
-        except (OSError, IndexError):
-            continue  # it ended meanwhile
-        if state != "Z" and text in cmdline:
-            found[int(stat.parent.name)] = cmdline
-    return found
 
 
 @pytest.fixture(scope="module")
@@ -97,11 +86,11 @@ def timed_out(tmp_path_factory):
     searching, left = False, {}
     try:
         while tailor_process.poll() is None:
-            searching = searching or any("bin/downward" in c for c in _processes_naming(str(tmp)).values())
+            searching = searching or any("bin/downward" in c for c in processes_naming(str(tmp)).values())
             time.sleep(0.2)
         out, err = tailor_process.communicate()
         time.sleep(0.3)  # what tailor kills needs a moment to go
-        left = _processes_naming(str(tmp))
+        left = processes_naming(str(tmp))
         yield tailor_process.returncode, out, err, searching, sorted(left.values())
     finally:
         tailor_process.kill()

@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
+from processes import processes_naming
 from tailor.planner_bridge.worker import descendants, end_descendants
 
 FIXTURES = Path(__file__).parent / "fixtures" / "pddl"
@@ -34,18 +35,6 @@ pytestmark = [
 ]
 
 
-def _processes_naming(text: str) -> dict[int, str]:
-    """pid -> command line of the live (not zombie) processes whose command line contains `text`."""
-    found = {}
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            state = stat.read_text().rsplit(")", 1)[1].split()[0]
-            cmdline = (stat.parent / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace").strip()
-        except (OSError, IndexError):
-            continue  # it ended meanwhile
-        if state != "Z" and text in cmdline:
-            found[int(stat.parent.name)] = cmdline
-    return found
 
 
 def _cmdline(pid: int) -> str:
@@ -81,7 +70,7 @@ def test_fast_downward_goes_with_a_killed_tailor(tmp_path, signum):
                "fast-downward-opt", "--timeout", "600"]
     process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                                env={**os.environ, "TMPDIR": str(tmp_path)})
-    searching = lambda: any("bin/downward" in c for c in _processes_naming(str(tmp_path)).values())
+    searching = lambda: any("bin/downward" in c for c in processes_naming(str(tmp_path)).values())
     try:
         if not _wait_for(searching, START_S):
             pytest.skip("Fast Downward's search did not start in time (a very loaded machine)")
@@ -94,11 +83,11 @@ def test_fast_downward_goes_with_a_killed_tailor(tmp_path, signum):
             assert (process.returncode, err) == (143, "tailor plan: terminated\n")
         assert _wait_for(lambda: not _alive(child[0]), GONE_S)
         time.sleep(LOOK_S)
-        assert _processes_naming(str(tmp_path)) == {}
+        assert processes_naming(str(tmp_path)) == {}
     finally:
         process.kill()
         process.wait()
-        for pid in _processes_naming(str(tmp_path)):
+        for pid in processes_naming(str(tmp_path)):
             try:
                 os.kill(pid, signal.SIGKILL)
             except ProcessLookupError:

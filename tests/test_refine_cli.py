@@ -119,18 +119,18 @@ def test_the_improvement_is_a_dash_where_greedy_is_predicted_to_take_no_time():
 
 def test_the_header_and_the_json_name_the_optimizer_that_ran(capsys):
     """auto, the default, is no optimizer of its own: the refined column names the one whose choices it took
-    (on the bundled soccer models the genetic algorithm: their feature spaces are neither piecewise affine nor
-    bounded, and the note says so), never one that did not run."""
+    (on the bundled soccer models the certified branch and bound: their feature spaces are not piecewise affine,
+    which the note says, but declare bounds), never one that did not run; with its gap."""
     assert main(["refine", "soccer", "score"]) == 0
     text = capsys.readouterr().out
-    assert "refined (h=2, ga, risk 1, neighbourhood 0.02)" in text
+    assert "refined (h=2, certified, risk 1, neighbourhood 0.02)" in text
     assert "analytic" not in text.split("Optimizer:")[0]
-    assert "certified not applicable: term '(approachball pos1 pos2)' cannot be bounded: feature space 'goto' " \
-           "declares no bounds" in text
+    assert "analytic not applicable: feature 5 of term '(approachball pos1 pos2)' is not piecewise affine" in text
     assert main(["refine", "soccer", "score", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert data["optimizer"] == "auto" and data["refined"]["optimizers"] == ["ga"]
+    assert data["optimizer"] == "auto" and data["refined"]["optimizers"] == ["certified"]
     window = data["refined"]["optimization"][0]
-    assert window["method"] == "ga" and window["gap"] is None and window["lower_bound"] is None
+    assert window["method"] == "certified" and 0 <= window["gap"] <= 0.01 * window["cost"]
+    assert window["lower_bound"] <= window["cost"]
     assert main(["refine", "soccer", "score", "--json", "--optimizer", "analytic"]) == 0
     assert json.loads(capsys.readouterr().out)["refined"]["optimizers"] == ["ga"]  # analytic fell back

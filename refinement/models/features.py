@@ -21,6 +21,7 @@ import numpy as np
 from tailor.errors import DataError
 from tailor.sims import registry
 from tailor.sims.episode import Episode
+from tailor.sims.intervals import axis
 from tailor.sims.invariances import shift_mirror_axes
 from tailor.sims.protocol import FeatureSpace
 
@@ -37,22 +38,10 @@ def _line(params: np.ndarray) -> np.ndarray:
 
 
 def _line_bounds(low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A guaranteed enclosure of `_line` over boxes of parameters (FeatureSpace.bounds): the distance from the
-    difference's interval (each subtraction rounds monotonically), a speed times the sign where the sign is
-    one, the hull of both signs where the goal may lie on either side."""
-    x_lo, v_lo, xg_lo, vg_lo = np.atleast_2d(low).T
-    x_hi, v_hi, xg_hi, vg_hi = np.atleast_2d(high).T
-    d_lo, d_hi = xg_lo - x_hi, xg_hi - x_lo  # xg - x over the box
-    dist_lo = np.where(d_lo > 0, d_lo, np.where(d_hi < 0, -d_hi, 0.0))
-    dist_hi = np.maximum(np.abs(d_lo), np.abs(d_hi))
-    ahead, behind = d_lo >= 0, d_hi < 0  # the sign is +1 (also at 0), or -1, over the whole box
-
-    def signed(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return (np.where(ahead, lo, np.where(behind, -hi, np.minimum(lo, -hi))),
-                np.where(ahead, hi, np.where(behind, -lo, np.maximum(hi, -lo))))
-
-    (sv_lo, sv_hi), (svg_lo, svg_hi) = signed(v_lo, v_hi), signed(vg_lo, vg_hi)
-    return np.column_stack([dist_lo, sv_lo, svg_lo]), np.column_stack([dist_hi, sv_hi, svg_hi])
+    """A guaranteed enclosure of `_line` over boxes of parameters (FeatureSpace.bounds): sims.intervals.axis."""
+    columns = [(a, b) for a, b in zip(np.atleast_2d(low).T, np.atleast_2d(high).T)]
+    pairs = axis(*columns)
+    return np.column_stack([p[0] for p in pairs]), np.column_stack([p[1] for p in pairs])
 
 
 def _line_shift_mirror(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:

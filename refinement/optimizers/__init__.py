@@ -12,11 +12,10 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import replace
-from typing import Callable
 
 import numpy as np
-
 from tailor.errors import EmptyRangeError, TailorError
 from tailor.refinement.optimizers import analytic, certified, genetic, sampling
 from tailor.refinement.optimizers.objective import (
@@ -42,7 +41,26 @@ __all__ = [
 ]
 
 
-AUTO_BUDGET = 20_000  # boxes the certified optimizer may bound in `auto` before the genetic algorithm runs
+# auto's budget of the certified optimizer before the genetic algorithm runs, in boxes (not a clock: the same
+# window gets the same choice on any machine, which golden files and `tailor evaluate`'s pairing of each window
+# with the GA's rely on): AUTO_BUDGET for up to AUTO_FREE free parameters (the bundled windows of 4 free
+# parameters need up to 37,000 boxes, 0.3 s), divided by AUTO_WIDE for each one more (no bundled window of 6
+# free parameters measured closed its gap in 40,000 boxes: 625 cost one of the costlier ones 0.07 s), and at most
+# AUTO_ROWS boxes times stencil rows under a neighbourhood (each box is bounded once per offset: the bundled
+# robust windows that close need 2,000-8,000 boxes of 9 rows); and none where the gap stalls or closing it looks
+# like taking more than AUTO_PROSPECT boxes (certified.minimize's prospect: the windows that closed looked like at
+# most 270,000 after 2,000 boxes; those near a jump of the planned path or an unbounded guard, like millions)
+AUTO_BUDGET = 40_000
+AUTO_FREE = 4
+AUTO_WIDE = 8
+AUTO_ROWS = 100_000
+AUTO_PROSPECT = 1_000_000
+
+
+def auto_budget(free: int, rows: int = 1) -> int:
+    """The boxes auto lets the certified optimizer bound in a window of `free` free parameters whose boxes are each
+    bounded over `rows` stencil rows (1 without a neighbourhood)."""
+    return min(AUTO_BUDGET // AUTO_WIDE ** max(0, free - AUTO_FREE), AUTO_ROWS // max(1, rows))
 
 
 def _with_ga(objective: Objective, seed: int, start: float, notes: list[str]) -> OptimizationResult:
@@ -71,8 +89,8 @@ _certified_or_ga = _or_ga("certified", certified.minimize)
 
 
 def auto(objective: Objective, seed: int = 0) -> OptimizationResult:
-    """Analytic where it applies, else certified within AUTO_BUDGET boxes, else (or where the gap is still above
-    the tolerance) the genetic algorithm; the note says which ran and why each other did not."""
+    """Analytic where it applies, else certified within auto_budget boxes (and AUTO_PROSPECT), else (or where the
+    gap is still above the tolerance) the genetic algorithm; the note says which ran and why each other did not."""
     start = time.perf_counter()
     notes = []
     try:
@@ -80,7 +98,9 @@ def auto(objective: Objective, seed: int = 0) -> OptimizationResult:
     except NotApplicable as why:
         notes.append(f"analytic not applicable: {why}")
     try:
-        bounded = certified.minimize(objective, seed, budget=AUTO_BUDGET)
+        rows = len(objective.offsets) if any(objective.neighbourhood) else 1
+        bounded = certified.minimize(objective, seed, budget=auto_budget(len(objective.free), rows),
+                                     prospect=AUTO_PROSPECT)
     except NotApplicable as why:
         notes.append(f"certified not applicable: {why}")
         log.debug("%s: the genetic algorithm instead", "; ".join(notes))

@@ -16,11 +16,13 @@ the features' values at a single point could never close the gap: such a term is
 Robust objective (a neighbourhood): the worst case at x is the largest cost over the stencil x + o (clipped to
 the ranges), so over a box B it is at least, for every offset o, the cost's bound over the box B + o; the
 largest of these is the bound. Validity (Alg. 6): a box whose region features (`region_bounds`) meet no leaf
-where the success classifier predicts success holds no valid choice and is dropped; every other box stays, so
-a bound is never raised by a validity the bounds cannot prove.
+where the success classifier predicts success, or whose box moved by the guard's margin to either side along a
+free parameter meets none (a valid choice needs success there too), holds no valid choice and is dropped;
+every other box stays, so a bound is never raised by a validity the bounds cannot prove.
 
-Deterministic: no random step, and the work is bounded by a number of boxes (`budget`), not by a clock, so the
-same problem gives the same answer on any machine.
+Deterministic: no random step, and the work is bounded by a number of boxes (`budget`, and a `prospect` that
+gives up on a gap that stalls or falls too slowly), not by a clock, so the same problem gives the same answer on
+any machine.
 """
 
 from __future__ import annotations
@@ -44,6 +46,8 @@ ACTIVE_WIDTH = 2.0  # a neighbourhood's offset along a free parameter bounds box
 POINT_CHECKS = (0.5, 0.25, 0.8)  # where along the diagonal of the ranges an enclosure is checked at a point
 POINT_TOLERANCE = 1e-6  # relative: how wide an enclosure of a single point may be
 TIE = 1e-9  # relative: bounds of halves this close count as equal (the widest parameter is split then)
+CHECKPOINT = 1000  # boxes: a search with a `prospect` is judged after twice this many, and after each doubling
+STALLED = 0.1  # ... and given up where its gap fell by less than this share over the last doubling (from 8x on)
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,6 +60,7 @@ class _Bounded:
     region_features: object | None
     use: np.ndarray  # the stencil rows that can change the term (Objective.stencils)
     position: np.ndarray
+    margin: tuple[float, ...] = ()  # Term.region_margin: how far inside the region a valid choice lies
 
 
 def _check_tight(term, objective: Objective) -> None:
@@ -91,7 +96,7 @@ def bounded_terms(objective: Objective) -> list[_Bounded]:
         if term.region is not None and term.region_bounds is not None:
             region = intervals.success_table(term.region)
         out.append(_Bounded(intervals.leaf_table(term.model), term.feature_bounds, region, term.region_bounds,
-                            use, position))
+                            use, position, tuple(term.region_margin)))
     return out
 
 
@@ -149,27 +154,46 @@ class _Search:
             ends = np.cumsum(np.bincount(pairs.box, minlength=k)).tolist()
             leaves.append([pairs.leaf[a:b] for a, b in zip([0] + ends[:-1], ends)])
             # the term's bound over the box moved by each stencil offset that can change it
-            shift = self.offsets[term.use]  # (U, n)
-            s_lo = np.clip(lo[None] + shift[:, None], self.low, self.high).reshape(-1, lo.shape[1])
-            s_hi = np.clip(hi[None] + shift[:, None], self.low, self.high).reshape(-1, lo.shape[1])
-            f_lo, f_hi = _enclosure(term.features, s_lo, s_hi)
+            if self.radius.any():  # (without a neighbourhood the grown box is the box: its enclosure above)
+                shift = self.offsets[term.use]  # (U, n)
+                s_lo = np.clip(lo[None] + shift[:, None], self.low, self.high).reshape(-1, lo.shape[1])
+                s_hi = np.clip(hi[None] + shift[:, None], self.low, self.high).reshape(-1, lo.shape[1])
+                f_lo, f_hi = _enclosure(term.features, s_lo, s_hi)
             width = np.minimum(f_hi[:k] - f_lo[:k], 1e300)  # the box itself: the first rows (offset 0)
             if len(self.widths) <= t:  # the root's enclosure: the scale of each feature's width
                 self.widths.append(np.where(width[0] > 0, width[0], 1.0))
-            spread += (width / self.widths[t]).sum(axis=1)
+            with np.errstate(over="ignore"):  # (enclosures 1e300 wide sum to inf: as wide as can be)
+                spread += (width / self.widths[t]).sum(axis=1)
             u = len(term.use)
             box = (np.arange(u)[:, None] * k + pairs.box[None]).ravel()
             on = active[term.use][:, pairs.box].ravel()
             moved = Candidates(box[on], np.tile(pairs.leaf, u)[on])
             value = intervals.minimum(term.table, moved, f_lo, f_hi, u * k).reshape(u, k)
-            total += value[term.position]
+            with np.errstate(invalid="ignore"):  # (an inactive offset's +inf beside another term's -inf)
+                total += value[term.position]
             if term.region is not None:
-                r_lo, r_hi = intervals.float32_hull(*_enclosure(term.region_features, lo, hi))
-                success = Candidates.every(term.region, k)
-                hit = intervals.meets(term.region, success, r_lo, r_hi)
-                possible &= np.bincount(success.box[hit], minlength=k) > 0
+                possible &= self.may_succeed(term, lo, hi)
         self.spread = spread
-        return np.where(active, total, -np.inf).max(axis=0), possible, leaves
+        bound = np.where(active, total, -np.inf).max(axis=0)
+        return np.where(np.isnan(bound), -np.inf, bound), possible, leaves  # (NaN: no bound)
+
+    def may_succeed(self, term: _Bounded, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """(k,) bool: whether the box may hold a choice the term's success classifier finds valid: its region
+        features meet a leaf predicting success, and so do the box's moved by the term's margin to either side
+        along each free parameter (Term.valid asks success there too, the moved point kept within the ranges)."""
+        k = len(lo)
+        boxes = [(lo, hi)]
+        for j, m in enumerate(term.margin):
+            for step in (-m, m) if m > 0 else ():
+                m_lo, m_hi = lo.copy(), hi.copy()
+                m_lo[:, j] = np.clip(lo[:, j] + step, self.low[j], self.high[j])
+                m_hi[:, j] = np.clip(hi[:, j] + step, self.low[j], self.high[j])
+                boxes.append((m_lo, m_hi))
+        r_lo, r_hi = intervals.float32_hull(*_enclosure(
+            term.region_features, np.concatenate([b[0] for b in boxes]), np.concatenate([b[1] for b in boxes])))
+        success = Candidates.every(term.region, len(r_lo))
+        hit = intervals.meets(term.region, success, r_lo, r_hi)
+        return (np.bincount(success.box[hit], minlength=len(r_lo)) > 0).reshape(len(boxes), k).all(axis=0)
 
     def add(self, lo: np.ndarray, hi: np.ndarray, bound: np.ndarray, leaves: list[list[np.ndarray]]) -> None:
         k = len(lo)
@@ -239,7 +263,9 @@ def _split(search: _Search, lo, hi, parent_bound, parent_leaves, cap: float):
             s_lo, s_hi, [[part[r] for r in rows for _ in range(n)] * 2 for part in parent_leaves])
         halves = np.maximum(np.where(s_possible, s_bound, np.inf).reshape(2, m, n), parent_bound[rows, None])
         # what the halves gain over the box, each at most up to the best cost (beyond, a half is closed anyway)
-        gain = np.minimum(halves, np.maximum(cap, parent_bound[rows, None])) - parent_bound[rows, None]
+        with np.errstate(invalid="ignore"):  # (-inf - -inf: a half no better bounded than its box gains nothing)
+            gain = np.minimum(halves, np.maximum(cap, parent_bound[rows, None])) - parent_bound[rows, None]
+        gain = np.where(np.isnan(gain), 0.0, gain)
         score = np.where(relative[rows] > 0, gain.sum(axis=0), -np.inf)
         spread = search.spread.reshape(2, m, n).sum(axis=0)  # how wide the halves' feature enclosures stay
         top = score.max(axis=1, keepdims=True)
@@ -259,7 +285,8 @@ def _enclosure(bounds, lo, hi) -> tuple[np.ndarray, np.ndarray]:
     f_lo, f_hi = np.asarray(f_lo, dtype=float), np.asarray(f_hi, dtype=float)
     if f_lo.shape != f_hi.shape or f_lo.ndim != 2 or len(f_lo) != len(lo):
         raise NotApplicable(f"feature bounds gave shapes {f_lo.shape}, {f_hi.shape} for {len(lo)} boxes")
-    return f_lo, f_hi
+    # an end that says nothing (NaN) is unbounded: no leaf is ruled out by it
+    return np.where(np.isnan(f_lo), -np.inf, f_lo), np.where(np.isnan(f_hi), np.inf, f_hi)
 
 
 def tolerance_of(cost: float, tolerance: float = TOLERANCE) -> float:
@@ -267,10 +294,17 @@ def tolerance_of(cost: float, tolerance: float = TOLERANCE) -> float:
     return max(ABSOLUTE_TOLERANCE, tolerance * abs(cost))
 
 
-def minimize(objective: Objective, seed: int = 0, budget: int = BUDGET, tolerance: float = TOLERANCE
-             ) -> OptimizationResult:
+def minimize(objective: Objective, seed: int = 0, budget: int = BUDGET, tolerance: float = TOLERANCE,
+             prospect: float | None = None) -> OptimizationResult:
     """Branch and bound to within `tolerance` of the optimum, or until `budget` boxes are bounded (the gap then
-    says how far it got); NotApplicable where a term cannot be bounded or no valid choice is found."""
+    says how far it got); NotApplicable where a term cannot be bounded or no valid choice is found.
+
+    With a `prospect` (boxes), also where, at a checkpoint (2 CHECKPOINT boxes and each doubling), the gap fell
+    by less than STALLED over the last doubling of the boxes (from 8 CHECKPOINT on: a bound stuck where an
+    enclosure stays wide), or closing it looks like taking more than `prospect` boxes both at the rate it fell
+    over that doubling and as if it fell in proportion to the boxes (the searches that close fall one way or the
+    other: some slowly until the boxes are small, then at once; some fast from a wide start). All in boxes:
+    the same problem stops at the same box on any machine."""
     del seed  # deterministic; the argument keeps the optimizers interchangeable
     start = time.perf_counter()
     search = _Search(objective, bounded_terms(objective))
@@ -293,12 +327,36 @@ def minimize(objective: Objective, seed: int = 0, budget: int = BUDGET, toleranc
     def tol() -> float:
         return tolerance_of(best_cost, tolerance) if np.isfinite(best_cost) else 0.0
 
+    checkpoint, last_gap, hopeless = CHECKPOINT, np.inf, ""
+
+    def beyond_prospect(gap: float) -> str:
+        """Why the gap looks too far to close within `prospect` boxes (at a checkpoint), or ""."""
+        nonlocal checkpoint, last_gap
+        if prospect is None or search.boxes < checkpoint:
+            return ""
+        checkpoint, before, last_gap = 2 * search.boxes, last_gap, gap
+        if np.isinf(gap) and np.isinf(before) and search.boxes >= 2 * CHECKPOINT:
+            return f"stopped after {search.boxes} boxes: its lower bound still unbounded"
+        if not (np.isfinite(gap) and gap > tol()):
+            return ""
+        if gap > (1.0 - STALLED) * before and search.boxes >= 8 * CHECKPOINT:
+            return (f"stopped after {search.boxes} boxes: its gap of {100 * gap / abs(best_cost):.3g}% fell by "
+                    f"{100 * (1 - gap / before):.2g}% over the last {search.boxes // 2}")
+        rate = np.log2(before / gap)  # halvings of the gap per doubling of the boxes (inf: unbounded before)
+        doublings = np.log2(gap / tol()) * min(1.0, 1.0 / rate if rate > 0.0 else np.inf)
+        projected = search.boxes * 2.0 ** min(doublings, 1000.0)  # the better of that rate and 1 / boxes
+        return (f"stopped after {search.boxes} boxes: its gap of {100 * gap / abs(best_cost):.3g}% would take "
+                f"{projected:.2g} boxes to close at best" if projected > prospect else "")
+
     if possible[0]:
         search.add(low[None], high[None], root_bound, leaves)
         consider((low + high)[None] / 2)
     while True:
         lowest = min(search.lowest(), pruned)
         if lowest == np.inf or (np.isfinite(best_cost) and best_cost - lowest <= tol()) or search.boxes >= budget:
+            break
+        hopeless = beyond_prospect(best_cost - lowest)
+        if hopeless:
             break
         slots = search.take(BATCH)
         lo, hi, parent_bound = search.lo[slots], search.hi[slots], search.bound[slots]
@@ -323,7 +381,8 @@ def minimize(objective: Objective, seed: int = 0, budget: int = BUDGET, toleranc
     certified = gap <= tol()
     note = (f"branch and bound: {search.boxes} boxes, gap {gap:.3g} s"
             + (f" ({100 * gap / abs(best_cost):.3g}%)" if best_cost else "")
-            + ("" if certified else f", budget of {budget} boxes spent before the tolerance {tolerance:g}")
+            + ("" if certified else f", {hopeless or f'budget of {budget} boxes spent'} before the tolerance "
+                                     f"{tolerance:g}")
             + ("; worst case over the neighbourhood" if any(objective.neighbourhood) else ""))
     return OptimizationResult(values=tuple(float(v) for v in best_point), cost=best_cost, method="certified",
                               evaluations=evaluations, seconds=time.perf_counter() - start, note=note,

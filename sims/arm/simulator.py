@@ -109,7 +109,6 @@ class ArmSim:
         self.seed = int(seed)
         self.rng = np.random.default_rng(seed)
         self._noise = NormalRows(self.rng, 6)  # 4 sensing + 2 motor values per control tick
-        self._peeked: list[float] | None = None  # the next noise row, drawn by observe() before run() uses it
         self.disturbance, self.variant = disturbance, variant
         # the ramps' acceleration limit: the payload's is lower (the speed limit stays)
         self.alpha_max = W.ALPHA_MAX if variant != "payload" else PAYLOAD_FACTOR * W.ALPHA_MAX
@@ -175,25 +174,11 @@ class ArmSim:
         stream); the simulation does not advance."""
         if action not in ACTIONS:
             raise SimError(f"unknown arm action {action!r}; known: {', '.join(ACTIONS)}")
-        return self._believe(self.true_state(), self._peek())
+        return self._believe(self.true_state(), self._noise.peek())
 
     def scene(self) -> dict[str, tuple[float, ...]]:
         """The scene measured now, in reset's form: {"arm": observe("reach")} (no further draw)."""
         return {"arm": self.observe("reach")}
-
-    def _draw(self) -> list[float]:
-        """Six standard normal numbers for one control tick (4 sensing, 2 motor), drawn in blocks."""
-        row = self._peeked
-        if row is None:
-            return self._noise.next()
-        self._peeked = None
-        return row
-
-    def _peek(self) -> list[float]:
-        """The noise row the next _draw returns."""
-        if self._peeked is None:
-            self._peeked = self._noise.next()
-        return self._peeked
 
     def _kick(self, kick: tuple[float, float]) -> None:
         """Add joint velocities (rad/s) to the links, keeping them rigid about the shoulder and the elbow."""
@@ -221,7 +206,7 @@ class ArmSim:
 
     def believed_state(self) -> tuple[float, float, float, float, float, float]:
         """The true state with the seeded sensing noise of `self.noise` (the tip from the believed angles)."""
-        q = self._believe(self.true_state(), self._draw())
+        q = self._believe(self.true_state(), self._noise.next())
         return (*q, *W.forward(q[0], q[2]))
 
     # --- dynamics ---------------------------------------------------------------------------------------
@@ -264,7 +249,7 @@ class ArmSim:
             if trajectory is not None and self.time >= self._next_sample - 1e-9:
                 trajectory.append((self.time, *true))
                 self._next_sample += 1.0 / LOG_HZ
-            e = self._draw()
+            e = self._noise.next()
             ta, wa, tb, wb = self._believe(true, e)
             if params is None:
                 params = np.array([ta, wa, tb, wb, *goal], dtype=float)

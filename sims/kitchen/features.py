@@ -8,14 +8,19 @@ the frame a pose is written in (a spot with zero offsets is the pose itself).
 "grasp" (grip, put): where the point to reach lies relative to the arm's shoulder: the pan angle |psi| and the
 extension r beyond the tucked EXT_REST, and the longer of the two joints' time-optimal ramps (the arm moves
 both at once, so the slower joint sets the time). Invariant to rigid motions of base and point together.
+
+Both declare guaranteed enclosures over boxes of parameters (FeatureSpace.bounds, for the certified optimizer):
+"grasp" by interval arithmetic through the geometry (the ramps are increasing in the distances they cover),
+"route" by deciding the route's candidates box by box (sims.kitchen.route_bounds).
 """
 
 from __future__ import annotations
 
 import numpy as np
-
+from tailor.sims import intervals as I
 from tailor.sims.kitchen import world as W
 from tailor.sims.kitchen.navigation import nominal_map
+from tailor.sims.kitchen.route_bounds import route_bounds
 from tailor.sims.protocol import FeatureSpace
 
 SPOT = ("ox", "oy", "ophi", "along", "dist", "heading")
@@ -71,6 +76,59 @@ def _grasp(params: np.ndarray) -> np.ndarray:
     return np.column_stack([pan, extension, ramp])
 
 
+def _columns(low: np.ndarray, high: np.ndarray) -> list[I.Pair]:
+    low, high = np.atleast_2d(np.asarray(low, dtype=float)), np.atleast_2d(np.asarray(high, dtype=float))
+    return [(low[:, k], high[:, k]) for k in range(low.shape[1])]
+
+
+def spot_pose_bounds(spot: list[I.Pair]) -> tuple[I.Pair, I.Pair, I.Pair]:
+    """Enclosures of a spot's pose x, y over boxes of its six values (spot_poses, evaluated in its order:
+    each operation rounds monotonically in each argument), and its heading ophi + heading unwrapped (the
+    features only use it through a wrapped difference)."""
+    ox, oy, ophi, along, dist, heading = spot
+    s, c = I.sin_cos(*ophi)
+    dc, ds, ac, as_ = I.product(dist, c), I.product(dist, s), I.product(along, c), I.product(along, s)
+    x = I.widen(ox[0] - dc[1] - as_[1], ox[1] - dc[0] - as_[0])
+    y = I.widen(oy[0] - ds[1] + ac[0], oy[1] - ds[0] + ac[1])
+    return x, y, (ophi[0] + heading[0], ophi[1] + heading[1])
+
+
+def _route_bounds(low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A guaranteed enclosure of `_route` over boxes of parameters (FeatureSpace.bounds): route_bounds over the
+    boxes of both poses."""
+    columns = _columns(low, high)
+    (sx, sy, s_phi), (gx, gy, g_phi) = spot_pose_bounds(columns[:6]), spot_pose_bounds(columns[6:12])
+    return route_bounds(nominal_map(), (sx, sy), s_phi, (gx, gy), g_phi)
+
+
+def _ramp_time_bounds(distance: I.Pair, v_max: float, a_max: float) -> I.Pair:
+    """ramp_time over an interval of distances: increasing in |distance| (both pieces meet at the knee)."""
+    lo, hi = I.absolute(*distance)
+    return I.widen(ramp_time(lo, v_max, a_max), ramp_time(hi, v_max, a_max))
+
+
+def _grasp_bounds(low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A guaranteed enclosure of `_grasp` over boxes of parameters (FeatureSpace.bounds): interval arithmetic
+    through reach_geometry (the pan as the least turn between the direction to the point and the heading), the
+    ramps increasing in the distances they cover. Exact at a point; over a box as wide as the heading's
+    dependence through both the shoulder and the pan lets it be."""
+    columns = _columns(low, high)
+    x, y, phi = spot_pose_bounds(columns[:6])
+    s, c = I.sin_cos(*phi)
+    sx = I.widen(x[0] + W.SHOULDER_OFFSET * c[0], x[1] + W.SHOULDER_OFFSET * c[1])
+    sy = I.widen(y[0] + W.SHOULDER_OFFSET * s[0], y[1] + W.SHOULDER_OFFSET * s[1])
+    (px, py) = columns[6], columns[7]
+    dx, dy = I.widen(px[0] - sx[1], px[1] - sx[0]), I.widen(py[0] - sy[1], py[1] - sy[0])
+    bearing = I.direction(dx, dy)
+    pan = I.abs_wrapped(bearing[0] - phi[1], bearing[1] - phi[0])
+    reach = I.hypot(dx, dy)
+    extension = I.widen(reach[0] - W.EXT_REST, reach[1] - W.EXT_REST)
+    pan_ramp = _ramp_time_bounds(pan, W.PAN_SPEED, W.PAN_ACCELERATION)
+    ext_ramp = _ramp_time_bounds(extension, W.EXT_SPEED, W.EXT_ACCELERATION)
+    return (np.column_stack([pan[0], extension[0], np.maximum(pan_ramp[0], ext_ramp[0])]),
+            np.column_stack([pan[1], extension[1], np.maximum(pan_ramp[1], ext_ramp[1])]))
+
+
 def _reframe(spots: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """The same poses as spots of random other frames (offsets solved so that spot_poses is unchanged)."""
     pose = spot_poses(spots)
@@ -100,6 +158,6 @@ def _rigid_motion(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
 
 
 ROUTE = FeatureSpace("route", SPOT + tuple(f"{q}g" for q in SPOT), ("length", "turn_start", "turn_goal", "turning"),
-                     _route, "the frame each pose is written in", _route_reframe)
+                     _route, "the frame each pose is written in", _route_reframe, _route_bounds)
 GRASP = FeatureSpace("grasp", SPOT + ("px", "py"), ("pan", "extension", "ramp"), _grasp,
-                     "rigid motions of base and point together", _rigid_motion)
+                     "rigid motions of base and point together", _rigid_motion, _grasp_bounds)

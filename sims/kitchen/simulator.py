@@ -152,7 +152,6 @@ class KitchenSim:
         self.seed = int(seed)
         self.rng = np.random.default_rng(seed)
         self._noise = NormalRows(self.rng, 8)
-        self._peeked: list[float] | None = None  # the next noise row, drawn by observe() before run() uses it
         self._sensing = np.random.default_rng((self.seed, SENSING_STREAM))  # scene()'s cup measurements
         self.disturbance, self.variant = disturbance, variant
         self._disturbances = np.random.default_rng((self.seed, DISTURBANCE_STREAM))
@@ -268,7 +267,7 @@ class KitchenSim:
         that observes stays on the open loop's noise stream); the simulation does not advance."""
         if action not in ACTIONS:
             raise SimError(f"unknown kitchen action {action!r}; known: {', '.join(ACTIONS)}")
-        return (*self._believe(self.true_state(), self._peek()), 0.0, 0.0, 0.0)
+        return (*self._believe(self.true_state(), self._noise.peek()), 0.0, 0.0, 0.0)
 
     def scene(self) -> dict[str, tuple[float, ...]]:
         """Every scene object measured now, in reset's form: the robot as observe() measures it, each table
@@ -287,19 +286,6 @@ class KitchenSim:
         if self.held is not None:
             out[f"held {self.held}"] = ()
         return out
-
-    def _draw(self) -> list[float]:
-        row = self._peeked
-        if row is None:
-            return self._noise.next()
-        self._peeked = None
-        return row
-
-    def _peek(self) -> list[float]:
-        """The noise row the next _draw returns."""
-        if self._peeked is None:
-            self._peeked = self._noise.next()
-        return self._peeked
 
     def _believe(self, true: Sequence[float], e: Sequence[float]) -> tuple[float, float, float]:
         n = self.noise
@@ -402,7 +388,7 @@ class KitchenSim:
         self._speed_work = self._turn_work = self._arm_work = 0.0
         self._released_at = None
         true = self.true_state()
-        believed = self._believe(true, self._draw())
+        believed = self._believe(true, self._noise.next())
         params = np.array([*believed, 0.0, 0.0, 0.0, *goal], dtype=float)
         if call.action == "navigate":
             outcome = self._go_to_pose(goal)
@@ -429,7 +415,7 @@ class KitchenSim:
         if self._trajectory is not None and self.time >= self._next_sample - 1e-9:
             self._trajectory.append((self.time, *true))
             self._next_sample += 1.0 / LOG_HZ
-        e = self._draw()
+        e = self._noise.next()
         believed = self._believe(true, e)
         if self._ticks % CONTROLS_PER_LOG == 0:
             self._log_t.append(self._ticks / CONTROL_HZ)
@@ -509,7 +495,7 @@ class KitchenSim:
 
     def _arm(self, action: str, goal: Sequence[float], base: tuple[float, float, float]) -> str:
         """grip / put: reach the point, close / open the gripper, tuck the arm."""
-        e = self._draw()
+        e = self._noise.next()
         bx, by, bphi = base
         tx, ty = goal
         if action == "grip":  # the arm's camera sees the cup nearest the point, relative to the base

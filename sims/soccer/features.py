@@ -28,13 +28,16 @@ whose free word would leave the field, so the robot drove a longer one; with the
 
 Vectorized (numpy), Dubins (1957) in the normalized frame of Shkel & Lumelsky (2001) as in sims.soccer.dubins,
 whose scalar candidates(), word_bounds() and shortest_path_inside() it reproduces (tests): coordination predicts
-millions of approach times per run, and the genetic algorithm thousands of dribbles per window.
+millions of approach times per run, and the genetic algorithm thousands of dribbles per window. Each space
+declares a guaranteed enclosure over boxes of parameters for the certified optimizer (sims.soccer.feature_bounds).
 """
 
 from __future__ import annotations
 
 import numpy as np
+from tailor.sims import intervals as I
 from tailor.sims.protocol import FeatureSpace
+from tailor.sims.soccer import feature_bounds as B
 from tailor.sims.soccer.approach import PRE_DISTANCE, R_APPROACH
 from tailor.sims.soccer.dribble import DRIBBLE as DRIBBLE_FOLLOWER
 from tailor.sims.soccer.dribble import FINAL_STRAIGHT, R_DRIBBLE
@@ -297,12 +300,48 @@ def _dribble(params: np.ndarray) -> np.ndarray:
     return np.column_stack([pose_row(params), _per_pose(dribble_path, params)])
 
 
+def _bounds(path_bounds) -> callable:
+    """A guaranteed enclosure of the pose row and the path features `path_bounds(columns)` gives (a list of (low,
+    high) pairs; sims.soccer.feature_bounds) over boxes of parameters; the paths bounded once per distinct box of
+    poses (the speeds do not change them: a neighbourhood's offsets along a speed ask for the same again)."""
+    def bounds(low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        low, high = np.atleast_2d(np.asarray(low, dtype=float)), np.atleast_2d(np.asarray(high, dtype=float))
+        columns = [(low[:, k], high[:, k]) for k in range(low.shape[1])]
+        pose = B.pose_bounds(columns)
+        first, inverse = I.distinct_rows(np.column_stack([low[:, PATH_COLUMNS], high[:, PATH_COLUMNS]]))
+        paths = path_bounds([(a[first], b[first]) for a, b in columns])
+        pairs = [pose[n] for n in POSE] + [(a[inverse], b[inverse]) for a, b in paths]
+        return np.column_stack([p[0] for p in pairs]), np.column_stack([p[1] for p in pairs])
+
+    return bounds
+
+
+def _approach_paths(columns: list) -> list:
+    """planned_path's (path, arcs, exact_path) enclosed."""
+    return list(B.shortest_bounds(B.Words(*B.axle_pose_bounds(columns, PRE_DISTANCE), R_APPROACH), PRE_DISTANCE))
+
+
+def _dribble_paths(columns: list) -> list:
+    """dribble_path's enclosed."""
+    start, pre = B.axle_pose_bounds(columns, FINAL_STRAIGHT)
+    return list(B.shortest_inside_bounds(start, pre, R_DRIBBLE, FINAL_STRAIGHT, DRIBBLE_BOX))
+
+
+def _goto_paths_bounds(columns: list) -> list:
+    """_goto_paths enclosed: the word inside the walls, its detour over the straight line, the lure."""
+    start, pre = B.axle_pose_bounds(columns, GOTO_STRAIGHT)
+    path, arcs, exact = B.shortest_inside_bounds(start, pre, R_APPROACH, GOTO_STRAIGHT, GOTO.box)
+    return [path, arcs, exact, B.detour_bounds(path, start, pre, GOTO_STRAIGHT),
+            *B.lure_bounds(columns, GOTO.box, LURE_MIN, LURE_GAIN, LURE_MAX)]
+
+
 APPROACH = FeatureSpace("approach", POSE_PARAMETERS, APPROACH_FEATURES, _approach,
-                        "translation, rotation and mirroring of the scene", rigid_motion)
+                        "translation, rotation and mirroring of the scene", rigid_motion, _bounds(_approach_paths))
 # dribbleBall's: the same with the path it plans with the ball (tighter radius, its own final straight, kept
 # clear of the walls, so not invariant to moving the scene). Not piecewise affine in a heading: refinement over
 # a subgoal dribbled from falls back to the genetic algorithm
 # goToPose's: the word and the lure it plans inside the walls, so, as dribbleBall's, invariant only to mirroring
-GOTO_SPACE = FeatureSpace("goto", POSE_PARAMETERS, GOTO_FEATURES, _goto, "mirroring the field", mirror_field)
+GOTO_SPACE = FeatureSpace("goto", POSE_PARAMETERS, GOTO_FEATURES, _goto, "mirroring the field", mirror_field,
+                          _bounds(_goto_paths_bounds))
 DRIBBLE = FeatureSpace("dribble", POSE_PARAMETERS, APPROACH_FEATURES, _dribble, "mirroring the field",
-                       mirror_field)
+                       mirror_field, _bounds(_dribble_paths))

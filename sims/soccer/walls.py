@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 from tailor.sims.protocol import FeatureSpace
+from tailor.sims.soccer.feature_bounds import pose_walls_bounds
 from tailor.sims.soccer.pose import POSE, POSE_PARAMETERS, norm, pose_row, sgn
 from tailor.sims.soccer.world import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH, WALL_RUNOFF
 
@@ -48,4 +49,5 @@ def mirror_field(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
 
 
 POSE_WALLS = FeatureSpace("pose_walls", POSE_PARAMETERS, NAMES, _pose_walls,
-                          "mirroring the field about either axis", mirror_field)
+                          "mirroring the field about either axis", mirror_field,
+                          lambda low, high: pose_walls_bounds(low, high, WALL_X, WALL_Y))
