@@ -12,11 +12,11 @@ import sys
 from pathlib import Path
 
 from tailor.cli.arguments import add_models_argument, positive_seconds, seed, whole_number
+from tailor.cli.main import EXIT_NOT_COMPLETED
 from tailor.outputs import check_output_file, json_text
 from tailor.progress import showing_progress
 from tailor.refinement.optimizers import DEFAULT_OPTIMIZER, OPTIMIZERS
 
-EXIT_NOT_COMPLETED = 19  # the task was not completed (docs/exit-statuses.md)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -47,6 +47,7 @@ COMMANDS = {  # name: (module, one line of help); a module defines add_arguments
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130  # Ctrl-C (SIGINT): 128 + 2, as a shell reports it
 EXIT_TERMINATED = 143  # SIGTERM: 128 + 15
+EXIT_NOT_COMPLETED = 19  # `tailor execute`: the task was not completed (docs/exit-statuses.md)
 
 
 class Terminated(KeyboardInterrupt):

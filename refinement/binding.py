@@ -170,7 +170,7 @@ class PredicateBinding:
     object the fact places when it holds initially; `args`: the argument positions it applies to (None: all);
     `lost_on_failure`: closed-loop execution (tailor.refinement.execution) takes a fact of this predicate that a
     failed action needed to be false afterwards, and what the step that made it true deleted to hold again (the
-    robot that lost the ball no longer has it, and stands where it stood: it must approach again).
+    robot that lost what it carried no longer has it, and stands where it stood: it must fetch it again).
     """
 
     name: str

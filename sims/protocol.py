@@ -232,8 +232,8 @@ class SimulatorEntry:
     # pictures of its learned models it can draw, besides the learning curves every simulator gets: Fig. 4.7's
     # DurationCurve, Fig. 4.8's SuccessRegion
     model_pictures: tuple[DurationCurve | SuccessRegion, ...] = ()
-    # seeded disturbances of the world it can add to a run (name -> what happens, in words; Ch. 8.1: the ball
-    # nudged by an opponent, a cup displaced): part of the scene, never known to refinement in advance
+    # seeded disturbances of the world it can add to a run (name -> what happens, in words; Ch. 8.1: an object
+    # pushed by someone else while the robot works): part of the scene, never known to refinement in advance
     disturbances: Mapping[str, str] = field(default_factory=dict)
     # changed robots it can simulate (name -> what changed, in words; Ch. 8.1: weaker motors, a payload): the
     # learned models do not know them; learning in operation adapts to them

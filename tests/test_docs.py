@@ -94,7 +94,8 @@ def test_exit_status_page_lists_every_status():
     listed = {int(status) for status in re.findall(r"^\| (\d+) \|", page, flags=re.M)}
     errors = {cls.exit_code for _, cls in inspect.getmembers(tailor.errors, inspect.isclass)
               if issubclass(cls, tailor.errors.TailorError)}
-    assert listed == errors | {0, cli_main.EXIT_USAGE, cli_main.EXIT_INTERRUPTED, cli_main.EXIT_TERMINATED}
+    assert listed == errors | {0, cli_main.EXIT_USAGE, cli_main.EXIT_INTERRUPTED, cli_main.EXIT_TERMINATED,
+                               cli_main.EXIT_NOT_COMPLETED}
 
 
 def test_api_page_example_is_the_readmes():

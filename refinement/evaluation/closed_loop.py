@@ -74,8 +74,8 @@ def summarize_closed_loop(rows: list[dict]) -> dict:
               if r["closed_loop"]["duration"] > 0]
     out["overhead_share"] = float(median(shares)) if shares else None
     out["overhead_share_mean"] = float(np.mean(shares)) if shares else None
-    pen = lambda r: r["duration"] + (0.0 if r["completed"] else FAILED_RUN_PENALTY)  # noqa: E731
-    diff = np.array([pen(r["closed_loop"]) - pen(r["open_loop"]) for r in rows])
+    charged = lambda r: r["duration"] + (0.0 if r["completed"] else FAILED_RUN_PENALTY)  # noqa: E731
+    diff = np.array([charged(r["closed_loop"]) - charged(r["open_loop"]) for r in rows])
     if np.any(diff != 0):
         out["p_closed_faster"] = float(stats.wilcoxon(diff, alternative="less").pvalue)
     else:

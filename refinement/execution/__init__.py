@@ -1,7 +1,7 @@
 """Closed-loop execution and learning in operation (Ch. 8.1): `tailor.execute` and `tailor execute`.
 
     import tailor
-    for event in tailor.execute("soccer", "score", seed=3, disturbance="nudge"):
+    for event in tailor.execute(domain, problem, seed=3, disturbance=name):
         print(event.kind, event.pddl, event.predicted, event.measured, event.outcome, event.reason)
 
 An executor runs one action call at a time: the domain's simulator (`SimulatedRobot`, the default), or a real

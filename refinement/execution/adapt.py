@@ -6,9 +6,9 @@ executed actions so far. The learned tree's splits are kept (they were learned f
 few hundred executions cannot place better ones) and its leaves' linear models are mapped: first one affine
 correction per action, duration' = a * duration + b, least squares shrunk toward (1, 0) by PRIOR executions'
 worth, then a per-leaf shift of the remaining error where a leaf has executions, shrunk by LEAF_PRIOR. (Each
-leaf's own affine map instead of its shift fitted the executions as well but refined worse: on the arm's payload
-variant, 17.9% faster than greedy on the last 20 of 200 tasks against 22.4%; the optimizer finds the leaves whose
-slope a few executions tilted.) The
+leaf's own affine map instead of its shift fitted the executions as well but refined worse, on a bundled variant
+17.9% faster than greedy on the last 20 of 200 tasks against 22.4%: the optimizer finds the leaves whose slope a
+few executions tilted.) The
 result is again a model tree over the same features, so every optimizer (analytic, certified, genetic) refines
 with it as with the trained one; it predicts the trained model until executions say otherwise.
 """

@@ -32,7 +32,7 @@ from tailor.sims.episode import SUCCESS, ActionCall, Episode
 from tailor.sims.protocol import Observable, SimulatorEntry
 
 Scene = Mapping[str, tuple[float, ...]]
-OUTCOME = re.compile(r"^[a-z][a-z0-9_]*$")  # an outcome's name: "success", "collision", "ball_lost", ...
+OUTCOME = re.compile(r"^[a-z][a-z0-9_]*$")  # an outcome's name: "success", "collision", "timeout", ...
 TRACE_FORMAT = "tailor.execution_trace/1"
 
 

@@ -5,15 +5,19 @@ prediction, re-refine from the measured state, replan after a failure, and learn
         print(event.kind, event.pddl, event.predicted, event.measured, event.outcome, event.reason)
 
 Before each action (after the first), the executor's measurements are compared with what the plan assumed:
-- the action's observed parameters (the robot's state now) against the subgoal the previous action aimed at,
-- every scene object a fact still needed places (the ball, a cup) against the belief the plan was made from.
-A deviation beyond `tolerance` (a share of the quantity's range) re-refines the window from the measured state
-(receding horizon: the action's observed parameters bound to the measurement, the moved objects' values
-replaced) and marks the later windows stale, so they are re-refined when their turn comes. A measured state
-outside the range the next step's preconditions allow, or a failed action, replans: the facts that hold are
-those after the plan steps completed (the failed step's effects not applied; a fact whose predicate the binding
-marks `lost_on_failure` that the failed step needed is false, and what its producer deleted holds again), the
-belief takes the measured scene objects and the values executed so far, and the planner plans again from them.
+- the window's predicted time from the measured state (the action's observed parameters as measured) against
+  the time predicted from the state planned, both with the plan's choices (the models compare the two, so a
+  state written in another form, a spot as a frame with offsets or as a pose, compares right);
+- every scene object a fact still needed places (an object to fetch) against the belief;
+- the success classifiers of the window's guarded actions at the measured state.
+A change of the predicted time beyond `time_tolerance`, an object moved beyond `object_tolerance` (a share of
+its quantity's range) or a guard predicting failure re-refines the window from the measured state (receding
+horizon: the observed parameters bound to the measurement, the moved objects' values replaced) and marks the
+next window stale, so it is re-refined in its turn. A guard no choice satisfies, or a failed action, replans:
+the facts that hold are those after the plan steps completed (the failed step's effects not applied; a fact
+whose predicate the binding marks `lost_on_failure` that the failed step needed is false, and what its producer
+deleted holds again), the belief takes the measured scene objects and the subgoals executed so far, and the
+planner plans again from them.
 Open loop (`closed_loop=False`) runs the same refined plan without monitoring and stops at the first failure.
 """
 
@@ -53,9 +57,9 @@ from tailor.refinement.pipeline import BELIEF_ARGUMENT, Inputs, Options, prepare
 from tailor.refinement.refine import guard_for, model_for, optimize_window, refine
 from tailor.sims.episode import SUCCESS, ActionCall, Episode
 
-# share of its quantity's range a scene object (a ball, a cup) may lie from where the plan assumed it before the
-# window is refined again with it where it is: 0.5% (4 cm on the soccer field, 6 cm in the kitchen) is a few
-# times the sensors' noise and far less than an object someone moved
+# share of its quantity's range a scene object (an object to fetch) may lie from where the plan assumed it before
+# the window is refined again with it where it is: 0.5% (4 cm on an 8 m field, 6 cm in a 12 m room) is a few
+# times the bundled sensors' noise and far less than an object someone moved
 OBJECT_TOLERANCE = 0.005
 TIME_TOLERANCE = 0.02  # share of a window's predicted time a deviation must change it by to re-refine it
 FAILED_RUN_PENALTY = 30.0  # s charged on top of a failed run's time where runs are compared (evaluations)
@@ -330,8 +334,8 @@ class ClosedLoop:
         scene = checked_scene(call_executor("scene", where, self.executor.scene), where)
         moved = self._moved_objects(plan, sequence, scene, done_steps)
         substituted = self._substituted(sequence, i, measured, moved)
-        # compared as the models see them (the same state may be written in several ways: a kitchen spot as its
-        # table's frame and offsets, or as the base's pose with zero offsets): the window's predicted time with
+        # compared as the models see them (the same state may be written in several ways: a spot as its table's
+        # frame and offsets, or as the base's pose with zero offsets): the window's predicted time with
         # the plan's choices, from the state planned and from the state measured, and the guards' verdicts
         reasons = [f"{name} moved" for name in moved]
         before = self._window_time(sequence, choices, i)
