@@ -20,11 +20,9 @@ CURVE_WINDOW = 20  # tasks per point of the learning curve's moving mean
 
 
 def _check(args, binding) -> None:
-    entry = binding.entry
-    for flag, name, known in (("--disturb", args.disturb, entry.disturbances), ("--variant", args.variant, entry.variants)):
-        if name is not None and name not in known:
-            raise UsageError(f"{flag} {name!r} is not one simulator {entry.name!r} offers (known: "
-                             f"{', '.join(known) or 'none'})")
+    wrong = binding.entry.unknown_option(args.disturb, args.variant)
+    if wrong is not None:
+        raise UsageError(wrong)
 
 
 def _write_json(kind: str, report: dict, rows: list[dict], args, models_dir) -> int:

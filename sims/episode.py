@@ -24,6 +24,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 SUCCESS = "success"
+# s charged on top of a failed run's time where runs are compared (the evaluations): a failure is as bad as
+# waiting for one more action to time out (the mobile robots' action timeout)
+FAILED_RUN_PENALTY = 30.0
 ENERGY, ERROR, HEADING_ERROR = "energy", "error", "heading_error"  # the bundled simulators' measures
 
 

@@ -258,16 +258,23 @@ class SimulatorEntry:
         object.__setattr__(self, "disturbances", MappingProxyType(dict(self.disturbances)))
         object.__setattr__(self, "variants", MappingProxyType(dict(self.variants)))
 
+    def unknown_option(self, disturbance: str | None = None, variant: str | None = None) -> str | None:
+        """What is wrong with a disturbance or variant name this simulator does not declare (None: nothing); the
+        API, the command line and `simulator` each raise it as their own error."""
+        for kind, name, known in (("disturbance", disturbance, self.disturbances),
+                                  ("variant", variant, self.variants)):
+            if name is not None and name not in known:
+                return f"simulator {self.name!r} has no {kind} {name!r} (known: {', '.join(known) or 'none'})"
+        return None
+
     def simulator(self, seed: int, noise=None, disturbance: str | None = None, variant: str | None = None
                   ) -> Simulator:
         """A new simulator: `create` with a disturbance and a variant checked against those declared."""
         from tailor.errors import SimError
 
-        for kind, name, known in (("disturbance", disturbance, self.disturbances),
-                                  ("variant", variant, self.variants)):
-            if name is not None and name not in known:
-                raise SimError(f"simulator {self.name!r} has no {kind} {name!r} (known: "
-                               f"{', '.join(known) or 'none'})")
+        wrong = self.unknown_option(disturbance, variant)
+        if wrong is not None:
+            raise SimError(wrong)
         if disturbance is None and variant is None:
             return self.create(seed, noise)
         return self.create(seed, noise, disturbance=disturbance, variant=variant)

@@ -51,9 +51,14 @@ def closed_loop_episode(job: Job, index: int, objects: dict, disturbance: str | 
     return row
 
 
+def _charged(run: dict) -> float:
+    """A run's time (a RunSummary's JSON), a failed run charged FAILED_RUN_PENALTY more."""
+    return run["duration"] + (0.0 if run["completed"] else FAILED_RUN_PENALTY)
+
+
 def _side(rows: list[dict], name: str) -> dict:
     runs = [r[name] for r in rows]
-    penalized = [r["duration"] + (0.0 if r["completed"] else FAILED_RUN_PENALTY) for r in runs]
+    penalized = [_charged(r) for r in runs]
     done = [r["duration"] for r in runs if r["completed"]]
     return {"runs": len(runs), "failed_runs": sum(1 for r in runs if not r["completed"]),
             "mean_penalized": float(np.mean(penalized)) if penalized else None,
@@ -74,8 +79,7 @@ def summarize_closed_loop(rows: list[dict]) -> dict:
               if r["closed_loop"]["duration"] > 0]
     out["overhead_share"] = float(median(shares)) if shares else None
     out["overhead_share_mean"] = float(np.mean(shares)) if shares else None
-    charged = lambda r: r["duration"] + (0.0 if r["completed"] else FAILED_RUN_PENALTY)  # noqa: E731
-    diff = np.array([charged(r["closed_loop"]) - charged(r["open_loop"]) for r in rows])
+    diff = np.array([_charged(r["closed_loop"]) - _charged(r["open_loop"]) for r in rows])
     if np.any(diff != 0):
         out["p_closed_faster"] = float(stats.wilcoxon(diff, alternative="less").pvalue)
     else:
@@ -115,7 +119,7 @@ def _learning_task(job: Job, index: int, objects: dict, variant: str | None, eve
         settings = ExecuteOptions(closed_loop=True, variant=variant, learn=name == "refined")
         use = learner if name == "refined" else _frozen(learner)
         summary = summarize(list(ClosedLoop(inputs, options, settings, learner=use).events()))
-        row[name] = summary.duration + (0.0 if summary.completed else FAILED_RUN_PENALTY)
+        row[name] = summary.penalized
         row[f"{name}_completed"] = summary.completed
     errors = learner.errors[before:]
     row["abs_errors"] = [abs(p - m) for _, p, m, _ in errors]
@@ -185,7 +189,7 @@ def reference_improvement(items: list[tuple[Job, int, dict]], variant: str | Non
             settings = ExecuteOptions(closed_loop=True, variant=variant, learn=True)
             summary = summarize(list(ClosedLoop(inputs, Options(horizon=h, seed=seed, greedy=False), settings,
                                                 learner=fixed).events()))
-            times[name].append(summary.duration + (0.0 if summary.completed else FAILED_RUN_PENALTY))
+            times[name].append(summary.penalized)
     if not items:
         return None
     greedy = float(np.mean(times["greedy"]))

@@ -30,6 +30,7 @@ from tailor.refinement.optimizers import DEFAULT_OPTIMIZER
 from tailor.refinement.pipeline import Options, refine_stage
 from tailor.refinement.refine import refine
 from tailor.refinement.models.meta_model import EQUAL_BAND  # "equal" within 1% (Table 5.4), as the meta model's
+from tailor.sims.episode import FAILED_RUN_PENALTY
 from tailor.refinement.situations import Job, asserted_situation, job_meta_model, job_models, stream_seed
 
 AGREEMENT = 0.01  # analytic and ga agree when their predicted costs differ by at most 1%
@@ -41,7 +42,7 @@ ORACLE_LINE_VALUES = 9  # values per free parameter in a coordinate-search line
 FULL_CIRCLE = 2 * math.pi - 1e-9
 # s, what a failed execution costs on top of the time it ran, in the penalized means (every scenario counted):
 # a failure is as bad as waiting for one more action to time out (30 s: the mobile robot's action timeout)
-FAILURE_PENALTY_S = 30.0
+FAILURE_PENALTY_S = FAILED_RUN_PENALTY
 
 
 def situation_seed(seed: int, index: int) -> int:

@@ -35,7 +35,6 @@ from tailor.refinement.execution.loop import (
     Event,
     ExecuteOptions,
     RunSummary,
-    execute_task,
     summarize,
 )
 from tailor.refinement.optimizers import DEFAULT_OPTIMIZER
@@ -82,16 +81,14 @@ def run(domain, problem, belief=None, *, horizon: int = 2, optimizer: str = DEFA
     task = pipeline.resolve_task(domain, problem, belief if isinstance(belief, (str, Path)) else None)
     inputs = pipeline.read_task(task, models, _belief_table(belief) if isinstance(belief, Mapping) else None)
     entry = inputs.binding.entry
-    if executor is None:
-        for kind, name, known in (("disturbance", disturbance, entry.disturbances), ("variant", variant, entry.variants)):
-            if name is not None and name not in known:
-                raise ArgumentValueError(f"{kind} {name!r} is not one simulator {entry.name!r} offers (known: "
-                                         f"{', '.join(known) or 'none'})")
+    wrong = entry.unknown_option(disturbance, variant) if executor is None else None
+    if wrong is not None:
+        raise ArgumentValueError(wrong)
     options = pipeline.Options(horizon=horizon, optimizer=optimizer, seed=seed, greedy=False, planner=planner,
                                timeout=timeout)
     return ClosedLoop(inputs, options, settings, executor, learner, log=None if log is None else Path(log))
 
 
-__all__ = ["execute", "run", "execute_task", "ClosedLoop", "Event", "ExecuteOptions", "RunSummary", "summarize", "Executed",
+__all__ = ["execute", "run", "ClosedLoop", "Event", "ExecuteOptions", "RunSummary", "summarize", "Executed",
            "Executor", "SimulatedRobot", "ReplayRobot", "Recorder", "TraceStep", "OnlineLearner", "recalibrated",
            "FAILED_RUN_PENALTY"]

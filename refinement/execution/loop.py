@@ -1,7 +1,7 @@
 """Closed-loop execution (Ch. 8.1): execute a refined plan one action at a time, monitor each against its
 prediction, re-refine from the measured state, replan after a failure, and learn from what was executed.
 
-    for event in execute_task(inputs, options, ExecuteOptions()):   # an iterator of Events
+    for event in ClosedLoop(inputs, options, ExecuteOptions()).events():   # inputs: pipeline.read_task
         print(event.kind, event.pddl, event.predicted, event.measured, event.outcome, event.reason)
 
 Before each action (after the first), the executor's measurements are compared with what the plan assumed:
@@ -32,7 +32,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from tailor.errors import EmptyRangeError, ExecutionError, NoPlanError, PlannerError, TailorError
+from tailor.errors import EmptyRangeError, NoPlanError, PlannerError
 from tailor.planner_bridge import GOAL, INITIAL, AbstractPlan
 from tailor.planner_bridge.replan import StepEffects, with_initial
 from tailor.refinement.action_sequence import ActionSequence, Parameter
@@ -42,7 +42,6 @@ from tailor.refinement.dispatch import check_scene
 from tailor.refinement.execution.adapt import OnlineLearner
 from tailor.refinement.execution.experience import check_log, read_executions, write_executions
 from tailor.refinement.execution.executors import (
-    Executed,
     Executor,
     SimulatedRobot,
     as_episode,
@@ -55,14 +54,13 @@ from tailor.refinement.instantiate import scene_name, type_chain
 from tailor.refinement.api import _plan_files
 from tailor.refinement.pipeline import BELIEF_ARGUMENT, Inputs, Options, prepare
 from tailor.refinement.refine import guard_for, model_for, optimize_window, refine
-from tailor.sims.episode import SUCCESS, ActionCall, Episode
+from tailor.sims.episode import FAILED_RUN_PENALTY, SUCCESS, ActionCall, Episode
 
 # share of its quantity's range a scene object (an object to fetch) may lie from where the plan assumed it before
 # the window is refined again with it where it is: 0.5% (4 cm on an 8 m field, 6 cm in a 12 m room) is a few
 # times the bundled sensors' noise and far less than an object someone moved
 OBJECT_TOLERANCE = 0.005
 TIME_TOLERANCE = 0.02  # share of a window's predicted time a deviation must change it by to re-refine it
-FAILED_RUN_PENALTY = 30.0  # s charged on top of a failed run's time where runs are compared (evaluations)
 ABSOLUTE_TOLERANCE = 1e-3  # for quantities whose range is a single value
 
 
@@ -558,14 +556,3 @@ class _Verdict:
     sequence: ActionSequence | None = None
     choices: dict | None = None
     re_refined: bool = False
-
-
-def execute_task(inputs: Inputs, options: Options = Options(), settings: ExecuteOptions = ExecuteOptions(),
-                 executor: Executor | None = None, learner: OnlineLearner | None = None, log: Path | None = None
-                 ) -> Iterator[Event]:
-    """The events of one closed-loop (or open-loop) run of a task read by `pipeline.read_task`."""
-    return ClosedLoop(inputs, options, settings, executor, learner, log=log).events()
-
-
-__all__ = ["ClosedLoop", "Event", "ExecuteOptions", "RunSummary", "execute_task", "summarize", "ExecutionError",
-           "Executed", "TailorError", "FAILED_RUN_PENALTY"]

@@ -252,7 +252,7 @@ class SoccerSim:
         """Place the robot (ball point x, y, heading phi, speed v) and the ball (at rest) or no ball."""
         x, y, phi, v = (float(q) for q in robot)
         v_max = self.dynamics.v_max
-        if self.dynamics == W.weak_motors(W.PIONEER) and W.PIONEER.v_max >= abs(v) > v_max:
+        if self.dynamics == W.WEAK_PIONEER and W.PIONEER.v_max >= abs(v) > v_max:
             v = math.copysign(v_max, v)  # the weak robot cannot start faster than it drives
         if not all(math.isfinite(q) for q in (x, y, phi, v)) or abs(v) > v_max + 1e-9:
             raise SimError(f"invalid robot state {robot}: finite values and |v| <= {v_max} m/s required")

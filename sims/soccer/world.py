@@ -130,6 +130,7 @@ def weak_motors(dynamics: Dynamics) -> Dynamics:
                    w_max=WEAK_TOP_SPEED * dynamics.w_max)
 
 
+WEAK_PIONEER = weak_motors(PIONEER)  # the soccer robot of variant "weak_motors"
 VARIANTS: dict[str, Callable[[Dynamics], Dynamics]] = {"weak_motors": weak_motors}
 
 
