@@ -51,10 +51,12 @@ def draw_run(events, domain: str, path: Path) -> Path:
             if failed and len(x):
                 ax.plot(x[-1], y[-1], "x", color="tab:red", markersize=9)
         note = None
-    if pairs:
-        unit = entry.quantity(pairs[0][0]).unit if entry is not None else ""
-        ax.set_xlabel(f"{pairs[0][0]} [{unit}]" if unit else pairs[0][0])
-        ax.set_ylabel(f"{pairs[0][1]} [{unit}]" if unit else pairs[0][1])
+    if pairs:  # each axis its own quantity's unit, as the simulator declares it
+        from tailor.refinement.refine_plots import axis_label
+        from tailor.sims.protocol import UNDECLARED
+
+        for name, set_label in zip(pairs[0], (ax.set_xlabel, ax.set_ylabel)):
+            set_label(axis_label(name, entry.quantity(name) if entry is not None else UNDECLARED))
         ax.set_aspect("equal", adjustable="datalim")
     handles, labels = ax.get_legend_handles_labels()
     unique = dict(zip(labels, handles))

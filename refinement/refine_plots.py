@@ -14,6 +14,8 @@ from tailor.sims.protocol import UNDECLARED, Quantity, SimulatorEntry
 
 FULL_CIRCLE = 2 * np.pi - 1e-9
 LAYER_STYLES = (("-", "tab:blue"), ("--", "tab:orange"), (":", "tab:green"))
+LEGEND_DROP = 30  # points from the bottom of a panel to the top of its legend (below the axis label)
+LEGEND_SHORT = 24  # characters: up to 6 labels no longer than this fit 3 columns under a panel; others 2
 
 
 def _save(fig, path: Path) -> None:
@@ -36,7 +38,24 @@ def subgoal_rows(result) -> list[int]:
     return [int(np.argmin(np.abs(t - end))) for end in ends] if len(t) else []
 
 
-def _draw(ax, result, layers, title: str) -> None:
+def axis_label(name: str, quantity: Quantity = UNDECLARED) -> str:
+    """An axis label of a quantity or column as its simulator declares it: "x (m)"; the bare name where no unit
+    is declared."""
+    return f"{name} ({quantity.unit})" if quantity.unit else name
+
+
+def layer_label(layer, entry: SimulatorEntry | None = None) -> str:
+    """What a view layer draws, for a legend: the scene object the simulator declares whose name prefixes the
+    layer's columns ("ball" for ball_x, ball_y), else its first scene object (the robot, whose own state the
+    other columns are); the column names where it declares no scene objects."""
+    objects = [name.split(" ")[0] for name in (entry.scene_objects if entry is not None else ())]
+    for name in objects:
+        if all(column.startswith(name + "_") for column in layer[:2]):
+            return name
+    return objects[0] if objects else ", ".join(layer[:2])
+
+
+def _draw(ax, result, layers, title: str, entry: SimulatorEntry | None = None) -> None:
     marks = subgoal_rows(result)
     for k, layer in enumerate(layers):
         if not all(result.has_column(c) for c in layer[:2]):
@@ -45,63 +64,112 @@ def _draw(ax, result, layers, title: str) -> None:
         x, y = result.column(layer[0]), result.column(layer[1])
         if not np.isfinite(x).any():
             continue
-        ax.plot(x, y, style, color=color, lw=1.5, label=f"{layer[0]}, {layer[1]}")
+        name = layer_label(layer, entry)
+        ax.plot(x, y, style, color=color, lw=1.5, label=name)
         ax.plot(x[:1], y[:1], "o", color=color, ms=8, mec="black", mew=0.6, zorder=4,
-                label="start" if k == 0 else None)
+                label="start" if k == 0 else f"{name} at the start")
         if len(layer) > 2 and result.has_column(layer[2]):
             heading, step = result.column(layer[2]), max(1, len(x) // 25)
             ax.quiver(x[::step], y[::step], np.cos(heading[::step]), np.sin(heading[::step]), color=color,
                       scale=25, width=0.004, alpha=0.6)
+            ax.plot([], [], linestyle="none", marker=r"$\rightarrow$", ms=10, color=color, alpha=0.6,
+                    label=f"{name} heading ({layer[2]})")  # the arrows' legend entry
         if k == 0 and marks:
             ax.plot(x[marks], y[marks], "x", color="k", ms=8, mew=2, zorder=5, label="subgoals reached")
-    ax.set_aspect("equal", adjustable="datalim")
+    across, up = _quantity(entry, layers[0][0]), _quantity(entry, layers[0][1])
+    if across.unit == up.unit:  # a plane (x, y in m; two joint angles): one scale; not time against position
+        ax.set_aspect("equal", adjustable="box")  # (box: the panels of a row share their limits)
     ax.grid(alpha=0.3)
     ax.set_title(title, fontsize=10)
-    ax.set_xlabel(layers[0][0])
-    ax.set_ylabel(layers[0][1])
+    ax.set_xlabel(axis_label(layers[0][0], across))
+    ax.set_ylabel(axis_label(layers[0][1], up))
 
 
-def plot_executions(path: Path, views, panels: list[tuple[str, object]], background=None) -> None:
+def _legend(ax, scene: tuple[str, ...] = ()) -> None:
+    """Every series of a panel named once (a scene draws several objects of one kind), the trajectories' before
+    the `scene`'s, below the axes where it covers nothing."""
+    from matplotlib.transforms import offset_copy
+
+    handles, labels = ax.get_legend_handles_labels()
+    unique = dict(zip(labels, handles))
+    order = sorted(unique, key=lambda label: label in scene)  # (stable: each group in the order drawn)
+    if len(unique) > 1:  # (anchored in points below the axes: clear of the axis label whatever the panel's height)
+        below = offset_copy(ax.transAxes, fig=ax.figure, y=-LEGEND_DROP, units="points")
+        short = len(order) <= 6 and max(map(len, order)) <= LEGEND_SHORT
+        ax.legend([unique[label] for label in order], order, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+                  bbox_transform=below, ncol=3 if short else 2, fontsize=8, frameon=False)
+
+
+def plot_executions(path: Path, views, panels: list[tuple[str, object]], background=None,
+                    entry: SimulatorEntry | None = None) -> None:
     """One row per view, one column per (title, SequenceResult), written to `path`; `background(ax, column)`
-    draws under the first view's trajectories (the simulator's draw_scene)."""
+    draws under the first view's trajectories (the simulator's draw_scene); units and names as `entry`
+    declares them."""
     import matplotlib.pyplot as plt
 
-    fig = executions_figure(views, panels, background)
+    fig = executions_figure(views, panels, background, entry)
     _save(fig, path)
     plt.close(fig)
 
 
-def executions_figure(views, panels: list[tuple[str, object]], background=None):
-    """The figure of `plot_executions`: a start marker and the subgoals reached in each panel, the legend in
-    the first panel of each row."""
+def executions_figure(views, panels: list[tuple[str, object]], background=None, entry: SimulatorEntry | None = None):
+    """The figure of `plot_executions`: a start marker and the subgoals reached in each panel; the panels of a
+    row (the same view of each execution) share their axes; each panel its legend, axes labelled with the units
+    `entry` declares."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     views = list(views) or [("t", "t")]
-    fig, axes = plt.subplots(len(views), len(panels), figsize=(5.5 * len(panels), 4.6 * len(views)), squeeze=False)
+    fig, axes = plt.subplots(len(views), len(panels), figsize=(5.5 * len(panels), 5.2 * len(views)), squeeze=False,
+                             sharex="row", sharey="row")
     for row, view in enumerate(views):
         for col, (title, result) in enumerate(panels):
+            scene = ()
             if row == 0 and background is not None:
                 background(axes[row, col], col)
-            _draw(axes[row, col], result, view_layers(view), title if row == 0 else "")
-        axes[row, 0].legend(loc="best", fontsize=8)
+                scene = tuple(axes[row, col].get_legend_handles_labels()[1])
+            _draw(axes[row, col], result, view_layers(view), title if row == 0 else "", entry)
+            _legend(axes[row, col], scene)
+            if col:
+                axes[row, col].set_ylabel("")  # (the first panel's label, and tick labels, say it)
+    fig.subplots_adjust(hspace=0.45)
     return fig
 
 
 MARK_STYLES = {"greedy": ("s", "tab:orange"), "refined": ("*", "tab:green")}  # marker, colour of a chosen value
 POLAR_MARGIN = 1.12  # the radius axis reaches this far beyond the largest value: no marker cut at the rim
+POLAR_CENTRE = 0.15  # the centre of polar axes lies this share of the radius range below the smallest value
+POLAR_HOLE = 0.12  # radius of the hole of polar axes not starting at 0, as a share of their radius range
 
 
-def tidy_polar(ax, largest: float) -> None:
-    """Readable polar axes: radius from 0 to a margin beyond `largest` (markers at the maximum stay whole), a
-    few radial ticks in a small font at 112.5 deg (between the 90 and 135 deg angle labels), angle labels
-    every 45 deg, small and padded so neighbouring panels do not run into each other."""
-    from matplotlib.ticker import MaxNLocator
+def polar_limits(smallest: float, largest: float) -> tuple[float, float]:
+    """The radius range of polar axes drawing values from `smallest` to `largest`: from a little below the
+    smallest (never below 0), so that a variation small beside the values themselves still shows, to a margin
+    beyond the largest (markers at the maximum stay whole)."""
+    upper = POLAR_MARGIN * largest if largest > 0 else 1.0
+    smallest = min(max(smallest, 0.0), largest) if largest > 0 else 0.0
+    lower = smallest - POLAR_CENTRE * (upper - smallest)
+    digit = 10.0 ** (np.floor(np.log10(upper - smallest)) - 1) if upper > smallest else 1.0
+    return max(0.0, float(np.floor(lower / digit) * digit)), upper  # (rounded down: a short tick label)
 
-    ax.set_ylim(0.0, POLAR_MARGIN * largest if largest > 0 else 1.0)
-    ax.yaxis.set_major_locator(MaxNLocator(nbins=4))
+
+def tidy_polar(ax, largest: float, smallest: float = 0.0, unit: str = "s") -> None:
+    """Readable polar axes: radius from near `smallest` to a margin beyond `largest` (polar_limits); where that
+    is not 0, a small hole at the centre, its rim labelled with the value there (no reader takes the centre for
+    0); a few radial ticks with their `unit` in a small font at 112.5 deg (between the 90 and 135 deg angle
+    labels), angle labels every 45 deg, small and padded so neighbouring panels do not run into each other."""
+    from matplotlib.ticker import FixedLocator, FuncFormatter, MaxNLocator
+
+    lower, upper = polar_limits(smallest, largest)
+    ax.set_ylim(lower, upper)
+    ticks = [t for t in MaxNLocator(nbins=4).tick_values(lower, upper) if lower <= t <= upper]
+    if lower > 0:
+        ax.set_rorigin(lower - POLAR_HOLE * (upper - lower))
+        ticks = [lower] + [t for t in ticks if t > lower + POLAR_CENTRE * (upper - lower)]  # rim and ticks apart
+    ax.yaxis.set_major_locator(FixedLocator(ticks))
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:.4g} {unit}".strip()))
     ax.set_rlabel_position(112.5)
     ax.tick_params(axis="y", labelsize=7, labelcolor="0.35")
     ax.tick_params(axis="x", labelsize=8, pad=1)
@@ -141,7 +209,7 @@ def costs_figure(parameter, values: np.ndarray, curves: list[tuple[str, np.ndarr
     for ax, (title, predicted) in zip(np.atleast_1d(axes), curves):
         ax.plot(values, predicted, color="tab:blue", label="predicted duration (s)")
         if polar:
-            tidy_polar(ax, float(np.nanmax(predicted)))
+            tidy_polar(ax, float(np.nanmax(predicted)), float(np.nanmin(predicted)))
         else:
             from matplotlib.ticker import MaxNLocator
 
@@ -167,6 +235,20 @@ def cost_plot_names(path) -> tuple[Path, Path]:
     return tuple(path.with_name(path.stem + kind + (path.suffix or ".png")) for kind in ("_polar", "_costs"))
 
 
+NO_FREE_PARAMETERS = "no free parameters"  # the one panel of a plan that leaves nothing to choose
+PANEL_LABELS = {"greedy": "greedy (h=1)", "zero": "zero baseline: every free parameter set to 0",
+                NO_FREE_PARAMETERS: "no free parameters: greedy and refined are the same plan"}
+
+
+def panel_title(key: str, outcome) -> str:
+    """The title of the panel of one execution (greedy, refined, the zero baseline, or the one plan of a sequence
+    without free parameters): what it is, then its predicted and simulated time."""
+    label = f"refined (h={outcome.refined.horizon})" if key == "refined" else PANEL_LABELS.get(key, key)
+    failed = "" if outcome.simulated.succeeded else " (failed)"
+    return (f"{label}\npredicted {outcome.refined.predicted_total:.2f} s, simulated {outcome.simulated.duration:.2f} s"
+            f"{failed}")
+
+
 def _quantity(entry: SimulatorEntry | None, name: str) -> Quantity:
     return entry.quantity(name) if entry is not None else UNDECLARED
 
@@ -177,26 +259,21 @@ def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
     the first one) as FILE_polar.png (or FILE_costs.png where it is not a full-circle angle), angles as the
     simulator declares them. Returns the files written."""
     path = Path(path)
-    panels = []
-    for key, o in outcomes.items():
-        label = {"greedy": "greedy (h=1)", "refined": f"refined (h={o.refined.horizon})",
-                 "zero": "free parameters 0"}.get(key, key)
-        title = f"{label}: predicted {o.refined.predicted_total:.2f} s, simulated {o.simulated.duration:.2f} s"
-        if not o.simulated.succeeded:
-            title += " (failed)"
-        panels.append((title, o.simulated))
+    if not prepared.sequence.free_parameters():  # nothing to choose: greedy, refined (and zero) are one plan
+        outcomes = {NO_FREE_PARAMETERS: outcomes["refined"]}
+    panels = [(panel_title(key, o), o.simulated) for key, o in outcomes.items()]
     entry = registry.get(prepared.sequence.simulator) if prepared.sequence.simulator else None
     draw_scene = entry.draw_scene if entry is not None else None
     chosen_values = [{p.id: p.value for a in o.refined.sequence.actions for p in a.params} for o in outcomes.values()]
     background = (None if draw_scene is None
                   else (lambda ax, col: draw_scene(ax, prepared.sequence, chosen_values[col])))
-    plot_executions(path, views, panels, background)
+    plot_executions(path, views, panels, background, entry)
     written = [path]
 
-    refined = outcomes["refined"].refined
     free = prepared.sequence.actions[0].free_parameters()
     if not free:
         return written
+    refined = outcomes["refined"].refined
     parameter = next((p for p in free if on_the_circle(p, _quantity(entry, p.id))), free[0])
     window = prepared.sequence.actions[:max(2, refined.horizon)]
     chosen = {p.id: p.value for a in refined.sequence.actions for p in a.params}

@@ -39,6 +39,18 @@ def plot_noise(report: dict, path: Path) -> None:
     _save(fig, path)
 
 
+def position_labels(simulator: str) -> tuple[str, str]:
+    """The axis labels of the plane of a team robot's position (the first two quantities of its state) with the
+    units `simulator` declares: ("x (m)", "y (m)"); ("x", "y") where it has no team scene."""
+    from tailor.refinement.refine_plots import axis_label
+
+    entry = registry.simulators().get(simulator)
+    scene = entry.team if entry is not None else None
+    if scene is None:
+        return ("x", "y")
+    return tuple(axis_label(name, entry.quantity(name)) for name in scene.state[:2])
+
+
 def heading_column(simulator: str) -> int | None:
     """The column of a team robot's state that `simulator` declares an angle (its heading, drawn as an arrow),
     None where it declares none (or has no team scene)."""
@@ -53,7 +65,10 @@ def plot_failure_example(report: dict, bounds: tuple[float, float, float, float]
     """Fig. 7.11: robots standing still (at the first two columns of their state, the heading where the
     simulator declares one); for each target position the robot chosen (solid green) or, where the failure
     tree predicts confusion, both robots that might go (dashed red). Beside it, Fig. 7.10's tree as regions
-    over the time gap and the quickest time, with the rules."""
+    over the time gap and the quickest time, with the rules. Axes in the units the simulator declares; a legend
+    names every kind of line and mark."""
+    from matplotlib.lines import Line2D
+
     ex, tree = report["example"], report["dynamic"]["failure_tree"]
     robots, targets = np.array(ex["robots"]), np.array(ex["targets"])
     fig, (ax, text) = plt.subplots(1, 2, figsize=(12, 5), gridspec_kw={"width_ratios": [3, 2]})
@@ -80,7 +95,17 @@ def plot_failure_example(report: dict, bounds: tuple[float, float, float, float]
     ax.set_aspect("equal")
     ax.set_xlim(x0 - 0.3, x1 + 0.3)
     ax.set_ylim(y0 - 0.3, y1 + 0.3)
+    xlabel, ylabel = position_labels(report.get("simulator", ""))
+    ax.set(xlabel=xlabel, ylabel=ylabel)
     ax.set_title("Q5: who goes (green) and predicted confusion (red)")
+    robot = (Line2D([], [], color="tab:blue", marker=r"$\rightarrow$", ms=12, linestyle="none",
+                    label="robot (standing; arrow: its heading)") if heading is not None
+             else Line2D([], [], color="tab:blue", marker="o", linestyle="none", label="robot (standing)"))
+    ax.legend(handles=[robot, Line2D([], [], color="k", marker=".", ms=5, linestyle="none", label="target position"),
+                       Line2D([], [], color="tab:green", lw=0.8, label="the robot chosen to go"),
+                       Line2D([], [], color="tab:red", lw=0.8, linestyle="--",
+                              label="predicted confusion: both robots that might go")],
+              loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, fontsize=8, frameon=False)
     text.axis("off")
     lines = ["Decision tree predicting coordination", "success (Fig. 7.10):", ""]
     if tree is not None:

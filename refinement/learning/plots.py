@@ -109,18 +109,23 @@ def curve_params(curve: DurationCurve, names: tuple[str, ...], angles: np.ndarra
 
 
 def plot_duration_curve(curve: DurationCurve, models: Mapping[str, ActionModel], path: Target) -> None:
-    """Predicted duration over the swept angle for one situation, Cartesian and polar (Fig. 4.7)."""
+    """Predicted duration over the swept angle for one situation, Cartesian and polar (Fig. 4.7), the polar radius
+    from near the shortest prediction (a variation small beside the durations themselves still shows); each
+    panel names its curves."""
     angles = np.linspace(-np.pi, np.pi, ANGLE_SAMPLES)
-    fig = plt.figure(figsize=(10.0, 4.6))
+    fig = plt.figure(figsize=(10.0, 5.2))
     cartesian = fig.add_subplot(1, 2, 1)
     polar = fig.add_subplot(1, 2, 2, projection="polar")
-    largest = 0.0
+    largest, smallest = 0.0, np.inf
     for action, model in models.items():
         predicted = model.predict_duration(curve_params(curve, _parameters_of(model), angles))
         largest = max(largest, float(np.nanmax(predicted)))
+        smallest = min(smallest, float(np.nanmin(predicted)))
         cartesian.plot(np.degrees(angles), predicted, label=action)
         polar.plot(angles, predicted, label=action)
-    tidy_polar(polar, largest)
+    tidy_polar(polar, largest, smallest)
+    polar.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=min(len(models), 4), fontsize="small",
+                 frameon=False)
     cartesian.set(xlabel=f"{curve.label} (deg)", ylabel="predicted duration (s)", xticks=range(-180, 181, 90),
                   title=curve.description)
     cartesian.grid(True, alpha=0.3)
