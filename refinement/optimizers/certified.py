@@ -40,14 +40,16 @@ from tailor.refinement.optimizers.structure import NotApplicable
 TOLERANCE = 5e-4  # the gap allowed, as a share of the best cost ...
 ABSOLUTE_TOLERANCE = 1e-6  # ... and in the objective's unit (s) where the cost is near 0
 BUDGET = 200_000  # boxes bounded at most by a call of `minimize` (the `certified` optimizer)
-BATCH = 64  # boxes split per step
+BATCH = 256  # boxes split per step
 STRONG_WIDTH = 1 / 16  # boxes narrower than this share of every range are split where it helps most
 ACTIVE_WIDTH = 2.0  # a neighbourhood's offset along a free parameter bounds boxes at most this many radii wide
 POINT_CHECKS = (0.5, 0.25, 0.8)  # where along the diagonal of the ranges an enclosure is checked at a point
 POINT_TOLERANCE = 1e-6  # relative: how wide an enclosure of a single point may be
 TIE = 1e-9  # relative: bounds of halves this close count as equal (the widest parameter is split then)
-CHECKPOINT = 1000  # boxes: a search with a `prospect` is judged after twice this many, and after each doubling
-STALLED = 0.1  # ... and given up where its gap fell by less than this share over the last doubling (from 8x on)
+CHECKPOINT = 250  # boxes: a search with a `prospect` is judged after twice this many, and after each doubling
+STALLED = 0.1  # ... and given up where its gap fell by less than this share over the last doubling ...
+STALL_FROM = 8000  # ... from this many boxes on (some gaps stall for a doubling before they close), and where
+UNBOUNDED_FROM = 1000  # its lower bound is still unbounded after this many
 
 
 @dataclass(frozen=True, eq=False)
@@ -112,6 +114,16 @@ class _Search:
                        else np.zeros(len(self.low)))
         self.offsets = objective.offsets if any(objective.neighbourhood) else np.zeros((1, len(self.low)))
         self.column = np.abs(self.offsets).argmax(axis=1)  # the free parameter each offset moves (row 0: none)
+        # the offsets a box is bounded over: the point and the stencil's ends (a subset of the stencil's rows
+        # bounds its worst case from below as well; the inner rows seldom raise it and cost as much)
+        reach = np.abs(self.offsets[np.arange(len(self.offsets)), self.column])
+        self.bounding = (np.arange(len(self.offsets)) == 0) | (reach >= self.radius[self.column])
+        self.rows_of = []  # per term: the stencil rows it is bounded over, and each stencil row's among them
+        for term in terms:
+            use = term.use[self.bounding[term.use]]
+            where = np.zeros(len(self.offsets), dtype=int)
+            where[use] = np.arange(len(use))
+            self.rows_of.append((use, np.where(self.bounding, where[term.use][term.position], 0)))
         self.lo = np.empty((1024, len(self.low)))
         self.hi = np.empty((1024, len(self.low)))
         self.bound = np.empty(1024)
@@ -139,38 +151,44 @@ class _Search:
         if self.radius.any():
             column = self.column[1:]
             active[1:] = (hi - lo)[:, column].T <= ACTIVE_WIDTH * self.radius[column][:, None]
+            active &= self.bounding[:, None]
         spread = np.zeros(k)
         possible = np.ones(k, dtype=bool)
         leaves = []
         for t, term in enumerate(self.terms):
+            use, position = self.rows_of[t]
             if parents is None:
                 pairs = Candidates.every(term.table, k)
             else:
                 counts = np.array([len(a) for a in parents[t]])
                 pairs = Candidates(np.repeat(np.arange(k), counts), np.concatenate(parents[t]))
-            f_lo, f_hi = _enclosure(term.features, grown_lo, grown_hi)
-            hit = intervals.meets(term.table, pairs, f_lo, f_hi)
+            # the grown box (the leaves its neighbourhood may meet), and the box moved by each stencil offset that
+            # can change the term (its bound): one enclosure call for both (a call costs more than its rows)
+            if self.radius.any():  # (without a neighbourhood the grown box is the box itself)
+                shift = self.offsets[use]  # (U, n)
+                s_lo = np.clip(lo[None] + shift[:, None], self.low, self.high).reshape(-1, lo.shape[1])
+                s_hi = np.clip(hi[None] + shift[:, None], self.low, self.high).reshape(-1, lo.shape[1])
+                e_lo, e_hi = _enclosure(term.features, np.concatenate([grown_lo, s_lo]),
+                                        np.concatenate([grown_hi, s_hi]))
+                g_lo, g_hi, f_lo, f_hi = e_lo[:k], e_hi[:k], e_lo[k:], e_hi[k:]
+            else:
+                g_lo, g_hi = f_lo, f_hi = _enclosure(term.features, grown_lo, grown_hi)
+            hit = intervals.meets(term.table, pairs, g_lo, g_hi)
             pairs = Candidates(pairs.box[hit], pairs.leaf[hit])
             ends = np.cumsum(np.bincount(pairs.box, minlength=k)).tolist()
             leaves.append([pairs.leaf[a:b] for a, b in zip([0] + ends[:-1], ends)])
-            # the term's bound over the box moved by each stencil offset that can change it
-            if self.radius.any():  # (without a neighbourhood the grown box is the box: its enclosure above)
-                shift = self.offsets[term.use]  # (U, n)
-                s_lo = np.clip(lo[None] + shift[:, None], self.low, self.high).reshape(-1, lo.shape[1])
-                s_hi = np.clip(hi[None] + shift[:, None], self.low, self.high).reshape(-1, lo.shape[1])
-                f_lo, f_hi = _enclosure(term.features, s_lo, s_hi)
             width = np.minimum(f_hi[:k] - f_lo[:k], 1e300)  # the box itself: the first rows (offset 0)
             if len(self.widths) <= t:  # the root's enclosure: the scale of each feature's width
                 self.widths.append(np.where(width[0] > 0, width[0], 1.0))
             with np.errstate(over="ignore"):  # (enclosures 1e300 wide sum to inf: as wide as can be)
                 spread += (width / self.widths[t]).sum(axis=1)
-            u = len(term.use)
+            u = len(use)
             box = (np.arange(u)[:, None] * k + pairs.box[None]).ravel()
-            on = active[term.use][:, pairs.box].ravel()
+            on = active[use][:, pairs.box].ravel()
             moved = Candidates(box[on], np.tile(pairs.leaf, u)[on])
             value = intervals.minimum(term.table, moved, f_lo, f_hi, u * k).reshape(u, k)
             with np.errstate(invalid="ignore"):  # (an inactive offset's +inf beside another term's -inf)
-                total += value[term.position]
+                total += value[position]
             if term.region is not None:
                 possible &= self.may_succeed(term, lo, hi)
         self.spread = spread
@@ -250,24 +268,27 @@ def _split(search: _Search, lo, hi, parent_bound, parent_leaves, cap: float):
     relative = (hi - lo) / search.scale
     axis = np.argmax(relative, axis=1)
     strong = (relative[np.arange(k), axis] <= STRONG_WIDTH) & (n > 1)
-    plain = np.flatnonzero(~strong)
+    plain, rows = np.flatnonzero(~strong), np.flatnonzero(strong)
+    m = len(rows)
     c_lo, c_hi = _halves(lo[plain], hi[plain], axis[plain])
-    bound, possible, leaves = search.evaluate(c_lo, c_hi, [[part[r] for r in plain] * 2 for part in parent_leaves])
+    axes = np.tile(np.arange(n), m)  # every strong box halved along every parameter, its best pair kept below
+    s_lo, s_hi = _halves(np.repeat(lo[rows], n, axis=0), np.repeat(hi[rows], n, axis=0), axes)
+    p = len(c_lo)  # both bounded in one call (a call of the enclosures costs more than its rows)
+    bound, possible, leaves = search.evaluate(
+        np.concatenate([c_lo, s_lo]), np.concatenate([c_hi, s_hi]),
+        [[part[r] for r in plain] * 2 + [part[r] for r in rows for _ in range(n)] * 2 for part in parent_leaves])
     half = np.concatenate([plain, plain])
-    if strong.any():
-        rows = np.flatnonzero(strong)
-        m = len(rows)
-        axes = np.tile(np.arange(n), m)
-        s_lo, s_hi = _halves(np.repeat(lo[rows], n, axis=0), np.repeat(hi[rows], n, axis=0), axes)
-        s_bound, s_possible, s_leaves = search.evaluate(
-            s_lo, s_hi, [[part[r] for r in rows for _ in range(n)] * 2 for part in parent_leaves])
+    if m:
+        s_bound, s_possible, s_spread = bound[p:], possible[p:], search.spread[p:]
+        s_leaves = [part[p:] for part in leaves]
+        bound, possible, leaves = bound[:p], possible[:p], [part[:p] for part in leaves]
         halves = np.maximum(np.where(s_possible, s_bound, np.inf).reshape(2, m, n), parent_bound[rows, None])
         # what the halves gain over the box, each at most up to the best cost (beyond, a half is closed anyway)
         with np.errstate(invalid="ignore"):  # (-inf - -inf: a half no better bounded than its box gains nothing)
             gain = np.minimum(halves, np.maximum(cap, parent_bound[rows, None])) - parent_bound[rows, None]
         gain = np.where(np.isnan(gain), 0.0, gain)
         score = np.where(relative[rows] > 0, gain.sum(axis=0), -np.inf)
-        spread = search.spread.reshape(2, m, n).sum(axis=0)  # how wide the halves' feature enclosures stay
+        spread = s_spread.reshape(2, m, n).sum(axis=0)  # how wide the halves' feature enclosures stay
         top = score.max(axis=1, keepdims=True)
         tie = score >= top - TIE * (1.0 + np.abs(np.where(np.isfinite(top), top, 0.0)))
         # of the best, the one whose halves enclose their features most tightly (a jump cut off), then the widest
@@ -300,7 +321,7 @@ def minimize(objective: Objective, seed: int = 0, budget: int = BUDGET, toleranc
     says how far it got); NotApplicable where a term cannot be bounded or no valid choice is found.
 
     With a `prospect` (boxes), also where, at a checkpoint (2 CHECKPOINT boxes and each doubling), the gap fell
-    by less than STALLED over the last doubling of the boxes (from 8 CHECKPOINT on: a bound stuck where an
+    by less than STALLED over the last doubling of the boxes (from STALL_FROM on: a bound stuck where an
     enclosure stays wide), or closing it looks like taking more than `prospect` boxes both at the rate it fell
     over that doubling and as if it fell in proportion to the boxes (the searches that close fall one way or the
     other: some slowly until the boxes are small, then at once; some fast from a wide start). All in boxes:
@@ -335,11 +356,11 @@ def minimize(objective: Objective, seed: int = 0, budget: int = BUDGET, toleranc
         if prospect is None or search.boxes < checkpoint:
             return ""
         checkpoint, before, last_gap = 2 * search.boxes, last_gap, gap
-        if np.isinf(gap) and np.isinf(before) and search.boxes >= 2 * CHECKPOINT:
+        if np.isinf(gap) and np.isinf(before) and search.boxes >= UNBOUNDED_FROM:
             return f"stopped after {search.boxes} boxes: its lower bound still unbounded"
         if not (np.isfinite(gap) and gap > tol()):
             return ""
-        if gap > (1.0 - STALLED) * before and search.boxes >= 8 * CHECKPOINT:
+        if gap > (1.0 - STALLED) * before and search.boxes >= STALL_FROM:
             return (f"stopped after {search.boxes} boxes: its gap of {100 * gap / abs(best_cost):.3g}% fell by "
                     f"{100 * (1 - gap / before):.2g}% over the last {search.boxes // 2}")
         rate = np.log2(before / gap)  # halvings of the gap per doubling of the boxes (inf: unbounded before)
@@ -363,9 +384,11 @@ def minimize(objective: Objective, seed: int = 0, budget: int = BUDGET, toleranc
         parent_leaves = search.leaves_of(slots)
         c_lo, c_hi, bound, possible, leaves = _split(search, lo, hi, parent_bound, parent_leaves,
                                                       best_cost if np.isfinite(best_cost) else np.inf)
-        candidates = [((c_lo + c_hi) / 2)[possible]]
+        # a half bounded within the tolerance of the best so far holds nothing worth evaluating
+        promising = possible & (bound < best_cost - tol()) if np.isfinite(best_cost) else possible
+        candidates = [((c_lo + c_hi) / 2)[promising]]
         if best_point is not None:  # and the point of each half nearest the best so far (optima sit on edges)
-            candidates.append(np.clip(best_point, c_lo, c_hi)[possible])
+            candidates.append(np.clip(best_point, c_lo, c_hi)[promising])
         consider(np.concatenate(candidates))
         keep = possible & (bound < best_cost - tol()) if np.isfinite(best_cost) else possible
         if np.any(possible & ~keep):

@@ -33,7 +33,7 @@ def _windows(domain: str, problem: str, horizon: int, monkeypatch) -> list[tuple
 
     def timed(objective, method, seed):
         start = time.process_time()
-        result = optimize(objective, method, seed)
+        result = optimize(objective, method=method, seed=seed)
         cpu.append(time.process_time() - start)
         return result
 

@@ -2,9 +2,10 @@
 robust objective, median <= 0.25 s CPU a window at h=2 and <= 0.5 s at h=3, for the genetic algorithm and for
 `auto`, the default, whichever optimizer it chooses; the dissertation's worst case took < 0.5 s). At h >= 2
 the chain has up to six free parameters per window (two way-points' heading and speed, and more); the
-analytic minimization does not apply (goToPose's `goto` features are curved in a heading) and the certified
-optimizer cannot bound them (`goto` plans Dubins words and declares no bounds), so auto runs the GA on every
-window after two checks that cost about 2 ms.
+analytic minimization does not apply (goToPose's `goto` features are curved in a heading); the certified
+optimizer bounds them (sims/soccer/feature_bounds.py) but closes the gap only on windows of two free
+parameters; where it cannot, auto gives up after a few hundred boxes (certified.CHECKPOINT) and runs the GA,
+keeping the better choice.
 
 Run: pytest -m benchmark -n 0 tests/benchmarks/test_ga_waypoints_speed.py -s
 The floors are checked on CPU time per window (time.process_time over the refinement divided by its windows),
@@ -58,7 +59,8 @@ def test_optimizer_speed_on_the_waypoint_chain():
               f"{SITUATIONS} situations")
     print(f"free parameters per window: up to {max(free)}; auto chose {sorted(methods)}")
     for h in HORIZONS:
-        assert totals[h, deployed, "auto"] == totals[h, deployed, "ga"]  # the same choices where auto ran the GA
+        # auto keeps the better of the certified optimizer's and the GA's choice in each window it cannot certify
+        assert np.mean(totals[h, deployed, "auto"]) <= 1.001 * np.mean(totals[h, deployed, "ga"])
         assert np.median(cpu[h, 0.0, "ga"]) <= 0.5
         assert np.median(cpu[h, deployed, "ga"]) <= FLOOR_S[h]
         assert np.median(cpu[h, deployed, "auto"]) <= FLOOR_S[h]
