@@ -46,7 +46,7 @@ def axis_label(name: str, quantity: Quantity = UNDECLARED) -> str:
 
 def layer_label(layer, entry: SimulatorEntry | None = None) -> str:
     """What a view layer draws, for a legend: the scene object the simulator declares whose name prefixes the
-    layer's columns ("ball" for ball_x, ball_y), else its first scene object (the robot, whose own state the
+    layer's columns ("box" for box_x, box_y), else its first scene object (the robot, whose own state the
     other columns are); the column names where it declares no scene objects."""
     objects = [name.split(" ")[0] for name in (entry.scene_objects if entry is not None else ())]
     for name in objects:

@@ -116,8 +116,8 @@ class _Search:
         self.column = np.abs(self.offsets).argmax(axis=1)  # the free parameter each offset moves (row 0: none)
         # the offsets a box is bounded over: the point and the stencil's ends (a subset of the stencil's rows
         # bounds its worst case from below as well; the inner rows seldom raise it and cost as much)
-        reach = np.abs(self.offsets[np.arange(len(self.offsets)), self.column])
-        self.bounding = (np.arange(len(self.offsets)) == 0) | (reach >= self.radius[self.column])
+        extent = np.abs(self.offsets[np.arange(len(self.offsets)), self.column])
+        self.bounding = (np.arange(len(self.offsets)) == 0) | (extent >= self.radius[self.column])
         self.rows_of = []  # per term: the stencil rows it is bounded over, and each stencil row's among them
         for term in terms:
             use = term.use[self.bounding[term.use]]
