@@ -169,5 +169,47 @@ def risk_lambda(text: str) -> float:
     return value
 
 
+def add_objective_arguments(parser: argparse.ArgumentParser) -> None:
+    """--objective EXPR and --max MEASURE=BOUND (repeatable): what refinement minimizes and keeps within bounds
+    (refinement.objective_grammar); a malformed one is a usage error naming the column."""
+    parser.add_argument("--objective", type=objective_text, default=None, metavar="EXPR",
+                        help="minimize a weighted sum of the actions' predicted measures instead of their duration, "
+                             "e.g. \"duration + 0.3*energy\": terms MEASURE, NUMBER*MEASURE or MEASURE*NUMBER joined "
+                             "by +, weights >= 0, each measure one the action models predict (their recipe's "
+                             "measures; default: the binding's [objective], else duration); greedy minimizes the "
+                             "same")
+    parser.add_argument("--max", type=measure_limit, action="append", default=[], metavar="MEASURE=BOUND",
+                        dest="limits",
+                        help="keep every action's predicted MEASURE at most BOUND (its unit), e.g. error=0.05: a "
+                             "choice that breaks it is not taken; where none keeps it, the output says which step "
+                             "and the command ends with status 9 (repeatable, one bound per measure)")
+
+
+def objective_text(text: str):
+    """An argparse type: an objective in the grammar of refinement.objective_grammar."""
+    from tailor.refinement.objective_grammar import ObjectiveSyntaxError, parse_objective
+
+    try:
+        return parse_objective(text)
+    except ObjectiveSyntaxError as exc:
+        raise argparse.ArgumentTypeError(f"{text!r}: {exc}") from None
+
+
+objective_text.__name__ = "objective"
+
+
+def measure_limit(text: str):
+    """An argparse type: a limit MEASURE=BOUND (refinement.objective_grammar)."""
+    from tailor.refinement.objective_grammar import ObjectiveSyntaxError, parse_bound
+
+    try:
+        return parse_bound(text)
+    except ObjectiveSyntaxError as exc:
+        raise argparse.ArgumentTypeError(f"{text!r}: {exc}") from None
+
+
+measure_limit.__name__ = "limit"
+
+
 seed = whole_number(0, MAX_SEED)  # an argparse type: numpy's and the simulators' generators take no negative seed
 seed.__name__ = "seed"

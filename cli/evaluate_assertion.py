@@ -18,7 +18,9 @@ def _print_text(report: dict) -> None:
     out = sys.stdout.write
     s = report
     out(f"Domain {s['domain']}: subgoal assertion over {s['episodes']} random '{s['generator']}' situations "
-        f"(seed {s['seed']}), each executed plain and with assertion + refinement (h=2), same simulator seed\n")
+        f"(seed {s['seed']}), each executed plain and with assertion + refinement (h=2"
+        + (f", risk {s['risk']:g}, neighbourhood {s['neighbourhood']:g}" if "risk" in s else "")
+        + "), same simulator seed\n")
     out(f"  success without assertion     {_pct(s['success_without'])}   (failures: "
         f"{', '.join(f'{k} {v}' for k, v in s['failures_without'].items()) or 'none'})\n")
     out(f"  success with assertion        {_pct(s['success_with'])}   (failures: "
@@ -27,6 +29,15 @@ def _print_text(report: dict) -> None:
     out(f"  {counted + ' avoided':<30}{_pct(s['collisions_avoided'])} of {s['collisions']} "
         f"({_pct(s['collisions_avoided_and_succeeded'])} avoided and succeeded)\n")
     out(f"  subgoal asserted              {_pct(s['asserted'])} of the situations\n")
+    if s.get("failure_probability_sources"):
+        out(f"  failure predicted             {_pct(s['predicted_fail'])} of the situations; left plain in "
+            f"{_pct(s['weighed_out'])} of the situations, the detour predicted to cost more than failing (failure "
+            f"probability x a second attempt through the subgoal); plain failed there {s['weighed_out_failed']} "
+            "times\n")
+        ms = s.get("assertion_ms_median")
+        out(f"    failure probability from {'; '.join(s['failure_probability_sources'])}; predicted detour median "
+            f"{'-' if s['detour_predicted_median'] is None else format(s['detour_predicted_median'], '+.2f')} s; "
+            f"weighing {'-' if ms is None else f'{ms:.0f}'} ms per situation (median)\n")
     out(f"  needless assertions           {_pct(s['needless_assertions'])} of the situations "
         f"(plain would have succeeded), slower there by {_pct(s['needless_cost'])} on average "
         f"(median {_pct(s['needless_cost_median'])})\n")
@@ -46,6 +57,25 @@ def _print_text(report: dict) -> None:
         out(f"    total              {_pct(f):>14} {_pct(1 - f):>18}\n")
     if s.get("plot"):
         out(f"\nWrote {s['plot']}\n")
+    if s.get("plot_search_space"):
+        out(f"Wrote {s['plot_search_space']} (Fig. 6.5, situation {s['plot_search_space_situation']})\n")
+
+
+def _draw_search_space(plot, kept: list[dict], entry) -> dict:
+    """Fig. 6.5 beside Fig. 6.6 (FILE_search_space.png) for the first drawn situation with an asserted subgoal:
+    the report's keys naming the file and the situation (none where no drawn situation has one)."""
+    from tailor.refinement.evaluation.assertion_plots import draw_search_space, search_space, search_space_name
+
+    for row in kept:
+        space = row["inserted"] and search_space(row["asserted_sequence"], row["sequence"], row["models"],
+                                                 row["success_models"], entry)
+        if space:
+            path = draw_search_space(search_space_name(plot), space,
+                                     f"Search space of subgoal refinement in subgoal assertion (situation "
+                                     f"{row['index']}; {', '.join(space.axes)} varied, the other free parameters "
+                                     "at their refined values)", entry)
+            return {"plot_search_space": str(path), "plot_search_space_situation": row["index"]}
+    return {}
 
 
 def run_assertion(args: argparse.Namespace, domain_dir, binding, plan, models_dir) -> int:
@@ -67,6 +97,9 @@ def run_assertion(args: argparse.Namespace, domain_dir, binding, plan, models_di
             raise ArgumentValueError("--plot draws the instances of --assertion (Fig. 6.6) or the meta model of "
                                      "--meta (Fig. 5.16): give one of them")
         check_output_file(args.plot, ".png")
+        from tailor.refinement.evaluation.assertion_plots import search_space_name
+
+        check_output_file(search_space_name(args.plot), ".png")
     if plan.assertion is None:
         raise BindingError("[evaluation] names no assertion situations (add assertion = \"<situation generator>\")",
                            file=binding.file)
@@ -74,16 +107,22 @@ def run_assertion(args: argparse.Namespace, domain_dir, binding, plan, models_di
     if not names:
         raise BindingError("--assertion: no action of the binding names a success_model to assert subgoals with",
                            file=binding.file)
-    setup = AssertionSetup(load_success_models(models_dir, names))
+    setup = AssertionSetup(load_success_models(models_dir, names), risk=getattr(args, "risk", None),
+                           neighbourhood=getattr(args, "neighbourhood", None))
     seeds = [(index, assertion_seed(args.seed, index)) for index in range(args.episodes)]
     items = draw_situations(domain_dir, binding, plan.assertion, seeds, args.seed, {}, models_dir)
+    refining = {}
     if items:  # models loaded once up front: a missing or bad model file fails before any work
+        from tailor.refinement.pipeline import Options, resolve_options
+
         job, _, objects = items[0]
-        job_models(job, situation_sequence(job, objects))
+        resolved = resolve_options(Options(risk=setup.risk, neighbourhood=setup.neighbourhood), binding,
+                                   job_models(job, situation_sequence(job, objects)))
+        refining = {"risk": resolved.risk, "neighbourhood": resolved.neighbourhood}
     rows = run_in_workers(assertion_episode, [(job, i, objects, setup) for job, i, objects in items], args.jobs,
                           "plain vs asserted")
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
-              "generator": plan.assertion}
+              "generator": plan.assertion, **refining, "weighs_detour": setup.weigh}
     report.update(summarize_assertion(rows))
     if args.plot:
         from tailor.refinement.evaluation.assertion_plots import draw_instances
@@ -95,6 +134,7 @@ def run_assertion(args: argparse.Namespace, domain_dir, binding, plan, models_di
         draw_instances(args.plot, kept, binding.entry.views)
         report["plot"] = str(args.plot)
         report["plot_situations"] = [r["index"] for r in chosen]
+        report.update(_draw_search_space(args.plot, kept, binding.entry))
     if args.json:
         from tailor.outputs import json_text, model_files, provenance, versioned
 

@@ -17,6 +17,7 @@ import numpy as np
 from tailor.errors import UsageError
 
 CURVE_WINDOW = 20  # tasks per point of the learning curve's moving mean
+CURVE_HORIZON = 2  # the refined runs of the stream refine this many actions ahead
 
 
 def _check(args, binding) -> None:
@@ -73,7 +74,7 @@ def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, mode
     _check(args, binding)
     if args.plot:
         check_output_file(args.plot, ".png")
-    rows = learning_stream(items, args.variant)
+    rows = learning_stream(items, args.variant, horizon=CURVE_HORIZON)
     reference = None
     if args.reference_episodes:
         from tailor.refinement.evaluation.closed_loop import (reference_error, reference_improvement,
@@ -99,7 +100,7 @@ def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, mode
         return float((g - np.mean([r["refined"] for r in chunk])) / g) if chunk else None
 
     report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
-              "generator": plan.comparison, "variant": args.variant, "tasks": len(rows),
+              "generator": plan.comparison, "variant": args.variant, "tasks": len(rows), "horizon": CURVE_HORIZON,
               "mae_first": mean_error(first), "mae_last": mean_error(last),
               "improvement_first": gain(first), "improvement_last": gain(last)}
     if reference is not None:

@@ -1,6 +1,9 @@
 """`tailor refine DOMAIN PROBLEM`: plan, instantiate, refine the free parameters (Sec. 5.4), optionally simulate.
 
 Greedy execution (h = 1) is always computed beside the requested horizon, so the gain can be read off.
+`--objective "duration + 0.3*energy"` weighs further measures the action models predict, `--max error=0.05`
+bounds them (Ch. 8.1); text and JSON then show every measure predicted (and, simulated, measured) per action,
+and a bound no choice keeps ends the command with status 9 after the output, naming the step.
 """
 
 from __future__ import annotations
@@ -13,12 +16,14 @@ import sys
 import time
 from pathlib import Path
 
+from tailor.errors import TailorError, UsageError
 from tailor.outputs import Provenance, check_output_file, json_text, provenance, versioned
 from tailor.planner_bridge import plan_from_ipc, render_text
 from tailor.progress import showing_progress
 from tailor.refinement import pipeline
 from tailor.refinement.models.action_models import COLLISION_SUFFIX
 from tailor.refinement.models.meta_model import load_meta_model, meta_model_path
+from tailor.refinement.objective_grammar import DURATION, ObjectiveSyntaxError, bounds_of
 from tailor.refinement.optimizers import DEFAULT_OPTIMIZER, OPTIMIZERS
 from tailor.refinement.refine import predicted_success
 from tailor.refinement.refine_plots import cost_plot_names, draw_refinement
@@ -26,6 +31,7 @@ from tailor.cli.arguments import (
     add_filter_arguments,
     add_models_argument,
     add_neighbourhood_argument,
+    add_objective_arguments,
     add_risk_argument,
     announce_models,
     positive_seconds,
@@ -63,6 +69,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
     add_risk_argument(parser)
     add_neighbourhood_argument(parser)
+    add_objective_arguments(parser)
 
 
 def _fmt_param(p) -> str:
@@ -82,10 +89,15 @@ def _execution_json(outcome, success_models=None) -> dict:
             entry.update(guard=action.guard, predicted_success=success[k] if success else None)
         if action.origin:  # inserted by subgoal assertion: which plan step it serves, and why
             entry["origin"] = action.origin
+        if refined.measures and len(refined.measures[k]) > 1:  # every measure its model predicts (Ch. 8.1)
+            entry["measures"] = {name: round(value, 6) for name, value in refined.measures[k].items()}
         if simulated is not None:
             if k < len(simulated.results):
                 entry["simulated"] = round(simulated.results[k].duration, 4)
                 entry["outcome"] = simulated.results[k].outcome
+                entry["simulated_measures"] = {DURATION: round(simulated.results[k].duration, 6),
+                                               **{name: round(value, 6)
+                                                  for name, value in simulated.results[k].measures.items()}}
             else:
                 entry["simulated"] = None
                 entry["outcome"] = "not_started"
@@ -96,11 +108,30 @@ def _execution_json(outcome, success_models=None) -> dict:
     data = {"horizon": refined.horizon, "risk": refined.risk, "neighbourhood": refined.neighbourhood, "actions": actions,
             "predicted_total": round(refined.predicted_total, 4),
             "optimizers": optimizers_run(refined.windows),
-            "optimization": [window_json(w) for w in refined.windows]}
+            "optimization": [window_json(w) for w in refined.windows],
+            "objective": refined.objective.to_json(), "limits": {b.measure: b.bound for b in refined.limits},
+            "violations": [v.to_json() for v in refined.violations]}
+    if _measure_names([refined]):
+        data["predicted_measures_total"] = {name: round(refined.measure_total(name), 6)
+                                            for name in (DURATION, *_measure_names([refined]))}
     if simulated is not None:
         data["simulated_total"] = round(simulated.duration, 4)
         data["succeeded"] = simulated.succeeded
+        names = dict.fromkeys(name for r in simulated.results for name in r.measures)
+        data["simulated_measures_total"] = {DURATION: round(simulated.duration, 6),
+                                            **{name: round(sum(r.measures[name] for r in simulated.results
+                                                               if name in r.measures), 6) for name in names}}
     return data
+
+
+def _measure_names(refinements) -> list[str]:
+    """The measures besides the duration that every action of every refinement's models predict, in order."""
+    names = None
+    for refined in refinements:
+        for measures in refined.measures or ({DURATION: 0.0},):
+            ordered = [name for name in measures if name != DURATION]
+            names = ordered if names is None else [n for n in names if n in ordered]
+    return list(names or ())
 
 
 def optimizers_run(windows) -> list[str]:
@@ -150,7 +181,14 @@ def result_json(result, method: str, seed: int, origin: Provenance | None = None
         data["filter"] = result.decision.to_json()
     data["refined"] = _execution_json(result.refined, result.success_models)
     data["greedy"] = _execution_json(result.greedy, result.success_models)
+    names = _measure_names([result.refined.refined, result.greedy.refined])
+    limited = [b.measure for b in result.refined.refined.limits]
+    data["measure_units"] = {name: _unit(result, name) for name in [DURATION, *dict.fromkeys([*names, *limited])]}
     return versioned("refine", data, origin)
+
+
+def _unit(result, measure: str) -> str:
+    return "s" if measure == DURATION else result.binding.entry.quantity(measure).unit
 
 
 def _gain(refined: float, greedy: float) -> str:
@@ -225,10 +263,60 @@ def _print_text(result) -> None:
         if simulate and g.simulated.succeeded and r.simulated.succeeded:
             line += f", simulated {_gain(r.simulated.duration, g.simulated.duration)}"
         out(line + "\n")
+    _print_measures(result, names, width, simulate)
+    unit = " s" if outcomes["refined"].refined.objective.plain else ""  # (a weighted sum has no one unit)
     for w in outcomes["refined"].refined.windows:
         note = f" ({w.note})" if w.note else ""
-        gap = "" if w.gap is None else f", gap {w.gap:.3g} s ({100 * w.gap_share:.2g}%)"
+        gap = "" if w.gap is None else f", gap {w.gap:.3g}{unit} ({100 * w.gap_share:.2g}%)"
         out(f"Optimizer: {w.method}, {1000 * w.seconds:.1f} ms, {w.evaluations} evaluations{gap}{note}\n")
+
+
+def _print_measures(result, names, width: int, simulate: bool) -> None:
+    """The objective and limits where they are not the plain duration, and a table per further measure the
+    models predict (predicted / simulated per action and in total, as the durations), then every limit no
+    choice kept."""
+    out = sys.stdout.write
+    outcomes = {"greedy": result.greedy, "refined": result.refined}
+    refined = outcomes["refined"].refined
+    if not refined.objective.plain or refined.limits:
+        limits = ", ".join(f"{b.measure} <= {b.bound:g} {_unit(result, b.measure)}".rstrip() for b in refined.limits)
+        out(f"\nObjective: {refined.objective.text()}" + (f"; every action's predicted {limits}" if limits else "")
+            + "\n")
+    for measure in _measure_names([outcomes[key].refined for key, _ in names]):
+        unit = _unit(result, measure)
+        out(f"\n{measure.capitalize()}" + (f" ({unit})" if unit else "") + ", predicted"
+            + (" / simulated" if simulate else "") + ":\n")
+        out(f"  {'action':<24}" + "".join(f"{label:>{width}}" for _, label in names) + "\n")
+        for k, action in enumerate(result.sequence.actions):
+            cells = []
+            for key, _ in names:
+                o = outcomes[key]
+                cell = f"{o.refined.measures[k][measure]:.4g}"
+                if simulate:
+                    res = o.simulated.results
+                    cell += f" / {res[k].measures[measure]:.4g}" if k < len(res) and measure in res[k].measures else " / -"
+                cells.append(cell)
+            out(f"  {str(action.step) + ' ' + action.action:<24}" + "".join(f"{c:>{width}}" for c in cells) + "\n")
+        totals = []
+        for key, _ in names:
+            o = outcomes[key]
+            cell = f"{o.refined.measure_total(measure):.4g}"
+            if simulate:
+                done = [r.measures[measure] for r in o.simulated.results if measure in r.measures]
+                cell += f" / {sum(done):.4g}" if len(done) == len(result.sequence.actions) else " / -"
+            totals.append(cell)
+        out(f"  {'total':<24}" + "".join(f"{c:>{width}}" for c in totals) + "\n")
+    for key, label in names:
+        for violation in outcomes[key].refined.violations:
+            out(f"Limit not kept ({label}): {violation.reason()}\n")
+
+
+def _check_limits(result) -> None:
+    """A TailorError (status 9, after the output) naming the first limit the refined sequence breaks."""
+    violations = result.refined.refined.violations
+    if violations:
+        more = f" (and {len(violations) - 1} more, listed above)" if len(violations) > 1 else ""
+        raise TailorError(f"limit not kept: {violations[0].reason()}{more}")
 
 
 NOTHING_TO_REFINE = "the goal holds in the initial state: the plan is empty, nothing to refine or simulate"
@@ -244,8 +332,10 @@ def _nothing_to_refine(result, args: argparse.Namespace, origin: Provenance) -> 
         sys.stdout.write(f"Plan ({plan.planner}) for {plan.domain}/{plan.problem}:\n{render_text(plan)}\n"
                          f"Nothing to refine: {NOTHING_TO_REFINE}.\n")
         return 0
+    objective = (args.objective or result.binding.objective).to_json()
     execution = {"horizon": args.horizon, "risk": args.risk or 0.0, "neighbourhood": args.neighbourhood or 0.0,
-                 "actions": [], "predicted_total": 0.0, "optimization": []}
+                 "actions": [], "predicted_total": 0.0, "optimization": [], "objective": objective,
+                 "limits": {b.measure: b.bound for b in bounds_of(args.limits)}, "violations": []}
     if args.simulate or args.plot:
         execution.update(simulated_total=0.0, succeeded=True)
     data = {"domain": plan.domain, "problem": plan.problem, "planner": plan.planner, "optimizer": args.optimizer,
@@ -261,13 +351,21 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:  # before planning and refining: a plot that cannot be written must not cost their time
         for path in (args.plot, *cost_plot_names(args.plot)):  # (which is drawn is known once instantiated)
             check_output_file(path, ".png")
+    try:
+        limits = bounds_of(args.limits)
+    except ObjectiveSyntaxError as exc:
+        raise UsageError(f"--max: {exc}") from None
     inputs = pipeline.read_task(pipeline.resolve_task(args.domain, args.problem, args.belief), args.models)
+    for option, objective, bounds in (("--objective", args.objective, ()), ("--max", None, limits)):
+        wrong = pipeline.unknown_measure(inputs.binding, objective, bounds)  # before planning: a typo costs nothing
+        if wrong is not None:
+            raise UsageError(f"{option}: {wrong}")
     use_filter = inputs.binding.refinement.filter if args.filter is None else args.filter
     meta = load_meta_model(inputs.models.path) if use_filter else None  # a bad one fails before planning
     options = pipeline.Options(horizon=args.horizon, optimizer=args.optimizer, seed=args.seed, risk=args.risk,
                                neighbourhood=args.neighbourhood, filter=args.filter, zero=None if args.plot else False,
                                simulate=args.simulate or bool(args.plot), planner=args.planner, timeout=args.timeout,
-                               strict=args.strict)
+                               strict=args.strict, objective=args.objective, limits=limits)
     started = time.perf_counter()
     with showing_progress(getattr(args, "progress", True)):  # the genetic algorithm takes seconds per window
         given = plan_from_ipc(inputs.pddl, args.plan) if args.plan else None
@@ -291,4 +389,5 @@ def run(args: argparse.Namespace) -> int:
     else:
         _print_text(result)
         sys.stdout.write("".join(f"Wrote {path}\n" for path in written))
+    _check_limits(result)
     return 0

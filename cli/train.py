@@ -14,7 +14,9 @@ from tailor.cli.arguments import (MAX_EPISODES, add_backend_arguments, backend_s
 
 MIN_EPISODES = 8  # a quarter of the episodes is the test set
 
-DESCRIPTION = ("gather experience in the simulator and learn the action models (durations, success classifiers). Prints a short summary and names every file written: the models (DIR/models/*.json) "
+DESCRIPTION = ("gather experience in the simulator and learn the action models (durations, success classifiers, and the "
+               "further measures the binding's [training.models.ACTION] measures declare, e.g. energy and end error). "
+               "Prints a short summary and names every file written: the models (DIR/models/*.json) "
                "and, in DIR/training/, report.html (tables, learning curves, pictures and the rules in one page), "
                "report.txt (tables and the full rules) and report.json; a warning on stderr where the run is too "
                "small to trust.")

@@ -35,6 +35,8 @@ from tailor.refinement.action_sequence import ActionSequence
 from tailor.refinement.binding import DOMAIN_FILE
 from tailor.refinement.dispatch import dispatch as dispatch_sequence
 from tailor.refinement.models.meta_model import load_meta_model
+from tailor.refinement.objective_grammar import (MeasureBound, ObjectiveSyntaxError, WeightedObjective, bounds_of,
+                                                 objective_from_table, parse_objective)
 from tailor.refinement.optimizers import DEFAULT_OPTIMIZER, OPTIMIZERS
 from tailor.refinement.refine import RefinedSequence, check_neighbourhood, check_risk
 from tailor.sims.episode import SequenceResult
@@ -76,15 +78,28 @@ class Refinement:
         """The predicted duration of the whole sequence, seconds."""
         return self.refined.predicted_total
 
+    @property
+    def measures(self) -> list[dict[str, float]]:
+        """Per action, every measure its model predicts at the chosen values: `{"duration": 3.2, "energy": 41.0}`."""
+        return [dict(m) for m in self.refined.measures]
+
+    @property
+    def violations(self) -> tuple:
+        """The limits no choice could keep (refine.Violation: step, measure, predicted, bound); () where all hold."""
+        return self.refined.violations
+
     def to_json(self) -> dict:
         return {"plan": self.plan.to_json(), "models": str(self.models), "horizon": self.refined.horizon,
                 "risk": self.refined.risk, "neighbourhood": self.refined.neighbourhood,
+                "objective": self.refined.objective.to_json(),
+                "limits": {b.measure: b.bound for b in self.refined.limits},
                 "assertions": [a.to_json() for a in self.assertions],
                 "filter": None if self.filter is None else self.filter.to_json(),
                 "free_parameters": [{"id": pid, "low": low, "high": high, "value": self.chosen[pid]}
                                     for pid, (low, high) in self.free.items()],
                 "sequence": self.sequence.to_json(), "predicted_s": list(self.refined.predicted),
-                "predicted_total_s": self.predicted_total}
+                "predicted_total_s": self.predicted_total, "measures": self.measures,
+                "violations": [v.to_json() for v in self.violations]}
 
 
 def plan(domain, problem=None, *, planner: str = DEFAULT_PLANNER, timeout: float | None = None) -> AbstractPlan:
@@ -106,7 +121,8 @@ def plan(domain, problem=None, *, planner: str = DEFAULT_PLANNER, timeout: float
 def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 2, optimizer: str = DEFAULT_OPTIMIZER,
            seed: int = 0, models: str | Path | None = None, planner: str = DEFAULT_PLANNER,
            timeout: float | None = None, assertion: bool = True, filter: bool | None = None,
-           risk: float | None = None, neighbourhood: float | None = None) -> Refinement:
+           risk: float | None = None, neighbourhood: float | None = None, objective=None, limits=None
+           ) -> Refinement:
     """Plan (unless `plan` is given: ours, or a SequentialPlan / PartialOrderPlan of any UP engine),
     instantiate (Alg. 3), assert subgoals where a success model predicts failure (Alg. 5; unless `assertion`
     is False) and refine over `horizon` actions (Sec. 5.4; 1 is greedy), as `tailor refine` does.
@@ -124,9 +140,16 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     stays plain. `optimizer` names one of OPTIMIZERS: "auto" (default) runs the analytic minimization where it
     applies, else the certified branch and bound where the feature spaces declare bounds, else the genetic
     algorithm; each window of `.refined.windows` says which ran, why the others did not, and its certified gap
-    (`.gap`, None where there is no bound)."""
+    (`.gap`, None where there is no bound).
+
+    `objective` is what refinement minimizes (Ch. 8.1): text as `--objective` takes it ("duration + 0.3*energy"),
+    a mapping {measure: weight}, a WeightedObjective, or None for the binding's `[objective]` (else the
+    duration); `limits` bound every action's predicted measures: {measure: bound}, or texts "error=0.05". Every
+    measure named must be one the domain's simulator reports and every action's model predicts (a ModelFileError
+    naming the file otherwise). A limit no choice keeps does not raise: `.violations` names each."""
     seed, horizon = _refine_arguments(domain, problem, belief, seed, horizon, models, assertion, filter, risk,
                                       neighbourhood, optimizer, timeout)
+    objective, limits = _objective_arguments(objective, limits)
     up_problem = _up_problem(problem)
     domain_dir = resolve_domain_dir(domain)
     if up_problem is None:
@@ -141,13 +164,18 @@ def refine(domain, problem, belief=None, *, plan: object = None, horizon: int = 
     if isinstance(plan, AbstractPlan) and inputs.pddl is not None and plan.problem.lower() != inputs.pddl.problem_name:
         raise ArgumentValueError(f"plan is a plan of problem {plan.problem!r}, not of {inputs.pddl.problem_name!r} "
                                  f"({task.problem})")
+    for name, weighed, bounds in (("objective", objective, ()), ("limits", None, limits)):
+        wrong = pipeline.unknown_measure(inputs.binding, weighed, bounds)
+        if wrong is not None:
+            raise ArgumentValueError(f"{name}: {wrong}")
     use_filter = inputs.binding.refinement.filter if filter is None else filter
     meta = load_meta_model(inputs.models.path) if use_filter else None
     if abstract is None:
         abstract = (plan_problem(up_problem, planner, timeout=timeout) if up_problem is not None
                     else _plan_files(task.domain, task.problem, planner, timeout, inputs.pddl))
     options = pipeline.Options(horizon=horizon, optimizer=optimizer, seed=seed, risk=risk, neighbourhood=neighbourhood,
-                               filter=filter, assertion=assertion, greedy=False, planner=planner, timeout=timeout)
+                               filter=filter, assertion=assertion, greedy=False, planner=planner, timeout=timeout,
+                               objective=objective, limits=limits)
     result = pipeline.run(inputs, options, plan=abstract, meta=meta)
     return Refinement(result.plan, result.sequence, result.refined.refined, result.models_dir, result.assertions,
                       result.decision)
@@ -189,6 +217,43 @@ def _refine_arguments(domain, problem, belief, seed, horizon, models, assertion,
         raise ArgumentTypeError(f"belief must be a mapping {{object: {{quantity: value}}}}, a path or None, "
                                 f"not {type(belief).__name__}")
     return seed, horizon
+
+
+def _objective_arguments(objective, limits) -> tuple[WeightedObjective | None, tuple[MeasureBound, ...]]:
+    """`refine`'s objective and limits as the pipeline takes them (an ArgumentTypeError or ArgumentValueError
+    naming the argument)."""
+    try:
+        if isinstance(objective, str):
+            objective = parse_objective(objective)
+        elif isinstance(objective, Mapping):
+            objective = objective_from_table(dict(objective))
+        elif objective is not None and not isinstance(objective, WeightedObjective):
+            raise ArgumentTypeError(f"objective must be text, a mapping {{measure: weight}}, a WeightedObjective or "
+                                    f"None, not {type(objective).__name__}")
+    except ObjectiveSyntaxError as exc:
+        raise ArgumentValueError(f"objective {objective!r}: {exc}") from None
+    except ValueError as exc:
+        raise ArgumentValueError(f"objective: {exc}") from None
+    if limits is None:
+        return objective, ()
+    if isinstance(limits, Mapping):
+        items = []
+        for measure, bound in limits.items():
+            if isinstance(bound, bool) or not isinstance(bound, (int, float)) and not _real(bound):
+                raise ArgumentTypeError(f"limits: the bound of {measure!r} must be a number, not "
+                                        f"{type(bound).__name__}")
+            try:
+                items.append(MeasureBound(str(measure), float(bound)))
+            except ValueError as exc:
+                raise ArgumentValueError(f"limits: {exc}") from None
+        limits = items
+    elif isinstance(limits, (str, bytes)) or not hasattr(limits, "__iter__"):
+        raise ArgumentTypeError(f"limits must be a mapping {{measure: bound}} or a list of \"measure=bound\" texts, "
+                                f"not {type(limits).__name__}")
+    try:
+        return objective, bounds_of(list(limits))
+    except ObjectiveSyntaxError as exc:
+        raise ArgumentValueError(f"limits: {exc}") from None
 
 
 def _is_up_plan(plan) -> bool:

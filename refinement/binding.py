@@ -6,8 +6,10 @@ groups, what each predicate implies about the continuous values of its arguments
 belief state, ranges, scene objects), and the ranges of each PDDL type that apply where no predicate says
 anything. Its `[refinement]` table sets refinement's defaults (the meta filter, the neighbourhood, the zero
 baseline), its `[evaluation]` table which random situations `tailor evaluate` draws (both typed here, once, when
-the file is read), and its `[training]` table what `tailor train` learns (validated by learning.recipe against
-the feature spaces). Binding a domain needs no Python.
+the file is read), its `[training]` table what `tailor train` learns (validated by learning.recipe against
+the feature spaces), and its `[objective]` table what refinement minimizes by default: a weight per measure
+(`duration = 1.0`, `energy = 0.3`; objective_grammar), the predicted duration alone where it has none.
+Binding a domain needs no Python.
 """
 
 from __future__ import annotations
@@ -26,7 +28,9 @@ from tailor.errors import BindingError, SimError, TailorError, check_path_argume
 from tailor.planner_bridge.reading import read_input
 from tailor.refinement.binding_domain import (DomainVocabulary, check_against_domain, did_you_mean, read_vocabulary,
                                               vocabulary_of)
+from tailor.refinement.objective_grammar import DURATION, DURATION_ONLY, WeightedObjective, objective_from_table
 from tailor.sims import registry
+from tailor.sims.episode import ENERGY, ERROR, HEADING_ERROR
 from tailor.sims.protocol import GROUPS, ActionSpec, SimulatorEntry
 
 SCHEMA = 2  # 2: the binding names its simulator
@@ -35,6 +39,7 @@ DOMAIN_FILE = "domain.pddl"  # the PDDL domain beside it, which the binding is c
 DEFAULT_TYPE = "default"  # [types.default]: ranges for objects of a type the binding does not name
 MAX_BOUND = 1e9  # no bound of a range beyond this: features of larger values overflow (squares, products)
 NAMED_BOUNDS = {"pi": math.pi, "-pi": -math.pi}  # strings a range bound may be written as
+MEASURES = (ENERGY, ERROR, HEADING_ERROR)  # measures besides the duration that episodes report (sims.episode)
 
 Range = tuple[float, float]
 
@@ -228,6 +233,7 @@ class Binding:
     evaluation: EvaluationPlan | None = None  # None: the binding names no situations to evaluate on
     quantities: tuple[str, ...] = ()  # every quantity the simulator's actions take
     refinement: RefinementDefaults = RefinementDefaults()
+    objective: WeightedObjective = DURATION_ONLY  # the [objective] table: what refinement minimizes by default
 
     @property
     def entry(self) -> SimulatorEntry:
@@ -295,7 +301,7 @@ def parse_binding(data: Mapping[str, Any], file: str | None = None) -> Binding:
         return BindingError(message, file=file)
 
     _check_keys(data, {"schema", "domain", "simulator", "actions", "predicates", "types", "training", "evaluation",
-                       "refinement"}, "top level", fail)
+                       "refinement", "objective"}, "top level", fail)
     if data.get("schema", SCHEMA) != SCHEMA:
         raise fail(f"unsupported schema {data['schema']!r} (expected {SCHEMA}: a binding names its simulator)")
     domain = data.get("domain")
@@ -318,14 +324,35 @@ def parse_binding(data: Mapping[str, Any], file: str | None = None) -> Binding:
     types = {name: MappingProxyType(_ranges(f"[types.{name}]", table, set(), quantities, fail))
              for name, table in _tables(data, "types", fail)}
     extra = {}
-    for key in ("training", "evaluation", "refinement"):
+    for key in ("training", "evaluation", "refinement", "objective"):
         if not isinstance(data.get(key, {}), dict):
             raise fail(f"'{key}' must be a table ([{key}])")
         extra[key] = dict(data.get(key, {}))
     refinement = _refinement(extra["refinement"], extra["evaluation"], file, fail)
     evaluation = _evaluation(extra["evaluation"], entry, fail)
+    objective = _objective(extra["objective"], entry, fail) if "objective" in data else DURATION_ONLY
     return Binding(file, domain, simulator, MappingProxyType(actions), MappingProxyType(predicates),
-                   MappingProxyType(types), MappingProxyType(extra["training"]), evaluation, quantities, refinement)
+                   MappingProxyType(types), MappingProxyType(extra["training"]), evaluation, quantities, refinement,
+                   objective)
+
+
+def known_measures(entry: SimulatorEntry) -> tuple[str, ...]:
+    """The measures of the simulator `entry`'s actions: the duration, and each of MEASURES it declares a unit for
+    (its episodes report those)."""
+    return (DURATION, *(name for name in MEASURES if name in entry.units))
+
+
+def _objective(table: dict, entry: SimulatorEntry, fail) -> WeightedObjective:
+    """The [objective] table: measure = weight, each a measure of the simulator, weights >= 0, one above 0."""
+    known = known_measures(entry)
+    for measure in table:
+        if measure not in known:
+            raise fail(f"[objective] {measure!r} is not a measure of simulator {entry.name!r} (known: "
+                       f"{', '.join(known)}){_did_you_mean(measure, known)}")
+    try:
+        return objective_from_table(table)
+    except ValueError as exc:
+        raise fail(f"[objective] {exc}") from None
 
 
 def _refinement(table: dict, evaluation: dict, file: str | None, fail) -> RefinementDefaults:

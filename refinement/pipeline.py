@@ -15,19 +15,22 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
-from tailor.errors import BeliefError, BindingError, ModelFileError
+from tailor.errors import BeliefError, BindingError, ModelFileError, UsageError
 from tailor.planner_bridge import DEFAULT_PLANNER, AbstractPlan, PDDLTask, plan_pddl, read_pddl, resolve_problem
 from tailor.refinement.action_sequence import ActionSequence
-from tailor.refinement.assertion import AssertedSequence, Assertion, assert_subgoals
+from tailor.refinement.assertion import AssertedSequence, Assertion, Detour, assert_subgoals
 from tailor.refinement.belief import BeliefState, belief_path_for, load_belief, parse_belief
-from tailor.refinement.binding import BINDING_FILE, Binding, load_domain_binding
+from tailor.refinement.binding import BINDING_FILE, Binding, known_measures, load_domain_binding
 from tailor.refinement.check import TaskCheck, check_task
 from tailor.refinement.dispatch import check_scene, dispatch
 from tailor.refinement.meta_filter import MetaDecision, decide
 from tailor.refinement.model_store import ModelSource, resolve_models
 from tailor.refinement.models.action_models import ActionModel, load_action_models, load_success_models
 from tailor.refinement.optimizers import DEFAULT_OPTIMIZER
-from tailor.refinement.refine import RefinedSequence, predicted_durations, refine, resolve_risk
+from tailor.refinement.binding_domain import did_you_mean
+from tailor.refinement.objective_grammar import MeasureBound, WeightedObjective
+from tailor.refinement.refine import (RefinedSequence, check_measures, predicted_durations, predicted_measures, refine,
+                                      resolve_risk)
 from tailor.sims.episode import SequenceResult
 
 GREEDY_HORIZON = 1
@@ -83,6 +86,9 @@ class Options:
     planner: str = DEFAULT_PLANNER
     timeout: float | None = None
     strict: bool = False  # the check's warnings (refinement.check) are errors
+    # what refinement minimizes (Ch. 8.1): None, the binding's [objective] (default: the predicted duration)
+    objective: WeightedObjective | None = None
+    limits: tuple[MeasureBound, ...] = ()  # bounds on every action's predicted measures (`--max error=0.05`)
 
 
 @dataclass(frozen=True)
@@ -189,21 +195,35 @@ def success_models_in(models_dir: Path, binding: Binding, sequence: ActionSequen
     return load_success_models(Path(models_dir), names) if names else {}
 
 
-def assert_task(sequence: ActionSequence, binding: Binding, success_models: dict, plan: AbstractPlan | None = None
-                ) -> AssertedSequence:
-    """Algorithm 5 (see tailor.refinement.assertion), the object types taken from the plan."""
+def assert_task(sequence: ActionSequence, binding: Binding, success_models: dict, plan: AbstractPlan | None = None,
+                detour: Detour | None = None) -> AssertedSequence:
+    """Algorithm 5 (see tailor.refinement.assertion), the object types taken from the plan; with `detour`, a
+    subgoal only where the predicted failure costs more than the detour."""
     types = plan.object_types if plan is not None and plan.objects else None
-    return assert_subgoals(sequence, binding, success_models, types)
+    return assert_subgoals(sequence, binding, success_models, types, detour)
 
 
 def resolve_options(options: Options, binding: Binding, models: dict[str, ActionModel]) -> Options:
     """`options` with the binding's `[refinement]` defaults and the risk filled in."""
     defaults = binding.refinement
     return replace(options,
+                   objective=binding.objective if options.objective is None else options.objective,
                    risk=resolve_risk(options.risk, models.values()),
                    neighbourhood=defaults.neighbourhood if options.neighbourhood is None else options.neighbourhood,
                    filter=defaults.filter if options.filter is None else options.filter,
                    zero=defaults.zero_baseline if options.zero is None else options.zero)
+
+
+def unknown_measure(binding: Binding, objective: WeightedObjective | None, limits=()) -> str | None:
+    """What is wrong with a measure the objective or a limit names that the binding's simulator does not have
+    (None: nothing); the command line and the API each raise it as their own error (a usage error)."""
+    known = known_measures(binding.entry)
+    named = [*(objective.measures if objective is not None else ()), *(limit.measure for limit in limits)]
+    for measure in named:
+        if measure not in known:
+            return (f"unknown measure {measure!r}: the measures of simulator {binding.simulator!r} are "
+                    f"{', '.join(known)}{did_you_mean(measure, known)}")
+    return None
 
 
 def zero_assignment(sequence: ActionSequence) -> dict[str, float]:
@@ -223,11 +243,13 @@ def refine_stage(sequence: ActionSequence, models: dict[str, ActionModel], succe
 
     judged = meta is not None and options.horizon > GREEDY_HORIZON and sequence.actions
     greedy = None
-    if options.greedy or judged:
+    objective = {} if options.objective is None else {"objective": options.objective}
+    if options.greedy or judged:  # the same objective and limits, one action at a time
         greedy = refine(sequence, models, horizon=GREEDY_HORIZON, method=options.optimizer, seed=seed,
-                        success_models=success_models)
+                        success_models=success_models, limits=options.limits, **objective)
     optimized = refine(sequence, models, horizon=options.horizon, method=options.optimizer, seed=seed,
-                       success_models=success_models, risk=options.risk, neighbourhood=options.neighbourhood)
+                       success_models=success_models, risk=options.risk, neighbourhood=options.neighbourhood,
+                       limits=options.limits, **objective)
     decision = decide(meta, greedy, models, optimized) if judged else None
     kept_greedy = decision is not None and not decision.refine
     greedy_run = execution(greedy) if greedy is not None else None
@@ -235,7 +257,8 @@ def refine_stage(sequence: ActionSequence, models: dict[str, ActionModel], succe
     zero = None
     if options.zero and sequence.free_parameters():
         bound = sequence.bind(zero_assignment(sequence))
-        zero = execution(RefinedSequence(bound, predicted_durations(bound, models), (), 0))
+        zero = execution(RefinedSequence(bound, predicted_durations(bound, models), (), 0,
+                                         measures=predicted_measures(bound, models)))
     return Refinements(refined_run, greedy_run if options.greedy else None, zero, decision, optimized)
 
 
@@ -263,12 +286,17 @@ def prepare(inputs: Inputs, options: Options = Options(), plan: AbstractPlan | N
     instantiated = checked.sequence
     success_models: dict = {}
     sequence, assertions = instantiated, ()
-    if options.assertion:
-        success_models = success_models_in(inputs.models.path, inputs.binding, instantiated)
-        asserted = assert_task(instantiated, inputs.binding, success_models, plan)
-        sequence, assertions = asserted.sequence, asserted.assertions
-    models = load_models(inputs.models.path, sequence)
+    models = load_models(inputs.models.path, instantiated)  # (an asserted subgoal reuses the same actions)
     resolved = resolve_options(options, inputs.binding, models)
+    if options.assertion:  # the detour weighed as the refine stage will take it
+        success_models = success_models_in(inputs.models.path, inputs.binding, instantiated)
+        detour = Detour(models, resolved.optimizer, resolved.seed, resolved.risk, resolved.neighbourhood)
+        asserted = assert_task(instantiated, inputs.binding, success_models, plan, detour)
+        sequence, assertions = asserted.sequence, asserted.assertions
+    wrong = unknown_measure(inputs.binding, resolved.objective, resolved.limits)
+    if wrong is not None:
+        raise UsageError(wrong)
+    check_measures(sequence.actions, models, resolved.objective, resolved.limits)  # each has a model of each
     if not sequence.actions:
         resolved = replace(resolved, simulate=False)  # nothing to execute
     return Prepared(plan, instantiated, sequence, tuple(assertions), inputs.binding, inputs.models, models,

@@ -15,6 +15,12 @@ neighbourhood (a share of each free range, the size of the execution noise: the 
 neighbourhood`) the optimizers minimize the worst predicted sum within it around a choice, so they stop
 choosing a dip of the models narrower than the robot can hit (a subgoal whose next action's planned path
 changes word a few degrees away).
+
+Beyond duration (Ch. 8.1): the objective may be a weighted sum of measures (`objective_grammar`: duration +
+0.3 * energy), each action then one term per weighted measure, its model scaled by the weight; and limits on
+measures (`error=0.05`) keep every action's predicted measure within its bound the way a success model keeps
+predicted success: a choice that breaks one is invalid (Term.valid). Where no choice keeps a bound, the
+refined sequence says so (`RefinedSequence.violations`) instead of hiding it.
 """
 
 from __future__ import annotations
@@ -28,7 +34,9 @@ import numpy as np
 from tailor.refinement.action_sequence import ActionSequence, ExecutableAction
 from tailor.errors import ArgumentValueError, DataError, ModelFileError
 from tailor.refinement.models.features import feature_space
+from tailor.refinement.objective_grammar import DURATION, DURATION_ONLY, MeasureBound, WeightedObjective
 from tailor.refinement.optimizers import DEFAULT_OPTIMIZER, FreeParameter, Objective, OptimizationResult, Term, optimize
+from tailor.refinement.optimizers.objective import scaled
 from tailor.progress import progress_bar
 from tailor.sims.protocol import FeatureSpace
 
@@ -60,10 +68,45 @@ class RefinedSequence:
     # per window, the same objective minimized by the optimizer `refine(compare=...)` names (evaluation: the
     # choices of two optimizers on the same windows); () where none was asked for
     compared: tuple[OptimizationResult, ...] = ()
+    objective: WeightedObjective = DURATION_ONLY  # what the windows minimized (Ch. 8.1)
+    limits: tuple[MeasureBound, ...] = ()  # bounds on every action's predicted measures
+    # per action, every measure its model predicts at the chosen values (duration first), checked; () where none
+    measures: tuple[Mapping[str, float], ...] = ()
+    violations: tuple[Violation, ...] = ()  # the limits no choice kept (empty: every one holds)
 
     @property
     def predicted_total(self) -> float:
         return float(sum(self.predicted))
+
+    def measure_total(self, measure: str) -> float | None:
+        """A measure predicted for the whole sequence (summed over its actions); None where an action's model
+        does not predict it."""
+        if measure == DURATION:
+            return self.predicted_total
+        if not self.measures or any(measure not in m for m in self.measures):
+            return None
+        return float(sum(m[measure] for m in self.measures))
+
+
+@dataclass(frozen=True)
+class Violation:
+    """A limit refinement could not keep: no choice within the action's free ranges keeps its predicted
+    measure within the bound (the best choice found breaks it)."""
+
+    index: int  # position of the action in the sequence
+    step: int  # its plan step (ExecutableAction.step)
+    action: str
+    measure: str
+    predicted: float
+    bound: float
+
+    def reason(self) -> str:
+        return (f"step {self.step} {self.action}: no subgoal within its ranges keeps the predicted {self.measure} "
+                f"<= {self.bound:g} (the best choice found: {self.predicted:.4g})")
+
+    def to_json(self) -> dict:
+        return {"step": self.step, "action": self.action, "measure": self.measure,
+                "predicted": self.predicted, "bound": self.bound}
 
 
 class LastBatch:
@@ -203,6 +246,59 @@ def action_term(action: ExecutableAction, model: ActionModel, free: tuple[FreePa
                 no_bounds=why, reads=reads)
 
 
+def action_terms(action: ExecutableAction, model: ActionModel, free: tuple[FreeParameter, ...],
+                 assignment: Mapping[str, float], success_model=None, risk: float = 0.0, shared: dict | None = None,
+                 objective: WeightedObjective = DURATION_ONLY, limits: tuple[MeasureBound, ...] = ()
+                 ) -> tuple[Term, ...]:
+    """One action's share of a window's objective: a term per measure the objective weighs (its model, plus
+    `risk` times its spread, scaled by the weight), sharing one feature batch; the first carries the validity
+    (the guard's predicted success, and every limit kept). The duration alone is `action_term` itself."""
+    base = action_term(action, model, free, assignment, success_model, risk, shared)
+    if objective.plain and not limits:
+        return (base,)
+    terms = []
+    for measure, weight in objective.weights:
+        if weight > 0:
+            term = replace(base, model=scaled(model.measure_with_risk(measure, risk), weight),
+                           label=base.label if measure == DURATION else f"{base.label} {measure}")
+            if terms:  # validity and the success region belong to the action, once
+                term = replace(term, valid=None, region=None, region_features=None, region_margin=(),
+                               region_bounds=None)
+            terms.append(term)
+    if limits:
+        terms[0] = replace(terms[0], valid=_keeping(base, model, limits))
+    return tuple(terms)
+
+
+def _keeping(base: Term, model: ActionModel, limits: tuple[MeasureBound, ...]):
+    """theta -> whether the action of term `base` keeps every limit at theta (and `base.valid` holds)."""
+    trees = [(model.tree_of(limit.measure), limit.bound) for limit in limits]
+    guard = base.valid
+
+    def valid(theta: np.ndarray) -> np.ndarray:
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        features = base.derive(base.inputs(theta))
+        ok = np.ones(len(theta), dtype=bool) if guard is None else np.asarray(guard(theta), dtype=bool)
+        for tree, bound in trees:
+            with np.errstate(over="ignore", invalid="ignore"):
+                ok &= np.asarray(tree.predict(features), dtype=float) <= bound
+        return ok
+
+    return valid
+
+
+def limit_term(action: ExecutableAction, model: ActionModel, free: tuple[FreeParameter, ...],
+               assignment: Mapping[str, float], limits: tuple[MeasureBound, ...], success_model=None) -> Term:
+    """Only the validity of an action beyond the horizon: its limits kept (and its guard's success)."""
+    term = guard_term(action, model, free, assignment, success_model) if success_model is not None else None
+    base = action_term(action, model, free, assignment, success_model)
+    if term is None:
+        term = replace(base, model=_NO_DURATION, features=lambda theta: np.zeros((len(np.atleast_2d(theta)), 1)),
+                       inputs=None, derive=None, reads=(), no_bounds="",
+                       feature_bounds=lambda lo, hi: (np.zeros((len(lo), 1)), np.zeros((len(lo), 1))))
+    return replace(term, valid=_keeping(base, model, limits), label=f"limits of {action.pddl}")
+
+
 def _bounds_of(model) -> tuple[object | None, str]:
     """The enclosure its feature space declares for a model's features (FeatureSpace.bounds: boxes of action
     parameters to boxes of features), or None and why not."""
@@ -340,7 +436,8 @@ def predicted_spreads(sequence: ActionSequence, models: Mapping[str, ActionModel
 def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon: int = 2,
            method: str = DEFAULT_OPTIMIZER, seed: int = 0, success_models: Mapping[str, object] | None = None,
            risk: float = 0.0, margin_share: float = MARGIN_SHARE, neighbourhood: float = 0.0,
-           compare: str | None = None) -> RefinedSequence:
+           compare: str | None = None, objective: WeightedObjective = DURATION_ONLY,
+           limits: tuple[MeasureBound, ...] = ()) -> RefinedSequence:
     """Bind every free parameter of `sequence`, h actions at a time, minimizing summed predicted duration
     (plus `risk` times the summed uncertainty), each choice `margin_share` of its range from the models' splits;
     with `neighbourhood` > 0, the worst of that sum within that share of each free range around a choice.
@@ -348,7 +445,10 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
     Guarded actions (subgoal assertion) take their success classifier from `success_models` by name: the
     optimizers consider only parameterizations it predicts to succeed (Alg. 6). With `compare` (an optimizer's
     name), each window's objective is also minimized by that optimizer (`RefinedSequence.compared`; the windows
-    still take `method`'s choices): two optimizers judged on the same windows.
+    still take `method`'s choices): two optimizers judged on the same windows. `objective` weighs the measures
+    summed (default: the duration alone); `limits` bound every action's predicted measures (a ModelFileError
+    naming the file where an action's model lacks a measure either names). A limit no choice keeps is reported
+    in `violations`.
     """
     if horizon < 1:
         raise ValueError("the horizon must be at least 1")
@@ -360,6 +460,8 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
     if risk:  # every model the sequence uses must know its uncertainty: say so before any work
         for action in actions:
             model_for(action, models).require_uncertainty()
+    limits = tuple(limits)
+    check_measures(actions, models, objective, limits)
     assignment: dict[str, float] = {}
     windows: list[OptimizationResult] = []
     acted: list[int] = []
@@ -367,32 +469,84 @@ def refine(sequence: ActionSequence, models: Mapping[str, ActionModel], horizon:
     steps = progress_bar(iterable=range(len(actions)), desc=f"refining (h={horizon})", unit="action", leave=False)
     for i in steps:
         window = optimize_window(actions, i, horizon, assignment, models, method, seed, success_models, risk,
-                                 margin_share, neighbourhood)
+                                 margin_share, neighbourhood, objective, limits)
         if window is None:
             continue  # action i's subgoal is already fixed; nothing of it to choose in this window
-        objective, result = window
+        window_objective, result = window
         windows.append(result)
         acted.append(i)
         if compare is not None:
-            compared.append(result if result.method == compare else optimize(objective, method=compare, seed=seed + i))
-        chosen = dict(zip((p.id for p in objective.free), result.values))
+            compared.append(result if result.method == compare
+                            else optimize(window_objective, method=compare, seed=seed + i))
+        chosen = dict(zip((p.id for p in window_objective.free), result.values))
         for p in actions[i].params:  # fix what action i uses; later subgoals are optimized again
             if p.id in chosen:
                 assignment[p.id] = float(chosen[p.id])
     bound = sequence.bind(assignment)
+    measures = predicted_measures(bound, models)
     return RefinedSequence(sequence=bound, predicted=predicted_durations(bound, models), windows=tuple(windows),
                            horizon=horizon, risk=float(risk), spread=predicted_spreads(bound, models),
-                           neighbourhood=float(neighbourhood), window_actions=tuple(acted), compared=tuple(compared))
+                           neighbourhood=float(neighbourhood), window_actions=tuple(acted), compared=tuple(compared),
+                           objective=objective, limits=limits, measures=measures,
+                           violations=limit_violations(bound, models, limits))
+
+
+def check_measures(actions, models: Mapping[str, ActionModel], objective: WeightedObjective = DURATION_ONLY,
+                   limits: tuple[MeasureBound, ...] = ()) -> None:
+    """A ModelFileError naming the file of the first action model that lacks a measure the objective weighs or
+    a limit bounds (before any work: the models of every action of the sequence)."""
+    if not isinstance(objective, WeightedObjective):
+        raise ArgumentValueError(f"the objective must be a WeightedObjective, not {type(objective).__name__}")
+    named = [m for m in (*objective.measures, *(limit.measure for limit in limits)) if m != DURATION]
+    for action in actions:
+        model = model_for(action, models)
+        for measure in named:
+            model.tree_of(measure)
+
+
+def predicted_measures(sequence: ActionSequence, models: Mapping[str, ActionModel]
+                       ) -> tuple[Mapping[str, float], ...]:
+    """Per action of a bound sequence, every measure its model predicts (duration first), each checked as a
+    duration is (an absurd prediction is a ModelFileError naming the file); () where a model is duck-typed
+    without measures (tests, plug-ins)."""
+    out = []
+    for action in sequence.actions:
+        model = model_for(action, models)
+        names = getattr(model, "measure_names", None)
+        if names is None:
+            return ()
+        values = action.values()[None, :]
+        where = f"step {action.step} {action.action}"
+        out.append({name: model.check_measure(name, float(model.predict_measure(name, values)[0]), where)
+                    for name in names})
+    return tuple(out)
+
+
+def limit_violations(sequence: ActionSequence, models: Mapping[str, ActionModel],
+                     limits: tuple[MeasureBound, ...]) -> tuple[Violation, ...]:
+    """The limits a bound sequence breaks, per action, at its (unchecked, unclipped) predictions: what the
+    optimizers' validity tests too."""
+    out = []
+    for index, action in enumerate(sequence.actions):
+        model = model_for(action, models)
+        for limit in limits:
+            value = float(model.predict_measure(limit.measure, action.values()[None, :])[0])
+            if not value <= limit.bound:
+                out.append(Violation(index, action.step, action.action, limit.measure, value, limit.bound))
+    return tuple(out)
 
 
 def optimize_window(actions: tuple[ExecutableAction, ...], i: int, horizon: int, assignment: Mapping[str, float],
                     models: Mapping[str, ActionModel], method: str = DEFAULT_OPTIMIZER, seed: int = 0,
                     success_models: Mapping[str, object] | None = None, risk: float = 0.0,
-                    margin_share: float = MARGIN_SHARE, neighbourhood: float = 0.0
+                    margin_share: float = MARGIN_SHARE, neighbourhood: float = 0.0,
+                    objective: WeightedObjective = DURATION_ONLY, limits: tuple[MeasureBound, ...] = ()
                     ) -> tuple[Objective, OptimizationResult] | None:
     """The window of `horizon` actions from action i, its free parameters not in `assignment` optimized (seed
     `seed + i`): the objective and its optimum; None where action i has nothing left to choose. One step of
-    `refine`, and what closed-loop execution re-optimizes from a measured state (receding horizon)."""
+    `refine`, and what closed-loop execution re-optimizes from a measured state (receding horizon). With
+    `limits`, an action beyond the horizon that shares a free parameter joins as a validity-only term, as a
+    guarded one does: a choice must leave it a way to keep its limits."""
     window = actions[i:i + horizon]
     free: list[FreeParameter] = []
     seen: set[str] = set()
@@ -409,16 +563,68 @@ def optimize_window(actions: tuple[ExecutableAction, ...], i: int, horizon: int,
         return None
     # a guarded action beyond the horizon that shares a free parameter still constrains it (Alg. 6): it joins as
     # a validity-only term, its other open parameters chosen with the window's (not fixed yet)
-    beyond = [a for a in actions[i + horizon:] if a.guard and any(p.id in seen for p in a.params if p.free)]
+    beyond = [a for a in actions[i + horizon:]
+              if (a.guard or limits) and any(p.id in seen for p in a.params if p.free)]
     for action in beyond:
         take(action)
     free_t = tuple(free)
-    shared: dict = {}  # one feature batch and duration model per action model of the window
-    terms = tuple(action_term(a, model_for(a, models), free_t, assignment, guard_for(a, success_models), risk,
-                              shared) for a in window)
-    terms += tuple(guard_term(a, model_for(a, models), free_t, assignment, guard_for(a, success_models))
-                   for a in beyond)
     margin = tuple(margin_share * (p.high - p.low) for p in free_t)
     radius = tuple(neighbourhood * (p.high - p.low) for p in free_t) if neighbourhood else ()
-    objective = Objective(free=free_t, terms=terms, margin=margin, neighbourhood=radius)
-    return objective, optimize(objective, method=method, seed=seed + i)
+
+    def objective_with(kept: Mapping[int, tuple[MeasureBound, ...]]) -> Objective:
+        """The window's objective, each action k (of window + beyond) keeping the limits kept[k]."""
+        shared: dict = {}  # one feature batch and duration model per action model of the window
+        terms = tuple(term for k, a in enumerate(window)
+                      for term in action_terms(a, model_for(a, models), free_t, assignment,
+                                               guard_for(a, success_models), risk, shared, objective, kept[k]))
+        terms += tuple(limit_term(a, model_for(a, models), free_t, assignment, kept[k], guard_for(a, success_models))
+                       if kept[k] else guard_term(a, model_for(a, models), free_t, assignment,
+                                                  guard_for(a, success_models))
+                       for k, a in enumerate(beyond, start=len(window)))
+        return Objective(free=free_t, terms=terms, margin=margin, neighbourhood=radius)
+
+    everyone = dict.fromkeys(range(len(window) + len(beyond)), tuple(limits))
+    summed = objective_with(everyone)
+    result = optimize(summed, method=method, seed=seed + i)
+    if limits and not summed.valid(np.array([result.values]))[0]:
+        relaxed, notes = _attainable_limits((*window, *beyond), models, free_t, assignment, limits, method, seed + i)
+        if notes:  # a limit no choice keeps: keep the least of that measure attainable, minimize the rest
+            summed = objective_with(relaxed)
+            result = optimize(summed, method=method, seed=seed + i)
+            result = replace(result, note="; ".join([*notes, result.note]))
+    return summed, result
+
+
+RELAXED_SHARE = 0.05  # a limit no choice keeps is relaxed to the least attainable value plus this share of the
+# measure's spread over the window's choices (a bound at the least alone leaves a sliver the optimizers miss)
+SPREAD_SAMPLES = 256  # seeded uniform choices the spread is estimated on
+
+
+def _attainable_limits(actions, models: Mapping[str, ActionModel], free: tuple[FreeParameter, ...],
+                       assignment: Mapping[str, float], limits: tuple[MeasureBound, ...], method: str, seed: int
+                       ) -> tuple[dict[int, tuple[MeasureBound, ...]], list[str]]:
+    """Per action (by position), its limits with each one no choice of the window's free values keeps raised to
+    the least value of its measure the window can attain (plus RELAXED_SHARE of its spread), and a note per raised
+    one: the window then chooses as precisely as it can there, instead of among choices that all break a limit."""
+    kept, notes = {}, []
+    low, high = np.array([p.low for p in free]), np.array([p.high for p in free])
+    sample = np.random.default_rng(seed).uniform(low, high, size=(SPREAD_SAMPLES, len(free)))
+    for k, action in enumerate(actions):
+        model = model_for(action, models)
+        base = action_term(action, model, free, assignment)
+        own = []
+        for limit in limits:
+            tree = model.tree_of(limit.measure)
+            least = optimize(Objective(free, (replace(base, model=tree),)), method=method, seed=seed).cost
+            if least > limit.bound:
+                with np.errstate(over="ignore", invalid="ignore"):
+                    values = np.asarray(tree.predict(base.derive(base.inputs(sample))), dtype=float)
+                spread = float(np.nanmax(values) - least) if np.isfinite(values).any() else 0.0
+                bound = least + RELAXED_SHARE * max(spread, 0.0) + 1e-12 * (1.0 + abs(least))
+                notes.append(f"no choice keeps step {action.step}'s {limit.measure} <= {limit.bound:g}: kept at "
+                             f"<= {bound:.4g}, near the least attainable {least:.4g}")
+                own.append(MeasureBound(limit.measure, bound))
+            else:
+                own.append(limit)
+        kept[k] = tuple(own)
+    return kept, notes

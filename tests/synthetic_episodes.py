@@ -2,7 +2,8 @@
 
 Durations follow a known formula (turn at TURN_RATE, then drive at SPEED, then turn to the goal heading), so
 the learning pipeline can be tested without the simulator; `gather` has the signature of
-`sims.experience.gather`. The episodes log the soccer simulator's named state columns (COLUMNS, no ball).
+`sims.experience.gather`. Each episode also reports an energy (J, growing with the distance and the arrival
+speed) and an end error (m, growing with the arrival speed), as the simulators' measures (Ch. 8.1). The episodes log the soccer simulator's named state columns (COLUMNS, no ball).
 """
 
 from __future__ import annotations
@@ -60,7 +61,20 @@ def synthetic_episode(action: str, seed: int, collide_beyond: float | None = Non
         bearing = np.arctan2(params[5] - params[1], params[4] - params[0])
         if abs(norm(params[6] - bearing)) > collide_beyond:
             outcome = "collision"
-    return Episode(action, params, t, state, COLUMNS, outcome, duration, seed)
+    measures = {"energy": float(synthetic_energy(params)[0] + abs(rng.normal(0.0, 0.1))),
+                "error": float(synthetic_error(params)[0] + abs(rng.normal(0.0, 0.001)))}
+    return Episode(action, params, t, state, COLUMNS, outcome, duration, seed, measures)
+
+
+def synthetic_energy(params: np.ndarray) -> np.ndarray:
+    """J: 4 J per metre driven, and 30 J per m/s of the speed arrived at."""
+    params = np.atleast_2d(params)
+    return 4.0 * np.hypot(params[:, 4] - params[:, 0], params[:, 5] - params[:, 1]) + 30.0 * params[:, 7]
+
+
+def synthetic_error(params: np.ndarray) -> np.ndarray:
+    """m: 1 cm, and 10 cm per m/s of the speed arrived at (a faster arrival overshoots)."""
+    return 0.01 + 0.1 * np.atleast_2d(params)[:, 7]
 
 
 def gather(simulator: str, scenario: str, episodes: int, seed: int, jobs: int = 1,

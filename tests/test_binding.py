@@ -155,8 +155,8 @@ BAD_BINDINGS = [
     ("actions = 3\n", r"'actions' must be a table of tables \(\[actions.NAME\]\)"),
     ("[actions]\ngo = 3\n", r"\[actions.go\] must be a table"),
     ("foo = 1\n",
-     r"top level: unknown key 'foo' \(expected one of actions, domain, evaluation, predicates, refinement, schema, "
-     r"simulator, training, types\)"),
+     r"top level: unknown key 'foo' \(expected one of actions, domain, evaluation, objective, predicates, refinement, "
+     r"schema, simulator, training, types\)"),
     ("schema = 1\n", r"unsupported schema 1 \(expected 2: a binding names its simulator\)"),
     ("schema = 3\n", r"unsupported schema 3 \(expected 2: a binding names its simulator\)"),
     ("training = 3\n", r"'training' must be a table \(\[training\]\)"),

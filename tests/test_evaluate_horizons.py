@@ -29,7 +29,7 @@ def test_each_effective_horizon_is_refined_once_and_marked(monkeypatch):
     def refine_stage(sequence, models, success, options):
         asked.append(options.horizon)
         refined = SimpleNamespace(predicted_total=10.0 - options.horizon, windows=[SimpleNamespace(method="analytic")])
-        simulated = SimpleNamespace(duration=20.0 - options.horizon, succeeded=True)
+        simulated = SimpleNamespace(duration=20.0 - options.horizon, succeeded=True, results=[])
         return SimpleNamespace(refined=SimpleNamespace(refined=refined, simulated=simulated))
 
     monkeypatch.setattr(experiments, "asserted_situation", lambda job, objects: (SimpleNamespace(actions=[1, 2]), {}))

@@ -41,9 +41,9 @@ def _run(tmp_path, monkeypatch, own_episodes: bool) -> tuple[list, dict]:
     monkeypatch.setattr(training, "_learn_at_subgoals", lambda *a, **k: None)
     monkeypatch.setattr(training, "write_outputs", lambda *a, **k: [])
     monkeypatch.setattr(training, "trust_warnings", lambda report: [])
-    recipe = load_recipe(SOCCER)
-    recipe = replace(recipe, models=tuple(replace(m, episodes=10) if m.action == "approachBall" else m
-                                          for m in recipe.models))
+    recipe = load_recipe(SOCCER)  # (the duration alone: the stand-in episodes have no measures)
+    recipe = replace(recipe, models=tuple(replace(m, episodes=10 if m.action == "approachBall" else m.episodes,
+                                                  measures=("duration",)) for m in recipe.models))
     training.train_domain(recipe, 4, 0, tmp_path, fresh_episodes=2, progress=False, gather=gather,
                           own_episodes=own_episodes)
     return gathered, learned

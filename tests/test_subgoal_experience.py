@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from types import SimpleNamespace
 
 import numpy as np
@@ -67,7 +69,8 @@ def test_each_round_chooses_subgoals_with_the_model_the_round_before_retrained(m
 
     monkeypatch.setattr("tailor.refinement.learning.subgoal_experience.gather_subgoal_experience", gather)
     monkeypatch.setattr(training, "train_duration_model", train)
-    recipe = load_recipe(SOCCER)
+    recipe = load_recipe(SOCCER)  # (the duration alone: the stand-in models and episodes have no measures)
+    recipe = replace(recipe, models=tuple(replace(m, measures=("duration",)) for m in recipe.models))
     chain = recipe.subgoal_experience[0]
     models = {"dribbleBall": "first model"}
     report = training._learn_at_subgoals(recipe, chain, models, {"dribbleBall": ["own"] * 10}, 7, 0, 1, False,

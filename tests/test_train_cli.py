@@ -58,7 +58,7 @@ def check_outputs(out, report: dict, episodes: int, fresh: int) -> None:
     assert waypoints["situations"] == round(episodes / 6) and waypoints["episodes"] == 3 * waypoints["situations"]
     assert score["rounds"] == min(3, score["situations"]) and waypoints["rounds"] == min(3, waypoints["situations"])
     collision = load_collision_model(out / "models" / "goToPose.collision.json")
-    assert (report["schema"], report["domain"], report["simulator"]) == ("tailor.training_report/3", "soccer", "soccer")
+    assert (report["schema"], report["domain"], report["simulator"]) == ("tailor.training_report/4", "soccer", "soccer")
     assert list(report["classifiers"]) == ["goToPose"]
     c = report["classifiers"]["goToPose"]
     assert c["action"] == "goToPose"
@@ -90,7 +90,11 @@ def check_outputs(out, report: dict, episodes: int, fresh: int) -> None:
     assert images == [(out / "training" / f"{png}.png").read_bytes() for png in
                       ("mae_vs_n_i", "mae_vs_episodes", "feature_spaces", "angle_at_polar",
                        "goToPose.success_region")]
-    assert page.details == len(models) + 1
+    # the rules of every model: each duration model, each further measure's (Ch. 8.1) and the classifier
+    assert page.details == sum(1 + len(model.measures) for model in models.values()) + 1
+    assert report["measures"] == {action: {name: m.report for name, m in model.measures.items()}
+                                  for action, model in models.items()}
+    assert all(set(model.measures) == {"energy", "error"} for model in models.values())
     assert sorted(report["files"]) == sorted(EXPECTED_FILES)
     for name in EXPECTED_FILES:  # a new file's permissions (the tests run under umask 022), not mkstemp's 0600
         assert stat.S_IMODE((out / name).stat().st_mode) == 0o666 & ~UMASK, name

@@ -6,17 +6,20 @@ The binding names the situations: `[evaluation] assertion = "<situation generato
 successful executions without and with assertion, the share of the plain executions' collisions (failures of
 the kind the classifier guards against; any failure where the simulator has no "collision" outcome) that
 assertion avoided, the needless assertions (a subgoal inserted where the plain action succeeded) and their
-time cost, and Table 6.1 (predicted x observed, before and after assertion).
+time cost, and Table 6.1 (predicted x observed, before and after assertion). Assertion and refinement run as in
+`tailor refine`: the risk lambda and neighbourhood resolved from the binding and the models, and a predicted
+failure weighed against the detour (`assertion.Weighing`); how often that kept the plain action is reported.
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from tailor.refinement.assertion import assert_subgoals
-from tailor.refinement.pipeline import Options, refine_stage
+from tailor.refinement.assertion import Detour, assert_subgoals
+from tailor.refinement.pipeline import Options, refine_stage, resolve_options
 from tailor.refinement.situations import Job, job_binding, job_models, situation_sequence, stream_seed
 
 COLLISION = "collision"
@@ -26,10 +29,16 @@ ASSERTION_STREAM = 6  # seed word of the assertion experiment (its situations di
 
 @dataclass(frozen=True)
 class AssertionSetup:
-    """What every episode needs besides its situation: the success classifiers, loaded once per process."""
+    """What every episode needs besides its situation: the success classifiers, loaded once per process; how to
+    refine (risk lambda and neighbourhood: None, as `tailor refine` does, the binding's and the models' defaults);
+    whether assertion weighs the detour against the predicted failure (False: a subgoal wherever failure is
+    predicted, Alg. 5 as the dissertation has it)."""
 
     success_models: dict
     method: str = "analytic"
+    risk: float | None = None
+    neighbourhood: float | None = None
+    weigh: bool = True
 
 
 def assertion_seed(seed: int, index: int) -> int:
@@ -37,13 +46,18 @@ def assertion_seed(seed: int, index: int) -> int:
 
 
 def assertion_episode(job: Job, index: int, objects: dict, setup: AssertionSetup, keep: bool = False) -> dict:
-    """One situation: the plain action (as instantiated) and with assertion + refinement, same seed."""
+    """One situation: the plain action (as instantiated) and with assertion + refinement, same seed; refined with
+    the options `tailor refine` would resolve, assertion weighing the detour as the pipeline does."""
     seed = assertion_seed(job.seed, index)
     sequence = situation_sequence(job, objects)
-    asserted = assert_subgoals(sequence, job_binding(job), setup.success_models, job.plan.object_types or None)
-    models = job_models(job, asserted.sequence)
-    options = Options(horizon=1, optimizer=setup.method, seed=seed, risk=0.0, neighbourhood=0.0, greedy=False,
-                      simulate=True)
+    binding = job_binding(job)
+    models = job_models(job, sequence)  # (an asserted subgoal reuses the same executable actions)
+    options = resolve_options(Options(horizon=1, optimizer=setup.method, seed=seed, risk=setup.risk,
+                                      neighbourhood=setup.neighbourhood, greedy=False, simulate=True), binding, models)
+    detour = (Detour(models, options.optimizer, seed, options.risk, options.neighbourhood) if setup.weigh else None)
+    started = time.perf_counter()
+    asserted = assert_subgoals(sequence, binding, setup.success_models, job.plan.object_types or None, detour)
+    assertion_seconds = time.perf_counter() - started
     stage = refine_stage(sequence, models, {}, options)  # the plain action: no guard, greedy
     plain_refined, plain = stage.refined.refined, stage.refined.simulated
     inserted = any(a.inserted for a in asserted.assertions)
@@ -61,9 +75,13 @@ def assertion_episode(job: Job, index: int, objects: dict, setup: AssertionSetup
            "predicted_plain": plain_refined.predicted_total, "predicted_with": refined.predicted_total,
            "methods": sorted({w.method for w in refined.windows}),
            "optimizer_seconds": sum(w.seconds for w in refined.windows),
+           "assertion_seconds": assertion_seconds,
+           "weighed_out": any(not a.predicted_success and not a.inserted for a in asserted.assertions),
+           "weighings": [a.weighing.to_json() for a in asserted.assertions if a.weighing is not None],
            "reasons": [a.reason() for a in asserted.assertions]}
     if keep:
-        row.update(plain_result=plain, with_result=result, sequence=refined.sequence, plain_sequence=sequence)
+        row.update(plain_result=plain, with_result=result, sequence=refined.sequence, plain_sequence=sequence,
+                   asserted_sequence=asserted.sequence, models=models, success_models=setup.success_models)
     return row
 
 
@@ -114,6 +132,9 @@ def summarize_assertion(rows: list[dict]) -> dict:
     cost = [r["with_time"] / r["plain_time"] - 1.0 for r, b in zip(rows, both) if b]
     methods = sorted({m for r in rows for m in r["methods"]})
     seconds = [r["optimizer_seconds"] for r in rows if r["inserted"]]
+    weighed_out = np.array([r.get("weighed_out", False) for r in rows], dtype=bool)
+    weighing = [w for r in rows for w in r.get("weighings", ())]
+    asserting = [r["assertion_seconds"] for r in rows if r.get("weighings")]
     return {
         "episodes": len(rows),
         "success_without": _share(plain_ok),
@@ -126,6 +147,13 @@ def summarize_assertion(rows: list[dict]) -> dict:
         "needless_assertions": _share(needless),
         "needless_cost": float(np.mean(cost)) if cost else None,
         "needless_cost_median": float(np.median(cost)) if cost else None,
+        # failure predicted, the detour predicted to cost more than the failure: no subgoal (and how that went)
+        "predicted_fail": _share(~predicted),
+        "weighed_out": _share(weighed_out),
+        "weighed_out_failed": int((weighed_out & ~plain_ok).sum()),
+        "failure_probability_sources": sorted({w["failure_probability_source"] for w in weighing}),
+        "detour_predicted_median": float(np.median([w["detour"] for w in weighing])) if weighing else None,
+        "assertion_ms_median": float(1000 * np.median(asserting)) if asserting else None,
         "failures_without": _counts(r["plain_outcome"] for r in rows),
         "failures_with": _counts(r["with_outcome"] for r in rows),
         "new_failures": int((plain_ok & ~with_ok).sum()),

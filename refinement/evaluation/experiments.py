@@ -224,7 +224,8 @@ def horizon_episode(job: Job, index: int, objects: dict, horizons: tuple[int, ..
             stage = refine_stage(sequence, models, success, options)
             refined, result = stage.refined.refined, stage.refined.simulated
             done[effective] = {"": result.duration, "_ok": result.succeeded, "_predicted": refined.predicted_total,
-                               "_methods": sorted({w.method for w in refined.windows})}
+                               "_methods": sorted({w.method for w in refined.windows}),
+                               "_actions": [[a.action, a.duration] for a in result.results]}
         out.update({f"h{h}{key}": value for key, value in done[effective].items()})
     return out
 
@@ -459,4 +460,16 @@ def summarize_horizons(rows: list[dict], horizons: tuple[int, ...]) -> dict:
             "methods": sorted({m for r in rows for m in r[f"h{h}_methods"]}),
         })
         previous = times
+    out["per_action"] = horizon_per_action(ok, horizons)
     return out
+
+
+def horizon_per_action(ok: list[dict], horizons: tuple[int, ...]) -> list[dict]:
+    """Table 5.2(b): the mean duration of each action of the horizon sequence with the first horizon (greedy,
+    h = 1) and the next (refined, h = 2), over the situations where every horizon succeeded (those of Table 5.3,
+    so each column sums to its horizon's mean); as Table 5.2(a), one table per executed sequence."""
+    if len(horizons) < 2 or not all(f"h{h}_actions" in r for r in ok for h in horizons[:2]):
+        return []
+    first, second = horizons[:2]
+    return _per_action([{"problem": r["problem"], "greedy_actions": r[f"h{first}_actions"],
+                         "refined_actions": r[f"h{second}_actions"]} for r in ok])

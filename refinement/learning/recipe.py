@@ -10,6 +10,9 @@
                                        # named): features generated from the action's quantities and selected
                                        # by cross-validated error (learning.feature_selection)
     episodes = 24000                   # optional: this many of each of its scenarios (default: episodes above)
+    measures = ["duration", "energy", "error"]   # optional: a model tree per measure (default: duration only),
+                                       # each a measure the simulator's episodes report (Ch. 8.1), stored in
+                                       # the action's one model file (models.action_models)
 
     [training.classifiers.navigate]    # a success classifier (Sec. 4.2.2), optional
     scenario = "navigateToObject"
@@ -29,11 +32,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tailor.refinement.binding import Binding, load_domain_binding
+from tailor.refinement.binding import Binding, known_measures, load_domain_binding
 from tailor.refinement.binding_domain import did_you_mean
 from tailor.errors import BindingError
 from tailor.refinement.models.expression_space import AUTO
 from tailor.refinement.models.features import feature_spaces
+from tailor.refinement.objective_grammar import DURATION
 from tailor.sims.experience import MAX_EPISODES
 from tailor.sims.protocol import ActionSpec
 
@@ -46,6 +50,12 @@ class ModelRecipe:
     scenarios: tuple[str, ...]  # experience scenarios whose episodes it learns from, together
     feature_space: str
     episodes: int | None = None  # episodes of each scenario it learns from; None: the recipe's (duration models)
+    measures: tuple[str, ...] = (DURATION,)  # a model tree per measure (duration models; the duration first)
+
+    @property
+    def further_measures(self) -> tuple[str, ...]:
+        """The measures learned besides the duration."""
+        return tuple(m for m in self.measures if m != DURATION)
 
 
 @dataclass(frozen=True)
@@ -152,8 +162,8 @@ def _models(section: Any, key: str, entry, fail) -> tuple[ModelRecipe, ...]:
         where = f"{key}.{action}"
         if not isinstance(table, dict):
             raise fail(f"[training.{where}] must be a table")
-        _keys(table, {"scenario", "feature_space", "episodes"} if key == "models" else {"scenario", "feature_space"},
-              where, fail)
+        _keys(table, {"scenario", "feature_space", "episodes", "measures"} if key == "models"
+              else {"scenario", "feature_space"}, where, fail)
         if action not in entry.actions:
             raise fail(f"{where}: {action!r} is not an action of simulator {entry.name!r} "
                        f"(known: {', '.join(entry.actions)})")
@@ -171,9 +181,10 @@ def _models(section: Any, key: str, entry, fail) -> tuple[ModelRecipe, ...]:
                 raise fail(f"{where} scenario = {scenario!r} runs {entry.scenarios[scenario].action}, not {action}")
         space = table.get("feature_space", AUTO if key == "models" else None)
         spaces = feature_spaces()
+        measures = _measures(table.get("measures", [DURATION]), where, entry, fail)
         if space == AUTO and key == "models":
             episodes = _positive_int(table["episodes"], f"{where} episodes", fail) if "episodes" in table else None
-            out.append(ModelRecipe(action, tuple(scenarios), AUTO, episodes))
+            out.append(ModelRecipe(action, tuple(scenarios), AUTO, episodes, measures))
             continue
         if not isinstance(space, str) or space not in spaces:
             known = ", ".join(sorted(spaces) + ([AUTO] if key == "models" else []))
@@ -182,5 +193,24 @@ def _models(section: Any, key: str, entry, fail) -> tuple[ModelRecipe, ...]:
             raise fail(f"{where} feature_space = {space!r} reads {len(spaces[space].parameters)} parameters, "
                        f"{action} has {len(entry.actions[action].parameters)}")
         episodes = _positive_int(table["episodes"], f"{where} episodes", fail) if "episodes" in table else None
-        out.append(ModelRecipe(action, tuple(scenarios), space, episodes))
+        out.append(ModelRecipe(action, tuple(scenarios), space, episodes, measures))
     return tuple(out)
+
+
+
+def _measures(value: Any, where: str, entry, fail) -> tuple[str, ...]:
+    """A model's `measures` list: names of measures of the simulator, the duration among them, none twice."""
+    if not isinstance(value, list) or not value or not all(isinstance(m, str) for m in value):
+        raise fail(f"{where} measures must be a non-empty list of measure names, e.g. "
+                   f"[\"duration\", \"energy\"], not {value!r}")
+    known = known_measures(entry)
+    for measure in value:
+        if measure not in known:
+            raise fail(f"{where} measures: {measure!r} is not a measure of simulator {entry.name!r} (known: "
+                       f"{', '.join(known)}){did_you_mean(measure, known)}")
+    if len(set(value)) != len(value):
+        raise fail(f"{where} measures names a measure twice: {value}")
+    if DURATION not in value:
+        raise fail(f"{where} measures must include \"duration\": every action model predicts it (the others "
+                   "are stored beside it)")
+    return (DURATION, *(m for m in value if m != DURATION))

@@ -1,5 +1,6 @@
-"""The readable training report: a Table 4.3-like row per duration model, the classifier's confusion matrix
-(Table 4.4), and the learned rules (the full text file); and the short summary `tailor train` prints."""
+"""The readable training report: a Table 4.3-like row per duration model and per further measure's model
+(energy, end error: Ch. 8.1), the classifier's confusion matrix (Table 4.4), and the learned rules (the full
+text file); and the short summary `tailor train` prints."""
 
 from __future__ import annotations
 
@@ -77,6 +78,38 @@ def duration_table(reports: dict[str, dict]) -> list[str]:
     return lines
 
 
+def measure_table(measures: dict[str, dict[str, dict]]) -> list[str]:
+    """Per action and further measure: successful episodes, the measure's mean, the leaf size, the held-out MAE
+    (absolute, relative to the mean, against gradient boosting) and the stored tree's leaves."""
+    rows = [(action, name, r) for action, by_measure in measures.items() for name, r in by_measure.items()]
+    if not rows:
+        return []
+    header = (f"{'action':<14}{'measure':<14}{'unit':>5}{'episodes':>9}{'mean':>10}{'leaf':>5}{'MAE':>10}"
+              f"{'MAE/mean':>9}{'HGB MAE':>10}{'MAE/HGB':>8}{'leaves':>7}")
+    lines = [header, "-" * len(header)]
+    for action, name, r in rows:
+        over = r.get("mae_over_hgb")
+        lines.append(f"{action:<14}{name:<14}{r.get('unit', ''):>5}{r['episodes']:>9d}{r['mean']:>10.4g}"
+                     f"{r['min_samples_leaf']:>5d}{r['mae']:>10.4g}{percent(r['mae_relative']):>9}"
+                     f"{r['mae_hgb']:>10.4g}{'-' if over is None else format(over, '.2f'):>8}{r['leaves']:>7}")
+    return lines
+
+
+def measure_mae_lines(report: dict) -> list[str]:
+    """One line per action with further measures' models: each one's held-out MAE, relative to its mean and to
+    gradient boosting."""
+    lines = []
+    for action, by_measure in report.get("measures", {}).items():
+        parts = []
+        for name, r in by_measure.items():
+            unit = f" {r['unit']}" if r.get("unit") else ""
+            over = "" if r.get("mae_over_hgb") is None else f", {r['mae_over_hgb']:.2f}x HGB"
+            parts.append(f"{name} MAE {r['mae']:.4g}{unit} ({percent(r['mae_relative'])} of its mean{over})")
+        if parts:
+            lines.append(f"  {action} measures: " + "; ".join(parts))
+    return lines
+
+
 def confusion_table(evaluation: dict) -> list[str]:
     c, n = evaluation["counts"], max(evaluation["episodes"], 1)
     share = lambda key: percent(c[key] / n)  # noqa: E731
@@ -123,7 +156,12 @@ def _classifier_lines(c: dict) -> list[str]:
 
 def rules_sections(models: dict, classifiers: dict) -> dict[str, str]:
     """Section title -> the learned rules (WEKA-like text, App. C.3.1) of each model and classifier."""
-    sections = {f"Rules of {action} (n_i = {model.n_i})": model.rules_text() for action, model in models.items()}
+    sections = {}
+    for action, model in models.items():
+        sections[f"Rules of {action} (n_i = {model.n_i})"] = model.rules_text()
+        for name, measure in getattr(model, "measures", {}).items():
+            unit = f"{measure.unit}, " if measure.unit else ""
+            sections[f"Rules of {action} {name} ({unit}n_i = {measure.n_i})"] = measure.rules_text(model.feature_names)
     sections.update({f"Rules of the success classifier of {action}": classifier.rules_text()
                      for action, classifier in classifiers.items()})
     return sections
@@ -153,6 +191,11 @@ def format_report(report: dict, models: dict, classifiers: dict, warnings: list[
         *duration_table(report["models"]),
         *_subgoal_lines(report.get("subgoal_experience")),
     ]
+    measures = measure_table(report.get("measures", {}))
+    if measures:
+        lines += ["", "Models of further measures (Ch. 8.1): each a model tree in its action's features, by the same",
+                  "protocol from the first example of each episode (n_i = 1); mean and MAE in the measure's unit, MAE",
+                  "on the held-out quarter beside gradient boosting (HGB) on the same examples.", "", *measures]
     table = space_table(report["models"])
     if table:
         lines += ["", "Feature spaces (Fig. 4.3): held-out MAE (s) of the model tree on the raw parameters, Table",
@@ -181,6 +224,7 @@ def summary_lines(report: dict) -> list[str]:
         ratio = "-" if r.get("mae_over_hgb") is None else f"{r['mae_over_hgb']:.2f}x"
         lines.append(f"  {action:<16}{r['episodes']:>9d}{r['examples']:>10d}{r['mae']:>9.3f}"
                      f"{percent(r['mae_relative']):>10}{ratio:>8}")
+    lines += measure_mae_lines(report)
     for action, c in classifier_reports(report).items():
         lines.append(f"  success classifier of {action}: {percent(c['accuracy'])} correct on "
                      f"{c['confusion']['episodes']} fresh episodes, {false_success_text(c, 'failing ones')}")

@@ -2,7 +2,9 @@
 
 The domain's recipe (its binding's [training] table, tailor.refinement.learning.recipe) says which actions get
 a duration model, which get a success classifier, from which experience scenario of its simulator, in which
-feature space. Everything is computed first and written only at the end, each file to a temporary name that
+feature space, and which further measures (energy, end error: Ch. 8.1) each duration model's action learns: a
+model tree per measure by the same protocol, in the duration model's features, stored in the same file
+(measure_models). Everything is computed first and written only at the end, each file to a temporary name that
 is renamed over the target once all are complete: an interrupted run leaves the old files untouched.
 """
 
@@ -20,6 +22,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Self
 
+import numpy as np
+
 from tailor.errors import DataError
 from tailor.refinement.learning.classifiers import train_collision_model
 from tailor.refinement.learning.duration_protocol import (
@@ -34,7 +38,7 @@ from tailor.refinement.learning.space_comparison import compare_spaces, learning
 from tailor.refinement.learning.html_report import html_report
 from tailor.refinement.learning.report import format_report, rules_sections
 from tailor.refinement.learning.trust import trust_warnings
-from tailor.refinement.models.action_models import COLLISION_SUFFIX
+from tailor.refinement.models.action_models import COLLISION_SUFFIX, MeasureModel
 from tailor.refinement.models.expression_space import AUTO
 from tailor.refinement.models.features import resolve
 from tailor.sims import registry
@@ -45,7 +49,8 @@ from tailor.progress import finish, stage_bar
 from tailor.sims.episode import Episode
 
 FRESH_SEED_OFFSET = 7_919_000  # the fresh test episodes of a classifier use seed + this: no shared episode
-REPORT_SCHEMA = "tailor.training_report/3"  # 3: classifiers by action, the simulator named (+ warnings, files)
+# 3: classifiers by action, the simulator named (+ warnings, files); 4: `measures`, the further measures' models
+REPORT_SCHEMA = "tailor.training_report/4"
 
 HELD_SIGNALS = (signal.SIGINT, signal.SIGTERM)  # held back once the finished files are renamed (RenameHold)
 Gather = Callable[..., list[Episode]]
@@ -132,7 +137,8 @@ def train_domain(
     log.debug("gathered the experience of %s in %.1f s", ", ".join(gathered_by_scenario), gathered - started)
 
     timings: dict[str, dict] = {}
-    fits = len(recipe.models) * _fits_per_model(n_i_candidates, episode_fractions) + 2 * len(recipe.classifiers)
+    fits = (len(recipe.models) * _fits_per_model(n_i_candidates, episode_fractions) + 2 * len(recipe.classifiers)
+            + sum(len(m.further_measures) for m in recipe.models) * _fits_per_model(MEASURE_N_I, episode_fractions))
     with stage_bar(fits, "training", "fit", progress) as bar:
         def step(label: str) -> None:
             bar.set_postfix_str(label, refresh=False)
@@ -166,6 +172,10 @@ def train_domain(
         "episodes_per_scenario": episodes,
         "experience": "simulator" if recorded is None else "recorded executions",
         "models": {action: model.report for action, model in models.items()},
+        # per action, its further measures' reports (the same rows as a duration model's, `mean` and `range` in
+        # the measure's unit)
+        "measures": {action: {name: m.report for name, m in getattr(model, "measures", {}).items()}
+                     for action, model in models.items() if getattr(model, "measures", None)},
         "classifiers": {action: model.report for action, model in classifiers.items()},
         "subgoal_experience": [row for row in subgoal if row is not None],
         "gather_seconds": gathered - started,
@@ -195,6 +205,10 @@ def train_action(recipe: TrainingRecipe, action: str, feature_space: str, episod
         space = selection.space if selection.space is not None else selection.named
     selected = time.perf_counter()  # the selection's own time is its report's "seconds"
     model = train_duration_model(action, episodes, seed, space, spec.observed, jobs=jobs, **protocol).model
+    further = next((m.further_measures for m in recipe.models if m.action == action), ())
+    if further:
+        model = replace(model, measures=measure_models(action, further, space, episodes, seed, spec.observed, entry,
+                                                       jobs=jobs, **protocol))
     trained = time.perf_counter()
     report = getattr(model, "report", {})  # (a stand-in model without a report records nothing)
     if selection is not None:
@@ -226,6 +240,57 @@ def train_action(recipe: TrainingRecipe, action: str, feature_space: str, episod
     return model
 
 
+MEASURE_N_I = (1,)  # a measure model learns from the first example of each episode (measure_episodes)
+
+
+def measure_episodes(action: str, episodes: list[Episode], measure: str) -> list[Episode]:
+    """The episodes as the duration protocol sees them for `measure`: each successful one with the measure in
+    place of its duration and only its first logged row (an episode's log does not say how much of a measure a
+    later row had still to spend, as it says how much time: only the whole episode's is known); failed ones as
+    they are (counted, not learned from). A DataError where a successful episode reports no such measure
+    (experience gathered, or a log written, before measures were recorded)."""
+    out, missing, used = [], 0, 0
+    for e in episodes:
+        if not e.succeeded:
+            out.append(e)
+            continue
+        if measure not in e.measures:
+            missing += 1
+            continue
+        used += 1
+        out.append(replace(e, duration=float(e.measures[measure]), t=np.zeros(1), state=e.state[:1]))
+    if missing:
+        raise DataError(f"{action}: {missing} of its {missing + used} successful episodes report no measure "
+                        f"{measure!r} (experience gathered, or a log written, before measures were recorded: gather "
+                        "it again, e.g. into a new --experience folder)")
+    values = [e.duration for e in out if e.succeeded]
+    if values and max(values) <= 0:
+        raise DataError(f"{action}: its measure {measure!r} is 0 in every successful episode: nothing to learn")
+    return out
+
+
+def measure_models(action: str, measures: tuple[str, ...], space, episodes: list[Episode], seed: int,
+                   observed: tuple[str, ...], entry, jobs: int = 1, n_i_candidates=None, **protocol) -> dict:
+    """A MeasureModel per measure: the duration protocol (Fig. 4.9: split, leaf size on validation, held-out MAE
+    beside gradient boosting, the final tree on all episodes, its leaves' held-out spread) run on
+    `measure_episodes`, in the duration model's feature space `space` (so one file holds one set of features);
+    n_i is 1 (MEASURE_N_I). Each report names its measure and unit and gives `mean` and `range` of the measure
+    where a duration model's report gives them of the duration."""
+    del n_i_candidates  # one example per episode: see measure_episodes
+    out = {}
+    for measure in measures:
+        trained = train_duration_model(f"{action} {measure}", measure_episodes(action, episodes, measure), seed,
+                                       space, observed, n_i_candidates=MEASURE_N_I, jobs=jobs, **protocol).model
+        report = dict(trained.report)
+        mean, seen = report.pop("mean_duration"), report.pop("duration_range")
+        report.pop("simulated_hours", None)  # (the sum of the measure, not time)
+        unit = entry.quantity(measure).unit
+        report = {"action": action, "measure": measure, "unit": unit, "mean": mean, "range": seen,
+                  **{k: v for k, v in report.items() if k != "action"}}
+        out[measure] = MeasureModel(measure, unit, trained.duration, trained.n_i, report, trained.uncertainty)
+    return out
+
+
 def _learn_at_subgoals(recipe: TrainingRecipe, chain: SubgoalExperience, models: dict, experience: dict,
                        situations: int, seed: int, jobs: int, progress: bool, n_i_candidates,
                        episode_fractions) -> dict | None:
@@ -242,7 +307,8 @@ def _learn_at_subgoals(recipe: TrainingRecipe, chain: SubgoalExperience, models:
     rounds = max(1, min(chain.rounds, situations))
     bounds = [round(situations * k / rounds) for k in range(rounds + 1)]
     extra: list[Episode] = []
-    fits = _fits_per_model(n_i_candidates, episode_fractions)
+    fits = (_fits_per_model(n_i_candidates, episode_fractions)
+            + len(model_recipe.further_measures) * _fits_per_model(MEASURE_N_I, episode_fractions))
     for k in range(rounds):
         extra += gather_subgoal_experience(recipe.domain_dir, chain.situations, chain.action, models,
                                            bounds[k + 1] - bounds[k], seed, jobs=jobs, progress=progress,

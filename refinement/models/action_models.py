@@ -1,7 +1,12 @@
 """Learned action models (Chapter 4) as frozen values with a JSON form, and their loaders.
 
 An ActionModel predicts how long an action takes from its parameters (observed, then internal): the
-parameters are mapped to a feature space (Table 4.1) and a model tree predicts the duration there.
+parameters are mapped to a feature space (Table 4.1) and a model tree predicts the duration there. Where the
+binding's recipe declares more measures (`measures = ["duration", "energy", "error"]`, Ch. 8.1), the same file
+holds a MeasureModel per further measure: a model tree over the same features, trained by the same protocol.
+One file per action, whatever it measures: `<action>.json` of schema `tailor.action_model/2` with a `measures`
+object (measure -> tree, report, uncertainty, unit); a file without one is written as `tailor.action_model/1`,
+as before, and both are read.
 A CollisionModel (a success classifier) predicts whether an action reaches its goal without failing, e.g.
 without bumping an object lying there (Sec. 4.2.2).
 Files are JSON with a schema key, never pickle: loading a model must not run code.
@@ -11,6 +16,8 @@ from __future__ import annotations
 
 import json
 import math
+import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,7 +33,10 @@ from tailor.refinement.models.model_tree import ModelTree
 from tailor.refinement.models.rules import Rule
 from tailor.refinement.models.uncertainty import LeafUncertainty, risk_adjusted
 
-ACTION_MODEL_SCHEMA = "tailor.action_model/1"
+ACTION_MODEL_SCHEMA = "tailor.action_model/1"  # the duration model alone (what every file held before measures)
+MEASURES_SCHEMA = "tailor.action_model/2"  # 2: also models of further measures (`measures`), same features
+ACTION_MODEL_SCHEMAS = (ACTION_MODEL_SCHEMA, MEASURES_SCHEMA)
+DURATION = "duration"  # the measure the `duration` tree predicts (objective_grammar.DURATION)
 COLLISION_MODEL_SCHEMA = "tailor.collision_model/1"
 COLLISION_SUFFIX = ".collision.json"  # <action>.collision.json: the action's success classifier
 META_FILE = "meta.json"  # the meta action model (tailor.refinement.models.meta_model), not an action's
@@ -40,6 +50,7 @@ NO_REPORT_BOUND = 86400.0  # s: plausible for a file that states neither (one da
 FEATURE_SPACE_KEY = "feature_space"  # a model file's feature space (Table 4.1), as the binding names it
 EXPRESSIONS_KEY = "expressions"  # a generated space's features as expression trees (models.expression_space)
 OLD_FEATURE_SPACE_KEY = "feature_set"  # the same in files written before: still read, never written
+_MEASURE_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,10 +68,61 @@ class ActionModel:
     uncertainty: LeafUncertainty | None = None
     # the features as expressions where they were generated (feature_space "auto"); None: a registered space
     expressions: ExpressionSpace | None = None
+    # models of further measures over the same features (Ch. 8.1), by measure; empty: the duration alone
+    measures: Mapping[str, MeasureModel] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.expressions is not None and tuple(self.feature_names) != self.expressions.names:
             raise ValueError(f"feature names {self.feature_names} are not its expressions' {self.expressions.names}")
+        if DURATION in self.measures:
+            raise ValueError("the duration is the model's own tree, not one of its measures")
+        object.__setattr__(self, "measures", dict(self.measures))  # (a copy; a dict pickles to worker processes)
+
+    @property
+    def measure_names(self) -> tuple[str, ...]:
+        """Every measure it predicts: the duration, then its further measures."""
+        return (DURATION, *self.measures)
+
+    def measure(self, name: str) -> MeasureModel:
+        """The model of a further measure; a ModelFileError naming the file where it has none."""
+        try:
+            return self.measures[name]
+        except KeyError:
+            raise ModelFileError(f"the action model of {self.action} has no model of {name!r} (it predicts "
+                                 f"{', '.join(self.measure_names)}): declare it in the binding's "
+                                 f"[training.models.{self.action}] measures and retrain with `tailor train`",
+                                 file=self.source) from None
+
+    def tree_of(self, name: str):
+        """The model tree predicting measure `name` (the duration's own, or a further measure's)."""
+        return self.duration if name == DURATION else self.measure(name).tree
+
+    def measure_with_risk(self, name: str, risk: float):
+        """What a risk-aware objective sums for measure `name`: its tree at risk 0, else its prediction plus risk
+        times its own leaves' held-out spread (a ModelFileError where that measure stores none)."""
+        if name == DURATION:
+            return self.duration_with_risk(risk)
+        model = self.measure(name)
+        if risk == 0:
+            return model.tree
+        if model.uncertainty is None:
+            raise ModelFileError(f"the {name} model of {self.action} has no uncertainty: refine with --risk 0",
+                                 file=self.source)
+        return risk_adjusted(model.tree, model.uncertainty, risk)
+
+    def predict_measure(self, name: str, params: np.ndarray) -> np.ndarray:
+        """Predicted measure `name` (its unit) for each row of (n, p) action parameters."""
+        if name == DURATION:
+            return self.predict_duration(params)
+        with np.errstate(over="ignore", invalid="ignore"):
+            return np.asarray(self.measure(name).tree.predict(self.features(params)), dtype=float)
+
+    def check_measure(self, name: str, value: float, where: str) -> float:
+        """`value` checked as check_duration checks a duration: clipped at 0 if plausible for the measure's
+        model, else a ModelFileError naming the file."""
+        if name == DURATION:
+            return self.check_duration(value, where)
+        return self.measure(name).check(value, where, self.source)
 
     @property
     def space(self) -> FeatureSpace:
@@ -139,8 +201,9 @@ class ActionModel:
         return self.duration.export_text(list(self.feature_names))
 
     def to_json(self) -> dict:
+        """Schema 1 for the duration alone (the same bytes as before measures existed), 2 with measures."""
         return {
-            "schema": ACTION_MODEL_SCHEMA,
+            "schema": MEASURES_SCHEMA if self.measures else ACTION_MODEL_SCHEMA,
             "action": self.action,
             FEATURE_SPACE_KEY: self.feature_space,
             "feature_names": list(self.feature_names),
@@ -150,12 +213,14 @@ class ActionModel:
             "duration": self.duration.to_json(),
             "report": self.report,
             **({} if self.uncertainty is None else {"uncertainty": self.uncertainty.to_json()}),
+            **({} if not self.measures else
+               {"measures": {name: m.to_json(self.feature_names) for name, m in self.measures.items()}}),
         }
 
     @classmethod
     def from_json(cls, data: dict, source: str) -> ActionModel:
         """Build from parsed JSON; anything malformed raises ModelFileError naming `source`."""
-        _check_schema(data, ACTION_MODEL_SCHEMA, source)
+        _check_schema(data, ACTION_MODEL_SCHEMAS, source)
         expressions = _expressions(data, source)
         action, space, names = _common_fields(data, source, expressions)
         n_i = data.get("n_i")
@@ -176,7 +241,104 @@ class ActionModel:
         uncertainty = None
         if "uncertainty" in data:  # optional: files written before it existed load without it
             uncertainty = LeafUncertainty.from_json(data["uncertainty"], tree.n_leaves_, source)
-        return cls(action, space, names, tree, n_i, _report(data, source), source, uncertainty, expressions)
+        measures = _measures(data, source, len(names))
+        return cls(action, space, names, tree, n_i, _report(data, source), source, uncertainty, expressions, measures)
+
+
+@dataclass(frozen=True, eq=False)
+class MeasureModel:
+    """Predicts one more measure of an action (Ch. 8.1: energy in J, end error in m, ...) from the features of
+    its action model, with a model tree trained by the duration's protocol on the first example of each
+    episode (an episode's log does not say how much of a measure was spent by a later row)."""
+
+    measure: str
+    unit: str
+    tree: ModelTree
+    n_i: int
+    report: dict = field(default_factory=dict)
+    uncertainty: LeafUncertainty | None = None
+
+    def plausible_range(self) -> tuple[float, float]:
+        """The values a prediction may take: those seen in training (report `range`), widened by RANGE_MARGIN
+        times their width on each side (as a duration's)."""
+        seen = self.report.get("range")
+        if not (isinstance(seen, list) and len(seen) == 2 and all(_is_number(v) for v in seen) and seen[0] <= seen[1]):
+            return -NO_REPORT_BOUND, NO_REPORT_BOUND
+        margin = RANGE_MARGIN * (seen[1] - seen[0])
+        return seen[0] - margin, seen[1] + margin
+
+    def check(self, value: float, where: str, source: str | None) -> float:
+        """`value` clipped at 0 (a measure here is an energy or a distance) if plausible, else a ModelFileError."""
+        unit = f" {self.unit}" if self.unit else ""
+        if not math.isfinite(value):
+            raise ModelFileError(f"{where}: the {self.measure} model predicts {value}{unit}: its coefficients are "
+                                 "broken (retrain with `tailor train`)", file=source)
+        low, high = self.plausible_range()
+        if not low <= value <= high:
+            raise ModelFileError(f"{where}: the {self.measure} model predicts {value:.4g}{unit}, outside the "
+                                 f"plausible [{low:.3g}, {high:.3g}]{unit} (the values seen in training, with a "
+                                 "margin): the file is inconsistent (retrain with `tailor train`)", file=source)
+        return max(0.0, value)
+
+    def rules_text(self, feature_names) -> str:
+        return self.tree.export_text(list(feature_names))
+
+    def to_json(self, feature_names) -> dict:
+        return {"unit": self.unit, "n_i": self.n_i, "rules": self.rules_text(feature_names).splitlines(),
+                "tree": self.tree.to_json(), "report": self.report,
+                **({} if self.uncertainty is None else {"uncertainty": self.uncertainty.to_json()})}
+
+    @classmethod
+    def from_json(cls, measure: str, data, source: str, n_features: int) -> MeasureModel:
+        """Check and rebuild the model of `measure`; any problem is a ModelFileError naming `source`."""
+        where = f"measures.{measure}"
+        if not isinstance(data, dict):
+            raise ModelFileError(f"'{where}' must be an object", file=source)
+        unit, n_i = data.get("unit", ""), data.get("n_i")
+        if not isinstance(unit, str):
+            raise ModelFileError(f"'{where}.unit' must be a string", file=source)
+        if not isinstance(n_i, int) or isinstance(n_i, bool) or n_i < 1:
+            raise ModelFileError(f"'{where}.n_i' must be a positive integer, got {n_i!r}", file=source)
+        if not isinstance(data.get("tree"), dict):
+            raise ModelFileError(f"'{where}.tree' must be a model tree object", file=source)
+        try:
+            tree = ModelTree.from_json(data["tree"], source)
+        except ModelFileError:
+            raise
+        except (KeyError, TypeError, ValueError, OverflowError) as exc:
+            raise ModelFileError(f"invalid {measure} model tree: {exc}", file=source) from None
+        if getattr(tree, "n_features_in_", None) != n_features:
+            raise ModelFileError(f"{measure} model tree takes {getattr(tree, 'n_features_in_', None)} features, "
+                                 f"feature space has {n_features}", file=source)
+        report = data.get("report", {})
+        if not isinstance(report, dict):
+            raise ModelFileError(f"'{where}.report' must be an object", file=source)
+        seen = report.get("range")
+        if seen is not None and not (isinstance(seen, list) and len(seen) == 2 and all(_is_number(v) for v in seen)
+                                     and seen[0] <= seen[1]):
+            raise ModelFileError(f"'{where}.report.range' must be [least, most] seen in training, got {seen!r}",
+                                 file=source)
+        uncertainty = None
+        if "uncertainty" in data:
+            uncertainty = LeafUncertainty.from_json(data["uncertainty"], tree.n_leaves_, source)
+        return cls(measure, unit, tree, n_i, report, uncertainty)
+
+
+def _measures(data: dict, source: str, n_features: int) -> dict[str, MeasureModel]:
+    """The further measures' models of a schema-2 file (none in a schema-1 file, which may not name any)."""
+    if "measures" not in data:
+        return {}
+    if data.get("schema") != MEASURES_SCHEMA:
+        raise ModelFileError(f"'measures' needs schema {MEASURES_SCHEMA!r}", file=source)
+    measures = data["measures"]
+    if not isinstance(measures, dict) or not measures:
+        raise ModelFileError("'measures' must be an object of measure -> model", file=source)
+    out = {}
+    for name, model in measures.items():
+        if not isinstance(name, str) or not _MEASURE_NAME.match(name) or name == DURATION:
+            raise ModelFileError(f"'measures' names {name!r}, not a further measure", file=source)
+        out[name] = MeasureModel.from_json(name, model, source, n_features)
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -322,9 +484,11 @@ def _is_number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and is_finite(value)
 
 
-def _check_schema(data: dict, schema: str, source: str) -> None:
-    if data.get("schema") != schema:
-        raise ModelFileError(f"schema is {data.get('schema')!r}, expected {schema!r}", file=source)
+def _check_schema(data: dict, schema: str | tuple[str, ...], source: str) -> None:
+    schemas = (schema,) if isinstance(schema, str) else schema
+    if data.get("schema") not in schemas:
+        raise ModelFileError(f"schema is {data.get('schema')!r}, expected "
+                             + " or ".join(repr(s) for s in schemas), file=source)
 
 
 def _expressions(data: dict, source: str) -> ExpressionSpace | None:

@@ -40,7 +40,7 @@ from tailor.refinement.optimizers.structure import NotApplicable
 TOLERANCE = 5e-4  # the gap allowed, as a share of the best cost ...
 ABSOLUTE_TOLERANCE = 1e-6  # ... and in the objective's unit (s) where the cost is near 0
 BUDGET = 200_000  # boxes bounded at most by a call of `minimize` (the `certified` optimizer)
-BATCH = 256  # boxes split per step
+BATCH = 64  # boxes split per step
 STRONG_WIDTH = 1 / 16  # boxes narrower than this share of every range are split where it helps most
 ACTIVE_WIDTH = 2.0  # a neighbourhood's offset along a free parameter bounds boxes at most this many radii wide
 POINT_CHECKS = (0.5, 0.25, 0.8)  # where along the diagonal of the ranges an enclosure is checked at a point

@@ -5,12 +5,16 @@ the action that reaches it and the one that leaves it). A term is one action's m
 that the free values induce; the objective sums the terms. Every optimizer returns an OptimizationResult: the
 choice, its cost, which optimizer made it and, where one is known, a lower bound of the objective (the gap).
 A term may carry an enclosure of its features over boxes of free values (`feature_bounds`): the certified
-optimizer needs it for every term.
+optimizer needs it for every term. A weighted objective (Ch. 8.1: duration + 0.3 * energy) is a sum of terms
+too, one per action and measure, each model `scaled` by its weight (>= 0): its predictions and the linear
+models of its rules multiplied, its leaves' boxes unchanged, so every optimizer minimizes it as it is.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+import weakref
+from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Callable
 
@@ -163,6 +167,41 @@ class Objective:
             if term.valid is not None:
                 ok &= np.asarray(term.valid(theta), dtype=bool)
         return ok
+
+
+class Scaled:
+    """A model (`predict`, `rules`) times a weight >= 0: what a weighted measure adds to the objective. Its rules
+    are the model's with coefficients and intercept multiplied (the same leaf boxes), so the analytic
+    minimization and the certified bounds (min of w * f is w * min f for w >= 0) hold for it unchanged."""
+
+    def __init__(self, model, weight: float) -> None:
+        if not (math.isfinite(weight) and weight >= 0):
+            raise ValueError(f"a measure's weight must be a finite number >= 0, not {weight!r}")
+        self.model, self.weight = model, float(weight)
+
+    def predict(self, X) -> np.ndarray:
+        return self.weight * np.asarray(self.model.predict(X), dtype=float)
+
+    def rules(self) -> list:
+        return [replace(rule, coef=self.weight * np.asarray(rule.coef, dtype=float),
+                        intercept=self.weight * float(rule.intercept)) for rule in self.model.rules()]
+
+
+_scaled: weakref.WeakKeyDictionary[object, dict[float, Scaled]] = weakref.WeakKeyDictionary()
+
+
+def scaled(model, weight: float):
+    """`model` times `weight`: the model itself at weight 1, else one Scaled per (model, weight), so that the
+    optimizers' caches of its rules last across windows (a model that cannot be weakly referenced gets a new one)."""
+    if weight == 1:
+        return model
+    try:
+        per_weight = _scaled.setdefault(model, {})
+    except TypeError:
+        return Scaled(model, weight)
+    if float(weight) not in per_weight:
+        per_weight[float(weight)] = Scaled(model, weight)
+    return per_weight[float(weight)]
 
 
 def neighbourhood_offsets(radius: np.ndarray) -> np.ndarray:
