@@ -185,30 +185,24 @@ def add_objective_arguments(parser: argparse.ArgumentParser) -> None:
                              "and the command ends with status 9 (repeatable, one bound per measure)")
 
 
-def objective_text(text: str):
-    """An argparse type: an objective in the grammar of refinement.objective_grammar."""
-    from tailor.refinement.objective_grammar import ObjectiveSyntaxError, parse_objective
+def _grammar_type(parse_name: str, name: str, what: str):
+    """An argparse type parsing with refinement.objective_grammar's `parse_name` (imported when first used): its
+    syntax error a usage error naming the column."""
 
-    try:
-        return parse_objective(text)
-    except ObjectiveSyntaxError as exc:
-        raise argparse.ArgumentTypeError(f"{text!r}: {exc}") from None
+    def parse(text: str):
+        from tailor.refinement import objective_grammar
 
+        try:
+            return getattr(objective_grammar, parse_name)(text)
+        except objective_grammar.ObjectiveSyntaxError as exc:
+            raise argparse.ArgumentTypeError(f"{text!r}: {exc}") from None
 
-objective_text.__name__ = "objective"
-
-
-def measure_limit(text: str):
-    """An argparse type: a limit MEASURE=BOUND (refinement.objective_grammar)."""
-    from tailor.refinement.objective_grammar import ObjectiveSyntaxError, parse_bound
-
-    try:
-        return parse_bound(text)
-    except ObjectiveSyntaxError as exc:
-        raise argparse.ArgumentTypeError(f"{text!r}: {exc}") from None
+    parse.__name__, parse.__doc__ = name, f"An argparse type: {what} (refinement.objective_grammar)."
+    return parse
 
 
-measure_limit.__name__ = "limit"
+objective_text = _grammar_type("parse_objective", "objective", "an objective, e.g. duration + 0.3*energy")
+measure_limit = _grammar_type("parse_bound", "limit", "a limit MEASURE=BOUND")
 
 
 seed = whole_number(0, MAX_SEED)  # an argparse type: numpy's and the simulators' generators take no negative seed

@@ -235,28 +235,18 @@ def _print_text(result) -> None:
                 cells.append(f"{value:.3f} ({math.degrees(value):.0f}°)" if angle else f"{value:.3f}")
             out(f"  {p.id:<16}" + "".join(f"{c:>{width}}" for c in cells) + "\n")
     simulate = all(outcomes[k].simulated is not None for k, _ in names)
-    out("\nDurations (s), predicted" + (" / simulated" if simulate else "") + ":\n")
-    out(f"  {'action':<24}" + "".join(f"{label:>{width}}" for _, label in names) + "\n")
-    for k, action in enumerate(result.sequence.actions):
-        cells = []
-        for key, _ in names:
-            o = outcomes[key]
-            cell = f"{o.refined.predicted[k]:.2f}"
-            if simulate:
-                res = o.simulated.results
-                cell += f" / {res[k].duration:.2f}" if k < len(res) else " / -"
-                if k < len(res) and res[k].outcome != "success":
-                    cell += f" ({res[k].outcome})"
-            cells.append(cell)
-        out(f"  {str(action.step) + ' ' + action.action:<24}" + "".join(f"{c:>{width}}" for c in cells) + "\n")
-    totals = []
-    for key, _ in names:
-        o = outcomes[key]
-        cell = f"{o.refined.predicted_total:.2f}"
+
+    def duration_cell(o, k: int) -> str:
+        cell = f"{o.refined.predicted[k]:.2f}"
         if simulate:
-            cell += f" / {o.simulated.duration:.2f}"
-        totals.append(cell)
-    out(f"  {'total':<24}" + "".join(f"{c:>{width}}" for c in totals) + "\n")
+            res = o.simulated.results
+            cell += f" / {res[k].duration:.2f}" if k < len(res) else " / -"
+            if k < len(res) and res[k].outcome != "success":
+                cell += f" ({res[k].outcome})"
+        return cell
+
+    _table(result, names, width, "Durations (s)", simulate, duration_cell,
+           lambda o: f"{o.refined.predicted_total:.2f}" + (f" / {o.simulated.duration:.2f}" if simulate else ""))
     if len(names) == 2:
         g, r = outcomes["greedy"], outcomes["refined"]
         line = f"\nImprovement of refined over greedy: predicted {_gain(r.refined.predicted_total, g.refined.predicted_total)}"
@@ -282,33 +272,38 @@ def _print_measures(result, names, width: int, simulate: bool) -> None:
         limits = ", ".join(f"{b.measure} <= {b.bound:g} {_unit(result, b.measure)}".rstrip() for b in refined.limits)
         out(f"\nObjective: {refined.objective.text()}" + (f"; every action's predicted {limits}" if limits else "")
             + "\n")
+    n = len(result.sequence.actions)
     for measure in _measure_names([outcomes[key].refined for key, _ in names]):
         unit = _unit(result, measure)
-        out(f"\n{measure.capitalize()}" + (f" ({unit})" if unit else "") + ", predicted"
-            + (" / simulated" if simulate else "") + ":\n")
-        out(f"  {'action':<24}" + "".join(f"{label:>{width}}" for _, label in names) + "\n")
-        for k, action in enumerate(result.sequence.actions):
-            cells = []
-            for key, _ in names:
-                o = outcomes[key]
-                cell = f"{o.refined.measures[k][measure]:.4g}"
-                if simulate:
-                    res = o.simulated.results
-                    cell += f" / {res[k].measures[measure]:.4g}" if k < len(res) and measure in res[k].measures else " / -"
-                cells.append(cell)
-            out(f"  {str(action.step) + ' ' + action.action:<24}" + "".join(f"{c:>{width}}" for c in cells) + "\n")
-        totals = []
-        for key, _ in names:
-            o = outcomes[key]
-            cell = f"{o.refined.measure_total(measure):.4g}"
-            if simulate:
-                done = [r.measures[measure] for r in o.simulated.results if measure in r.measures]
-                cell += f" / {sum(done):.4g}" if len(done) == len(result.sequence.actions) else " / -"
-            totals.append(cell)
-        out(f"  {'total':<24}" + "".join(f"{c:>{width}}" for c in totals) + "\n")
+
+        def measure_cell(o, k: int, measure=measure) -> str:
+            res = o.simulated.results if simulate else ()
+            return f"{o.refined.measures[k][measure]:.4g}" + (
+                "" if not simulate else f" / {res[k].measures[measure]:.4g}"
+                if k < len(res) and measure in res[k].measures else " / -")
+
+        def measure_total(o, measure=measure) -> str:
+            done = [r.measures[measure] for r in o.simulated.results if measure in r.measures] if simulate else []
+            return f"{o.refined.measure_total(measure):.4g}" + (
+                "" if not simulate else f" / {sum(done):.4g}" if len(done) == n else " / -")
+
+        _table(result, names, width, measure.capitalize() + (f" ({unit})" if unit else ""), simulate, measure_cell,
+               measure_total)
     for key, label in names:
         for violation in outcomes[key].refined.violations:
             out(f"Limit not kept ({label}): {violation.reason()}\n")
+
+
+def _table(result, names, width: int, title: str, simulate: bool, cell, total) -> None:
+    """One value per action and execution (`cell(outcome, k)`), predicted (/ simulated), and their totals."""
+    out = sys.stdout.write
+    outcomes = {"greedy": result.greedy, "refined": result.refined}
+    out(f"\n{title}, predicted" + (" / simulated" if simulate else "") + ":\n")
+    out(f"  {'action':<24}" + "".join(f"{label:>{width}}" for _, label in names) + "\n")
+    for k, action in enumerate(result.sequence.actions):
+        out(f"  {str(action.step) + ' ' + action.action:<24}"
+            + "".join(f"{cell(outcomes[key], k):>{width}}" for key, _ in names) + "\n")
+    out(f"  {'total':<24}" + "".join(f"{total(outcomes[key]):>{width}}" for key, _ in names) + "\n")
 
 
 def _check_limits(result) -> None:
