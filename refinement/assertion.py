@@ -210,10 +210,14 @@ def failure_probability(classifier, row: np.ndarray) -> tuple[float, str]:
     """The probability that the action fails with parameters `row`, and where it comes from: the classifier's own
     estimate where it makes one (a `failure_probability(params)` method, e.g. its leaf's share of failed training
     episodes); else the share that failed of the fresh episodes it predicted to fail (its report's confusion,
-    Table 4.4); else 1, a failure taken as certain (every predicted failure then gets its subgoal, as in Alg. 5)."""
+    Table 4.4); else 1, a failure taken as certain (every predicted failure then gets its subgoal, as in Alg. 5).
+    The classifier's method returns the probabilities per row, or (probabilities, sources), or None where it has no
+    estimate (a file without its leaves' counts)."""
     own = getattr(classifier, "failure_probability", None)
-    if callable(own):
-        return float(np.asarray(own(row[None, :]), dtype=float)[0]), "the classifier's leaf"
+    estimate = own(row[None, :]) if callable(own) else None
+    if estimate is not None:
+        probability, source = estimate if isinstance(estimate, tuple) else (estimate, ("the classifier's leaf",))
+        return float(np.asarray(probability, dtype=float)[0]), str(source[0])
     counts = ((getattr(classifier, "report", None) or {}).get("confusion") or {}).get("counts") or {}
     failed, succeeded = counts.get("predicted_fail_observed_fail"), counts.get("predicted_fail_observed_success")
     if isinstance(failed, int) and isinstance(succeeded, int) and failed + succeeded > 0:

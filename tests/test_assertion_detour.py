@@ -5,6 +5,7 @@ actions through the subgoal, refined, against the plain action), and every asser
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -92,10 +93,13 @@ def test_the_failure_probability_comes_from_the_classifier(soccer):
     real = soccer.success_models["goToPose"]
     row = soccer.instantiated.actions[0].values()
     assert failure_probability(WithFailureRate(real, 0.3), row) == (0.3, "the classifier's leaf")
-    # without one of its own: the share that failed of the fresh episodes it predicted to fail (Table 4.4)
+    # its leaf's share of failed training episodes (the bundled classifier counts them)
+    p, source = failure_probability(real, row)
+    assert 0.0 < p < 1.0 and source.startswith("leaf ")
+    # a classifier without counts: the share that failed of the fresh episodes it predicted to fail (Table 4.4)
     counts = real.report["confusion"]["counts"]
     failed, succeeded = counts["predicted_fail_observed_fail"], counts["predicted_fail_observed_success"]
-    p, source = failure_probability(real, row)
+    p, source = failure_probability(replace(real, tree=replace(real.tree, failures=None)), row)
     assert p == pytest.approx(failed / (failed + succeeded)) and "fresh episodes" in source
     assert failure_probability(object(), row)[0] == 1.0  # nothing known: a failure is taken as certain
 

@@ -136,6 +136,9 @@ def train_collision_model(
     step("collision: fitting the tree")
     classifier = make_classifier(cost, class_balance(y), leaf, seed).fit(X, y)
     tree = tree_arrays(classifier).simplified()  # same predictions, no split between leaves that agree
+    # each node's training episodes and how many of them failed, counted by routing the rows through the final
+    # tree (sklearn's `value` is weighted by the class weights): each leaf's failure probability (assertion)
+    tree = tree.counted(X, y == FAIL)
     evaluation = confusion(tree.predict(compute_features(feature_space, first_examples(fresh)[0])), labels(fresh))
     outcomes, counts = np.unique([e.outcome for e in episodes], return_counts=True)
     report = {

@@ -371,6 +371,18 @@ class CollisionModel:
         """The tree node (leaf) each row of (n, p) parameters reaches: where a prediction comes from."""
         return self.tree.apply(self.features(params))
 
+    def failure_probability(self, params: np.ndarray) -> tuple[np.ndarray, tuple[str, ...]] | None:
+        """Per row of (n, p) parameters, the probability of failing from the leaf it reaches, (failed + 1) /
+        (samples + 2) of the training episodes there (Laplace), and where that comes from (the leaf and its counts);
+        None for a tree without the counts (a file written before they were recorded)."""
+        leaves = self.leaf(params)
+        probability = self.tree.failure_probability(leaves)
+        if probability is None:
+            return None
+        return probability, tuple(
+            f"leaf {leaf} of {self.action}'s classifier ({self.tree.failures[leaf]} of its {self.tree.samples[leaf]} "
+            "training episodes failed, Laplace)" for leaf in leaves)
+
     def success_rules(self) -> list[Rule]:
         """The leaves predicting success as rules with a zero linear model: intersected with a model tree's
         rules (App. C.3.3) they restrict the analytic minimization to the predicted-success region (Alg. 6)."""

@@ -9,7 +9,7 @@ the predicted class. Each leaf is also a box lower < x <= upper, the form subgoa
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from tailor.refinement.models.rules import leaf_boxes
@@ -86,10 +86,14 @@ class DecisionTree(_Routed):
     threshold: np.ndarray  # (nodes,) float, go left if x <= threshold
     success: np.ndarray  # (nodes,) bool, the class predicted at the node
     samples: np.ndarray  # (nodes,) int, training episodes reaching the node
+    # (nodes,) int, how many of those failed (None: not recorded, as in trees written before they were)
+    failures: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         check_structure(self.children_left, self.children_right,
                         {name: getattr(self, name) for name in ("feature", "threshold", "success", "samples")})
+        if self.failures is not None:
+            check_failures(self.failures, self.samples)
 
     def predict(self, X: np.ndarray) -> np.ndarray:
         return self.success[self.apply(X)]
@@ -101,7 +105,29 @@ class DecisionTree(_Routed):
             **structure,
             success=np.array([bool(self.success[k]) if verdict[k] is None else verdict[k] for k in keep]),
             samples=np.array([int(self.samples[k]) for k in keep]),
+            failures=None if self.failures is None else np.array([int(self.failures[k]) for k in keep]),
         )
+
+    def counted(self, X: np.ndarray, failed: np.ndarray) -> DecisionTree:
+        """The same tree with `samples` and `failures` counted by routing the rows of X (n, f) through it, `failed`
+        (n,) marking the rows that failed: unweighted counts, whatever class weights the learner used."""
+        reached = self.apply(X)
+        n = len(self.children_left)
+        samples = np.bincount(reached, minlength=n).astype(np.int64)
+        failures = np.bincount(reached, weights=np.asarray(failed, dtype=bool), minlength=n).astype(np.int64)
+        for node in reversed(preorder(self.children_left, self.children_right)):  # inner nodes: sum of children
+            if self.children_left[node] != LEAF:
+                for counts in (samples, failures):
+                    counts[node] = counts[self.children_left[node]] + counts[self.children_right[node]]
+        return replace(self, samples=samples, failures=failures)
+
+    def failure_probability(self, nodes: np.ndarray) -> np.ndarray | None:
+        """The Laplace estimate (failed + 1) / (samples + 2) of failing at each of `nodes` from the training episodes
+        that reached it (None where the failures were not recorded)."""
+        if self.failures is None:
+            return None
+        nodes = np.asarray(nodes, dtype=np.int64)
+        return (self.failures[nodes] + 1.0) / (self.samples[nodes] + 2.0)
 
     def leaf_boxes(self, n_features: int) -> list[LeafBox]:
         """Every leaf as a box in feature space, in depth-first order (left before right)."""
@@ -156,11 +182,17 @@ class DecisionTree(_Routed):
             "threshold": self.threshold.tolist(),
             "success": self.success.tolist(),
             "samples": self.samples.tolist(),
+            **({} if self.failures is None else {"failures": self.failures.tolist()}),
         }
 
     @classmethod
     def from_json(cls, data: dict) -> DecisionTree:
-        """Raises ValueError/KeyError/TypeError on malformed data (the loader names the file)."""
+        """Raises ValueError/KeyError/TypeError on malformed data (the loader names the file). `failures` is
+        optional (trees written before it was recorded load without it)."""
+        failures = data.get("failures")
+        if failures is not None and (not isinstance(failures, list) or not all(
+                isinstance(f, int) and not isinstance(f, bool) for f in failures)):
+            raise ValueError("failures must be a list of integers, one per node")
         return cls(
             children_left=np.asarray(data["children_left"], dtype=np.int64),
             children_right=np.asarray(data["children_right"], dtype=np.int64),
@@ -168,7 +200,31 @@ class DecisionTree(_Routed):
             threshold=np.asarray(data["threshold"], dtype=float),
             success=np.asarray(data["success"], dtype=bool),
             samples=np.asarray(data["samples"], dtype=np.int64),
+            failures=None if failures is None else np.asarray(failures, dtype=np.int64),
         )
+
+
+def check_failures(failures: np.ndarray, samples: np.ndarray) -> None:
+    """ValueError unless `failures` holds one count per node, each between 0 and the node's samples."""
+    if np.shape(failures) != np.shape(samples):
+        raise ValueError(f"failures must have one count per node ({len(samples)}), got shape {np.shape(failures)}")
+    if not np.issubdtype(np.asarray(failures).dtype, np.integer):
+        raise ValueError("failures must be integers")
+    if np.any(failures < 0) or np.any(failures > samples):
+        node = int(np.flatnonzero((failures < 0) | (failures > samples))[0])
+        raise ValueError(f"failures at node {node} ({int(failures[node])}) must lie in 0..samples "
+                         f"({int(samples[node])})")
+
+
+def preorder(left: np.ndarray, right: np.ndarray) -> list[int]:
+    """The nodes of a tree in preorder (every parent before its children)."""
+    order, stack = [], [0]
+    while stack:
+        node = stack.pop()
+        order.append(node)
+        if left[node] != LEAF:
+            stack += [int(right[node]), int(left[node])]
+    return order
 
 
 
