@@ -11,6 +11,7 @@ from tailor.cli.arguments import (
     add_filter_arguments,
     add_models_argument,
     add_neighbourhood_argument,
+    measure_limit,
     number,
     add_risk_argument,
     announce_models,
@@ -21,6 +22,7 @@ from tailor.cli.arguments import (
     whole_number,
     worker_count,
 )
+from tailor.cli.evaluate_pareto import energy_weights
 
 
 HORIZONS = (1, 2, 3, 4)  # run on every horizon situation; reported where one differs from a shorter horizon
@@ -50,8 +52,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="measure subgoal assertion instead (Table 6.1): random situations of the binding's "
                              "[evaluation] assertion generator, plain vs with assertion + refinement")
     parser.add_argument("--plot", metavar="FILE.png",
-                        help="with --assertion: draw three instances with their asserted subgoals (Fig. 6.6); "
-                             "with --meta: the meta model's tree and regions (Fig. 5.16)")
+                        help="with --assertion: draw three instances with their asserted subgoals (Fig. 6.6), and "
+                             "as FILE_search_space.png the search space of one asserted subgoal (Fig. 6.5); "
+                             "with --meta: the meta model's tree and regions (Fig. 5.16); with --pareto: measured "
+                             "mean time against mean energy per weight, the front marked")
     parser.add_argument("--closed-loop", action="store_true",
                         help="execute each situation's refined plan open and closed loop (monitored, re-refined, "
                              "replanned; Ch. 8.1) with the same simulator seed: failed runs, time, recovered share, "
@@ -87,6 +91,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--risk-sweep", type=_lambdas, default=(), metavar="LIST",
                         help="also refine every situation with each of these risk lambdas (comma-separated, e.g. "
                              "0,0.5,1,2) and report them side by side on the same situations, greedy runs and oracle")
+    parser.add_argument("--pareto", type=energy_weights, default=None, metavar="W1,W2,...",
+                        help="the time-energy front instead (Ch. 8.1): refine every situation for duration + W*energy "
+                             "with each energy weight W (comma-separated, e.g. 0,0.1,0.3,1; 0, the duration alone, is "
+                             "always run), execute each and report measured mean time, energy and error per weight "
+                             "against greedy and W=0 (Wilcoxon p of energy); --plot FILE.png draws time against "
+                             "energy with the front marked")
+    parser.add_argument("--max", type=measure_limit, action="append", default=[], metavar="MEASURE=BOUND",
+                        dest="limits",
+                        help="with --pareto: also refine for the duration keeping every action's predicted MEASURE "
+                             "at most BOUND (e.g. error=0.05), and report the share of runs ending within it with "
+                             "and without (repeatable, one bound per measure)")
 
 
 def _lambdas(text: str) -> tuple[float, ...]:
@@ -167,11 +182,7 @@ def _print_text(report: dict) -> None:
             f"{_pct(s.get('optimizer_wait_share'))} (each window refined while the action before it executes)\n")
     if s.get("per_action"):
         out("\nPer action (Table 5.2), mean duration (s) over the situations where both succeeded (how many):\n")
-        out("  problem          step  action              greedy (h=1)  refined (h=2)\n")
-        for row in s["per_action"]:
-            label = f"{row['problem']} ({row['situations']})"
-            out(f"  {label:<16} {row['step']:>4}  {row['action']:<18} {_fmt(row['greedy_mean']):>13}"
-                f"  {_fmt(row['refined_mean']):>13}\n")
+        _print_per_action(out, s["per_action"])
     sweep = report.get("risk_sweep")
     if sweep:
         out(f"\nRisk-aware refinement (h=2, {report.get('optimizer', 'auto')}) on the same situations: objective = "
@@ -194,6 +205,19 @@ def _print_text(report: dict) -> None:
                 f"  {','.join(row['methods'])}"
                 + (f"  ({row['shorter']} of {w['scenarios']} situations have fewer actions: h={row['horizon']} acts "
                    "as their length there)" if row.get("shorter") else "") + "\n")
+        if w.get("per_action"):
+            out(f"\nPer action of the horizon sequence (Table 5.2(b)), mean duration (s) over the {w['episodes']} "
+                "situations above (how many had each sequence):\n")
+            _print_per_action(out, w["per_action"])
+
+
+def _print_per_action(out, rows: list[dict]) -> None:
+    """Table 5.2: one line per action of each executed sequence, greedy (h=1) and refined (h=2) means."""
+    out("  problem          step  action              greedy (h=1)  refined (h=2)\n")
+    for row in rows:
+        label = f"{row['problem']} ({row['situations']})"
+        out(f"  {label:<16} {row['step']:>4}  {row['action']:<18} {_fmt(row['greedy_mean']):>13}"
+            f"  {_fmt(row['refined_mean']):>13}\n")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -225,6 +249,10 @@ def _evaluate(args: argparse.Namespace) -> int:
     plan = binding.require_evaluation()
     from tailor.errors import UsageError
 
+    if args.pareto is None and args.limits:
+        raise UsageError("--max belongs to --pareto")
+    if args.pareto is not None and (args.meta or args.assertion):
+        raise UsageError(f"--pareto and {'--meta' if args.meta else '--assertion'} are two experiments: give one")
     if args.meta:
         if args.assertion:
             raise UsageError("--meta and --assertion are two experiments: give one")
@@ -235,7 +263,7 @@ def _evaluate(args: argparse.Namespace) -> int:
         return run_meta(args, domain_dir, binding, plan, source)
     if args.fresh_episodes is not None or args.out is not None or args.worse_cost is not None:
         raise UsageError("--fresh-episodes, --worse-cost and --out belong to --meta")
-    if args.assertion or (args.plot and not args.learning_curve):
+    if args.assertion or (args.plot and not args.learning_curve and args.pareto is None):
         from tailor.cli.evaluate_assertion import run_assertion
 
         return run_assertion(args, domain_dir, binding, plan, source.path)
@@ -254,6 +282,10 @@ def _evaluate(args: argparse.Namespace) -> int:
         return draw_situations(domain_dir, binding, generator, seeds, args.seed, planned, source.path)
 
     items = situations(plan.comparison, args.episodes)
+    if args.pareto is not None:
+        from tailor.cli.evaluate_pareto import run_pareto
+
+        return run_pareto(args, domain_dir, binding, plan, source, items)
     if args.closed_loop or args.learning_curve:
         from tailor.cli.evaluate_closed_loop import run_closed_loop, run_learning_curve
 

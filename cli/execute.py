@@ -3,6 +3,8 @@
 Each action is monitored against its prediction; a deviation re-refines the next window from the measured
 state, a failure replans from the facts that hold (up to --replans times). --learn recalibrates the duration
 models on the executed actions (every --learn-every of them; with --log, also on the executions logged before).
+--objective and --max are refine's (Ch. 8.1): every refinement of the run, re-refinements and replans too,
+minimizes that objective within those limits.
 """
 
 from __future__ import annotations
@@ -11,10 +13,12 @@ import argparse
 import sys
 from pathlib import Path
 
-from tailor.cli.arguments import add_models_argument, positive_seconds, seed, whole_number
+from tailor.cli.arguments import add_models_argument, add_objective_arguments, positive_seconds, seed, whole_number
 from tailor.cli.main import EXIT_NOT_COMPLETED
 from tailor.outputs import check_output_file, json_text
 from tailor.progress import showing_progress
+from tailor.errors import UsageError
+from tailor.refinement.objective_grammar import ObjectiveSyntaxError, bounds_of
 from tailor.refinement.optimizers import DEFAULT_OPTIMIZER, OPTIMIZERS
 
 
@@ -41,6 +45,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="actions optimized together (default 2; 1 is greedy)")
     parser.add_argument("--optimizer", choices=sorted(OPTIMIZERS), default=DEFAULT_OPTIMIZER,
                         help=f"as for `tailor refine` (default: {DEFAULT_OPTIMIZER})")
+    add_objective_arguments(parser)  # every refinement of the run minimizes it: re-refinements and replans too
     parser.add_argument("--seed", type=seed, default=0, metavar="S",
                         help="seed of the optimizer and of the simulator's noise and disturbance (default 0)")
     parser.add_argument("--belief", metavar="FILE", help="belief state file (default: PROBLEM's stem + .toml)")
@@ -59,10 +64,15 @@ def run(args: argparse.Namespace) -> int:
 
     if args.plot:
         check_output_file(args.plot, ".png")
+    try:
+        limits = bounds_of(args.limits)
+    except ObjectiveSyntaxError as exc:
+        raise UsageError(f"--max: {exc}") from None
     loop = prepare_run(args.domain, args.problem, args.belief, horizon=args.horizon, optimizer=args.optimizer,
                      seed=args.seed, models=args.models, closed_loop=not args.open_loop, replans=args.replans,
                      learn=args.learn, learn_every=args.learn_every, disturbance=args.disturb, variant=args.variant,
-                     log=args.log, planner=args.planner, timeout=args.timeout)
+                     log=args.log, planner=args.planner, timeout=args.timeout, objective=args.objective,
+                     limits=limits)
     collected = []
     with showing_progress(False):
         for event in loop.events():

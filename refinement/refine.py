@@ -277,6 +277,8 @@ def _keeping(base: Term, model: ActionModel, limits: tuple[MeasureBound, ...]):
 
     def valid(theta: np.ndarray) -> np.ndarray:
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        if not len(theta):
+            return np.ones(0, dtype=bool)
         features = base.derive(base.inputs(theta))
         ok = np.ones(len(theta), dtype=bool) if guard is None else np.asarray(guard(theta), dtype=bool)
         for tree, bound in trees:

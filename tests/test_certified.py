@@ -341,3 +341,18 @@ def test_auto_budget_is_boxes_fewer_for_each_free_parameter_beyond_four():
 
     assert auto_budget(2) == auto_budget(4) == AUTO_BUDGET
     assert auto_budget(6) == AUTO_BUDGET // AUTO_WIDE ** 2 < auto_budget(5) < AUTO_BUDGET
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_validity_check_is_never_asked_about_no_points(seed):
+    """Once every half of a step is pruned or bounded within the tolerance there is nothing to evaluate: a
+    validity check (a limit on a measure, a success classifier) that cannot take an empty batch is not called."""
+    objective = random_objective(np.random.default_rng(seed), 2, 2, n_leaves=30, extra_kind="curved")
+    term = objective.terms[0]
+
+    def strict(theta):
+        assert len(np.atleast_2d(theta)), "validity asked about an empty batch"
+        return np.ones(len(np.atleast_2d(theta)), dtype=bool)
+
+    result = certified.minimize(Objective(objective.free, (replace(term, valid=strict),) + objective.terms[1:]))
+    assert result.gap <= certified.tolerance_of(result.cost)

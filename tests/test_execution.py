@@ -285,3 +285,69 @@ def test_evaluate_closed_loop_recovers_a_nudged_ball():
     assert report["open_loop"]["runs"] == report["closed_loop"]["runs"] == 3
     assert report["closed_loop"]["failed_runs"] < report["open_loop"]["failed_runs"]
     assert report["recovered_share"] > 0 and report["closed_loop"]["replans"] > 0
+
+
+# --- the run's objective and limits (issue 31): every refinement of the run minimizes them --------------------
+def _goals(problem, objective=None, limits=(), plain_start=False, **teleport):
+    """The goals a run on `Teleport` calls, refined (ga, seed 0) for `objective` within `limits`; `plain_start`:
+    the run starts from the duration-only refinement, so only its re-refined windows can differ."""
+    from tailor.refinement.refine import refine
+
+    domain, problem_file = resolve_problem("soccer", problem)
+    inputs = pipeline.read_task(pipeline.Task(domain, problem_file, problem_file.with_suffix(".toml")))
+    options = pipeline.Options(seed=0, greedy=False, optimizer="ga", objective=objective, limits=limits)
+    prepared = pipeline.prepare(inputs, options)
+    start = None
+    if plain_start:
+        o = prepared.options
+        start = refine(prepared.sequence, prepared.models, horizon=o.horizon, method=o.optimizer, seed=o.seed,
+                       success_models=prepared.success_models, risk=o.risk, neighbourhood=o.neighbourhood)
+    robot = Teleport(**teleport)
+    events = list(ClosedLoop(inputs, options, ExecuteOptions(), robot, prepared=prepared, refined=start).events())
+    assert summarize(events).completed
+    return [c.goal for c in robot.calls], events
+
+
+def test_the_run_refines_for_its_objective_within_its_limits():
+    """Energy weighed, the robot arrives at the ball from another heading; the error bounded at 8 cm, it arrives
+    slower (the goToPose error model grows with the arrival speed). Dropping either (the loop refining for the
+    duration alone, as it did) gives the duration-only goals."""
+    from tailor.refinement.objective_grammar import MeasureBound, parse_objective
+
+    plain, _ = _goals("score")
+    energy, _ = _goals("score", parse_objective("duration + 10*energy"))
+    limited, _ = _goals("score", limits=(MeasureBound("error", 0.08),))
+    assert abs(math.remainder(plain[0][2] - energy[0][2], 2 * math.pi)) > 0.3  # the heading at the ball
+    assert plain[0][3] == pytest.approx(0.3, abs=0.01) and limited[0][3] < 0.1  # the speed arriving there
+
+
+def test_re_refined_windows_minimize_the_runs_objective_within_its_limits():
+    """The same duration-only plan, the robot arriving 0.8 rad off each heading: the windows re-refined from the
+    measured state differ with the objective and with the limit (the first call, the plan's, does not)."""
+    from tailor.refinement.objective_grammar import MeasureBound, parse_objective
+
+    plain, events = _goals("waypoints", plain_start=True, heading_error=0.8)
+    energy, _ = _goals("waypoints", parse_objective("duration + 10*energy"), plain_start=True, heading_error=0.8)
+    limited, _ = _goals("waypoints", limits=(MeasureBound("error", 0.08),), plain_start=True, heading_error=0.8)
+    assert any(e.kind == "re-refined" for e in events)
+    assert plain[0] == energy[0] == limited[0]
+    assert any(a != b for a, b in zip(plain[1:], energy[1:]))
+    assert max(goal[3] for goal in plain[1:3]) > 0.5 and max(goal[3] for goal in limited[1:3]) < 0.1
+
+
+def test_execute_takes_the_objective_and_limits_as_refine_does(capsys):
+    from tailor.cli.main import main
+    from tailor.refinement.execution import run
+    from tailor.refinement.objective_grammar import MeasureBound, parse_objective
+
+    loop = run("soccer", "score", optimizer="ga", objective="duration + 0.5*energy", limits={"error": 0.08})
+    assert loop.resolved.objective == parse_objective("duration + 0.5*energy")
+    assert loop.resolved.limits == (MeasureBound("error", 0.08),)
+    assert main(["-q", "execute", "soccer", "score", "--optimizer", "ga", "--objective", "duration + 0.5*energy",
+                 "--max", "error=0.08", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["summary"]["completed"]
+    for extra, message in ((["--objective", "duration + enrgy"], "objective: unknown measure 'enrgy'"),
+                           (["--max", "error=1", "--max", "error=2"], "--max: error is limited twice")):
+        assert main(["execute", "soccer", "score", *extra]) == 2
+        errors = [line for line in capsys.readouterr().err.splitlines() if "error:" in line]
+        assert len(errors) == 1 and message in errors[0]

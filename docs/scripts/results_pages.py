@@ -221,6 +221,41 @@ def _learning_curve(domain: str, name: str, e: dict) -> list[str]:
     return out
 
 
+def _assertion(domain: str, name: str, e: dict) -> list[str]:
+    command = _command(e, f"tailor evaluate {domain} --assertion --episodes {e['episodes']} --seed {e['seed']} --json")
+    out = [f"## Subgoal assertion (Table 6.1): `{name}`\n",
+           f"From `domains/{domain}/training/{name}`, the report of `{command}`: {e['episodes']} random "
+           f"{code(e['generator'])} situations executed with the plain action and with assertion and refinement "
+           f"(risk {_num(e['risk'], 1)}, neighbourhood {_num(e['neighbourhood'])}), same simulator seed"
+           f"{'; a subgoal asserted only where its detour pays' if e.get('weighs_detour') else ''}.\n"]
+    rows = [["success without / with assertion", f"{_pct(e['success_without'])} / {_pct(e['success_with'])}"],
+            ["subgoal asserted", _pct(e["asserted"])],
+            ["asserted needlessly (plain would have succeeded)", _pct(e["needless_assertions"])],
+            ["slow-down where needless, mean / median",
+             f"{_pct(e['needless_cost'])} / {_pct(e.get('needless_cost_median'))}"]]
+    if "weighed_out" in e:
+        rows.append(["left plain by the weighing (of them failed)", f"{_pct(e['weighed_out'])} "
+                     f"({e['weighed_out_failed']})"])
+    out.append(table(["", "measured"], rows, align="ll"))
+    return out
+
+
+def _pareto(domain: str, name: str, e: dict) -> list[str]:
+    command = _command(e, f"tailor evaluate {domain} --pareto ... --episodes {e['situations']} --json")
+    out = [f"## Time against energy (Ch. 8.1): `{name}`\n",
+           f"From `domains/{domain}/training/{name}`, the report of `{command}`: {e['situations']} random "
+           f"{code(e['comparison'])} situations refined for {code(e['objective'])} with each weight W and executed; "
+           f"means over the {e['episodes']} where no run failed ({e['test']} of energy against W = 0).\n"]
+    rows = [["greedy", str(e["greedy"]["failed"]), f"{_num(e['greedy']['duration'])} s", _num(e["greedy"]["energy"]),
+             "", "", ""]]
+    for p in e["pareto"]:
+        rows.append([f"W = {p['weight']:g}", str(p["failed"]), f"{_num(p['duration'])} s", _num(p["energy"]),
+                     _pct(p["duration_change"]), _pct(p["energy_change"]), _p(p["p_energy"])])
+    out.append(table(["", "failed", "mean time", "mean energy (J)", "time vs W = 0", "energy vs W = 0",
+                      "p energy"], rows, align="lrrrrrr"))
+    return out
+
+
 def domain_page(training: Path) -> str:
     domain = training.parent.name
     report = json.loads((training / "report.json").read_text(encoding="utf-8"))
@@ -237,6 +272,10 @@ def domain_page(training: Path) -> str:
             out += ["\n"] + _closed_loop(domain, path.name, evaluation)
         elif "mae_last" in evaluation:
             out += ["\n"] + _learning_curve(domain, path.name, evaluation)
+        elif "pareto" in evaluation:
+            out += ["\n"] + _pareto(domain, path.name, evaluation)
+        elif "needless_assertions" in evaluation:
+            out += ["\n"] + _assertion(domain, path.name, evaluation)
     for path in sorted(training.glob("*.txt")):
         if path.name in SKIPPED_TEXT:
             continue

@@ -19,7 +19,7 @@ from pathlib import Path
 from tailor.errors import ArgumentTypeError, ArgumentValueError
 from tailor.planner_bridge import DEFAULT_PLANNER
 from tailor.refinement import pipeline
-from tailor.refinement.api import _belief_table, _refine_arguments
+from tailor.refinement.api import _belief_table, _objective_arguments, _refine_arguments
 from tailor.refinement.execution.adapt import OnlineLearner, recalibrated
 from tailor.refinement.execution.executors import (
     Executed,
@@ -50,11 +50,13 @@ def run(domain, problem, belief=None, *, horizon: int = 2, optimizer: str = DEFA
             models: str | Path | None = None, closed_loop: bool = True, replans: int = 2, learn: bool = False,
             learn_every: int = 5, disturbance: str | None = None, variant: str | None = None,
             executor: Executor | None = None, learner: OnlineLearner | None = None, log: str | Path | None = None,
-            planner: str = DEFAULT_PLANNER, timeout: float | None = None) -> ClosedLoop:
+            planner: str = DEFAULT_PLANNER, timeout: float | None = None, objective=None, limits=None
+            ) -> ClosedLoop:
     """The run of a task, planned and refined, ready to execute (`.events()`; `execute` is that).
 
-    `domain`, `problem`, `belief`, `horizon`, `optimizer`, `seed`, `models`, `planner`, `timeout`: as for
-    `tailor.refine`. `closed_loop` False runs the refined plan open loop (no monitoring, the first failure ends
+    `domain`, `problem`, `belief`, `horizon`, `optimizer`, `seed`, `models`, `planner`, `timeout`, `objective`,
+    `limits`: as for `tailor.refine` (every refinement of the run, re-refinements and replans too, minimizes that
+    objective within those limits). `closed_loop` False runs the refined plan open loop (no monitoring, the first failure ends
     it). `replans`: how often to plan again after a failure. `learn`: recalibrate the duration models every
     `learn_every` executed actions (or pass a `learner` kept across calls). `executor`: a robot adapter (default:
     the domain's simulator with `seed`, `disturbance` and `variant`). `log`: a folder where every executed
@@ -62,6 +64,7 @@ def run(domain, problem, belief=None, *, horizon: int = 2, optimizer: str = DEFA
     The task is read, planned and refined here; nothing is executed until `.events()` is iterated."""
     seed, horizon = _refine_arguments(domain, problem, belief, seed, horizon, models, True, None, None, None,
                                       optimizer, timeout)
+    objective, limits = _objective_arguments(objective, limits)
     for name, value in (("closed_loop", closed_loop), ("learn", learn)):
         if not isinstance(value, bool):
             raise ArgumentTypeError(f"{name} must be bool, not {type(value).__name__}")
@@ -84,8 +87,12 @@ def run(domain, problem, belief=None, *, horizon: int = 2, optimizer: str = DEFA
     wrong = entry.unknown_option(disturbance, variant) if executor is None else None
     if wrong is not None:
         raise ArgumentValueError(wrong)
+    for name, weighed, bounds in (("objective", objective, ()), ("limits", None, limits)):
+        wrong = pipeline.unknown_measure(inputs.binding, weighed, bounds)  # before planning, as `refine`
+        if wrong is not None:
+            raise ArgumentValueError(f"{name}: {wrong}")
     options = pipeline.Options(horizon=horizon, optimizer=optimizer, seed=seed, greedy=False, planner=planner,
-                               timeout=timeout)
+                               timeout=timeout, objective=objective, limits=limits)
     return ClosedLoop(inputs, options, settings, executor, learner, log=None if log is None else Path(log))
 
 

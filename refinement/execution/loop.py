@@ -19,6 +19,8 @@ whose predicate the binding marks `lost_on_failure` that the failed step needed 
 deleted holds again), the belief takes the measured scene objects and the subgoals executed so far, and the
 planner plans again from them.
 Open loop (`closed_loop=False`) runs the same refined plan without monitoring and stops at the first failure.
+Every refinement of a run (the first, each re-refined window, each replan's) minimizes the run's objective
+within its limits (`Options.objective`, `Options.limits`; Ch. 8.1), as `tailor refine` does.
 """
 
 from __future__ import annotations
@@ -303,7 +305,8 @@ class ClosedLoop:
     def _refine(self, sequence: ActionSequence):
         o = self.resolved
         return refine(sequence, self.models, horizon=o.horizon, method=o.optimizer, seed=o.seed,
-                      success_models=self.success_models, risk=o.risk, neighbourhood=o.neighbourhood)
+                      success_models=self.success_models, risk=o.risk, neighbourhood=o.neighbourhood,
+                      objective=o.objective, limits=o.limits)
 
     @staticmethod
     def _choices(bound: ActionSequence) -> dict[str, float]:
@@ -350,7 +353,8 @@ class ClosedLoop:
         assignment = {pid: v for pid, v in choices.items() if pid in self._fixed_ids(sequence, i)}
         o = self.resolved
         window = optimize_window(sequence.actions, i, o.horizon, assignment, self.models, o.optimizer, o.seed,
-                                 self.success_models, o.risk, neighbourhood=o.neighbourhood)
+                                 self.success_models, o.risk, neighbourhood=o.neighbourhood, objective=o.objective,
+                                 limits=o.limits)
         if window is None and failing:
             return _Verdict(replan=True, reason=f"{where}: {failing[0]} is predicted to fail from the measured "
                                                 "state and it has nothing left to choose")

@@ -335,6 +335,8 @@ def minimize(objective: Objective, seed: int = 0, budget: int = BUDGET, toleranc
 
     def consider(points: np.ndarray) -> None:
         nonlocal best_cost, best_point, evaluations
+        if not len(points):  # (every half pruned or bounded within the tolerance)
+            return
         valid = objective.valid(points)
         if not valid.any():
             return
