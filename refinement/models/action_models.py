@@ -226,18 +226,7 @@ class ActionModel:
         n_i = data.get("n_i")
         if not isinstance(n_i, int) or isinstance(n_i, bool) or n_i < 1:
             raise ModelFileError(f"'n_i' must be a positive integer, got {n_i!r}", file=source)
-        if not isinstance(data.get("duration"), dict):
-            raise ModelFileError("'duration' must be a model tree object", file=source)
-        try:
-            tree = ModelTree.from_json(data["duration"], source)
-        except ModelFileError:
-            raise
-        except (KeyError, TypeError, ValueError, OverflowError) as exc:
-            raise ModelFileError(f"invalid duration model tree: {exc}", file=source) from None
-        n_in = getattr(tree, "n_features_in_", None)
-        if n_in != len(names):
-            raise ModelFileError(f"duration model tree takes {n_in} features, feature space has {len(names)}",
-                                 file=source)
+        tree = _model_tree(data.get("duration"), "'duration'", "duration", len(names), source)
         uncertainty = None
         if "uncertainty" in data:  # optional: files written before it existed load without it
             uncertainty = LeafUncertainty.from_json(data["uncertainty"], tree.n_leaves_, source)
@@ -299,17 +288,7 @@ class MeasureModel:
             raise ModelFileError(f"'{where}.unit' must be a string", file=source)
         if not isinstance(n_i, int) or isinstance(n_i, bool) or n_i < 1:
             raise ModelFileError(f"'{where}.n_i' must be a positive integer, got {n_i!r}", file=source)
-        if not isinstance(data.get("tree"), dict):
-            raise ModelFileError(f"'{where}.tree' must be a model tree object", file=source)
-        try:
-            tree = ModelTree.from_json(data["tree"], source)
-        except ModelFileError:
-            raise
-        except (KeyError, TypeError, ValueError, OverflowError) as exc:
-            raise ModelFileError(f"invalid {measure} model tree: {exc}", file=source) from None
-        if getattr(tree, "n_features_in_", None) != n_features:
-            raise ModelFileError(f"{measure} model tree takes {getattr(tree, 'n_features_in_', None)} features, "
-                                 f"feature space has {n_features}", file=source)
+        tree = _model_tree(data.get("tree"), f"'{where}.tree'", measure, n_features, source)
         report = data.get("report", {})
         if not isinstance(report, dict):
             raise ModelFileError(f"'{where}.report' must be an object", file=source)
@@ -553,3 +532,21 @@ def _report(data: dict, source: str) -> dict:
         raise ModelFileError(f"'report.duration_range' must be [shortest, longest] seconds seen in training, "
                              f"got {seen!r}", file=source)
     return report
+
+
+def _model_tree(data, where: str, measure: str, n_features: int, source) -> ModelTree:
+    """A measure's model tree read from its JSON object `data` (at `where` in the file), checked to take the
+    feature space's `n_features` features: anything else is a ModelFileError naming the file."""
+    if not isinstance(data, dict):
+        raise ModelFileError(f"{where} must be a model tree object", file=source)
+    try:
+        tree = ModelTree.from_json(data, source)
+    except ModelFileError:
+        raise
+    except (KeyError, TypeError, ValueError, OverflowError) as exc:
+        raise ModelFileError(f"invalid {measure} model tree: {exc}", file=source) from None
+    n_in = getattr(tree, "n_features_in_", None)
+    if n_in != n_features:
+        raise ModelFileError(f"{measure} model tree takes {n_in} features, feature space has {n_features}",
+                             file=source)
+    return tree
