@@ -15,7 +15,8 @@ the features' values at a single point could never close the gap: such a term is
 
 Robust objective (a neighbourhood): the worst case at x is the largest cost over the stencil x + o (clipped to
 the ranges), so over a box B it is at least, for every offset o, the cost's bound over the box B + o; the
-largest of these is the bound. Validity (Alg. 6): a box whose region features (`region_bounds`) meet no leaf
+largest of these is the bound (taken over the point and the stencil's ends only: a subset of the offsets bounds
+the worst case as well, and the inner ones seldom raise it). Validity (Alg. 6): a box whose region features (`region_bounds`) meet no leaf
 where the success classifier predicts success, or whose box moved by the guard's margin to either side along a
 free parameter meets none (a valid choice needs success there too), holds no valid choice and is dropped;
 every other box stays, so a bound is never raised by a validity the bounds cannot prove.
