@@ -178,11 +178,15 @@ def add_objective_arguments(parser: argparse.ArgumentParser) -> None:
                              "by +, weights >= 0, each measure one the action models predict (their recipe's "
                              "measures; default: the binding's [objective], else duration); greedy minimizes the "
                              "same")
+    add_limit_argument(parser, "keep every action's predicted MEASURE at most BOUND (its unit), e.g. error=0.05: "
+                               "a choice that breaks it is not taken; where none keeps it, the output says which "
+                               "step and the command ends with status 9 (repeatable, one bound per measure)")
+
+
+def add_limit_argument(parser: argparse.ArgumentParser, help: str) -> None:
+    """--max MEASURE=BOUND (repeatable) into `args.limits`."""
     parser.add_argument("--max", type=measure_limit, action="append", default=[], metavar="MEASURE=BOUND",
-                        dest="limits",
-                        help="keep every action's predicted MEASURE at most BOUND (its unit), e.g. error=0.05: a "
-                             "choice that breaks it is not taken; where none keeps it, the output says which step "
-                             "and the command ends with status 9 (repeatable, one bound per measure)")
+                        dest="limits", help=help)
 
 
 def _grammar_type(parse_name: str, name: str, what: str):

@@ -11,7 +11,7 @@ from tailor.cli.arguments import (
     add_filter_arguments,
     add_models_argument,
     add_neighbourhood_argument,
-    measure_limit,
+    add_limit_argument,
     number,
     add_risk_argument,
     announce_models,
@@ -97,9 +97,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "always run), execute each and report measured mean time, energy and error per weight "
                              "against greedy and W=0 (Wilcoxon p of energy); --plot FILE.png draws time against "
                              "energy with the front marked")
-    parser.add_argument("--max", type=measure_limit, action="append", default=[], metavar="MEASURE=BOUND",
-                        dest="limits",
-                        help="with --pareto: also refine for the duration keeping every action's predicted MEASURE "
+    add_limit_argument(parser, "with --pareto: also refine for the duration keeping every action's predicted MEASURE "
                              "at most BOUND (e.g. error=0.05), and report the share of runs ending within it with "
                              "and without (repeatable, one bound per measure)")
 

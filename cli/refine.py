@@ -245,7 +245,7 @@ def _print_text(result) -> None:
                 cell += f" ({res[k].outcome})"
         return cell
 
-    _table(result, names, width, "Durations (s)", simulate, duration_cell,
+    _table(result, outcomes, names, width, "Durations (s)", simulate, duration_cell,
            lambda o: f"{o.refined.predicted_total:.2f}" + (f" / {o.simulated.duration:.2f}" if simulate else ""))
     if len(names) == 2:
         g, r = outcomes["greedy"], outcomes["refined"]
@@ -287,17 +287,16 @@ def _print_measures(result, names, width: int, simulate: bool) -> None:
             return f"{o.refined.measure_total(measure):.4g}" + (
                 "" if not simulate else f" / {sum(done):.4g}" if len(done) == n else " / -")
 
-        _table(result, names, width, measure.capitalize() + (f" ({unit})" if unit else ""), simulate, measure_cell,
-               measure_total)
+        _table(result, outcomes, names, width, measure.capitalize() + (f" ({unit})" if unit else ""), simulate,
+               measure_cell, measure_total)
     for key, label in names:
         for violation in outcomes[key].refined.violations:
             out(f"Limit not kept ({label}): {violation.reason()}\n")
 
 
-def _table(result, names, width: int, title: str, simulate: bool, cell, total) -> None:
+def _table(result, outcomes, names, width: int, title: str, simulate: bool, cell, total) -> None:
     """One value per action and execution (`cell(outcome, k)`), predicted (/ simulated), and their totals."""
     out = sys.stdout.write
-    outcomes = {"greedy": result.greedy, "refined": result.refined}
     out(f"\n{title}, predicted" + (" / simulated" if simulate else "") + ":\n")
     out(f"  {'action':<24}" + "".join(f"{label:>{width}}" for _, label in names) + "\n")
     for k, action in enumerate(result.sequence.actions):
