@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 from sklearn.base import RegressorMixin
 from sklearn.ensemble import HistGradientBoostingRegressor
-from threadpoolctl import threadpool_limits
 
+from tailor.refinement.learning.threads import one_thread
 from tailor.refinement.models.action_models import ActionModel
 from tailor.errors import DataError
 from tailor.refinement.models.expression_space import ExpressionSpace
@@ -42,9 +42,6 @@ LEAF_TOLERANCE = 0.03  # a larger leaf size is taken if its validation MAE is at
 MIN_EPISODES = 8  # fewer successful episodes cannot be split into train / validation / test
 
 # Each fit runs on one thread (OpenMP, BLAS): the cores are used by fitting in --jobs workers. Left to itself,
-# HistGradientBoostingRegressor starts an OpenMP thread per CPU; on a busy machine its threads wait for one
-# another: a fit of 200 examples took 31 s with 2 threads under load, 0.14 s with one.
-ONE_THREAD = 1
 RegressorFactory = Callable[[int, int], RegressorMixin]  # (seed, min_samples_leaf) -> unfitted regressor
 
 
@@ -205,7 +202,7 @@ def train_duration_model(
     mae_constant = float(np.mean(np.abs(first_examples(test)[1] - constant)))
 
     step(f"{action}: final model")
-    with threadpool_limits(limits=ONE_THREAD):
+    with one_thread():
         final = fit_on_episodes(used, feature_space, n_i, make_model(seed, leaf), observed)
     uncertainty = _leaf_uncertainty(final, used, seed, leaf, n_i, feature_space, observed, make_model, step, action,
                                     jobs)
@@ -267,7 +264,7 @@ def _leaf_uncertainty(final: RegressorMixin, used: list[Episode], seed: int, lea
 def _fit_and_residuals(factory: RegressorFactory, seed: int, leaf: int, features: np.ndarray, targets: np.ndarray,
                        test_features: np.ndarray, test_durations: np.ndarray) -> np.ndarray:
     """Observed minus predicted duration of each held-out example, by a regressor fitted on the others."""
-    with threadpool_limits(limits=ONE_THREAD):
+    with one_thread():
         regressor = factory(seed, leaf).fit(features, targets)
         return test_durations - regressor.predict(test_features)
 
@@ -282,7 +279,7 @@ def _first_example_features(episodes: list[Episode], feature_space: str | Featur
 def _fit_and_test(factory: RegressorFactory, seed: int, leaf: int, features: np.ndarray, targets: np.ndarray,
                   test_features: np.ndarray, test_durations: np.ndarray) -> tuple[float, int | None]:
     """(held-out MAE, leaves) of a regressor of `factory` fitted on the examples: one fit, run in a worker."""
-    with threadpool_limits(limits=ONE_THREAD):  # the parallelism is the workers'; see ONE_THREAD
+    with one_thread():  # the parallelism is the workers' (learning.threads)
         regressor = factory(seed, leaf).fit(features, targets)
         return float(np.mean(np.abs(regressor.predict(test_features) - test_durations))), _leaves(regressor)
 
