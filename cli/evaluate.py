@@ -41,7 +41,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "every sequence is not listed")
     parser.add_argument("--situations", metavar="NAME", default=None,
                         help="a situation generator of the domain's simulator to evaluate on (greedy vs refined and "
-                             "the horizons) instead of the binding's [evaluation] ones, e.g. another scenario")
+                             "the horizons, or --assertion) instead of the binding's [evaluation] ones, e.g. "
+                             "another scenario")
     parser.add_argument("--seed", type=seed, default=0, metavar="S", help="seed of situations and simulator")
     parser.add_argument("--jobs", type=worker_count, default=1, metavar="J",
                         help="worker processes (default 1; at most the number of CPUs)")
@@ -51,6 +52,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--assertion", action="store_true",
                         help="measure subgoal assertion instead (Table 6.1): random situations of the binding's "
                              "[evaluation] assertion generator, plain vs with assertion + refinement")
+    parser.add_argument("--classifier", type=_names, default=(), metavar="SCENARIO[,SCENARIO...]",
+                        help="measure the success classifiers instead (Table 4.4): the classifier of each experience "
+                             "scenario's action (comma-separated scenarios, as `tailor domains` lists them) on "
+                             "--episodes fresh episodes of it: correct, false success (predicted success but failed, "
+                             "of all episodes) and the share an 'always success' prediction gets right")
     parser.add_argument("--plot", metavar="FILE.png",
                         help="with --assertion: draw three instances with their asserted subgoals (Fig. 6.6), and "
                              "as FILE_search_space.png the search space of one asserted subgoal (Fig. 6.5); "
@@ -107,6 +113,14 @@ def _lambdas(text: str) -> tuple[float, ...]:
     if not any(parts) or not all(parts):  # (an empty item is a typing mistake, as in --n-i)
         raise argparse.ArgumentTypeError(f"expected comma-separated risk lambdas, e.g. 0,0.5,1, not {text!r}")
     return tuple(dict.fromkeys(risk_lambda(part) for part in parts))
+
+
+def _names(text: str) -> tuple[str, ...]:
+    """Comma-separated names (argparse type of --classifier), each once, in order."""
+    parts = [part.strip() for part in text.split(",")]
+    if not all(parts):
+        raise argparse.ArgumentTypeError(f"expected comma-separated scenario names, not {text!r}")
+    return tuple(dict.fromkeys(parts))
 
 
 def positive_number(text: str) -> float:
@@ -244,11 +258,28 @@ def _evaluate(args: argparse.Namespace) -> int:
     domain_dir = resolve_domain_dir(args.domain)
     binding = load_domain_binding(domain_dir)
     source = resolve_models(domain_dir, args.models)
-    plan = binding.require_evaluation()
     from tailor.errors import UsageError
 
     if args.pareto is None and args.limits:
         raise UsageError("--max belongs to --pareto")
+    if args.classifier:  # (draws no situations: needs no [evaluation])
+        others = [flag for flag, given in (("--assertion", args.assertion), ("--meta", args.meta),
+                                           ("--pareto", args.pareto is not None), ("--closed-loop", args.closed_loop),
+                                           ("--learning-curve", args.learning_curve)) if given]
+        if others:
+            raise UsageError(f"--classifier and {others[0]} are two experiments: give one")
+        if args.plot or args.situations is not None:
+            raise UsageError(f"{'--plot' if args.plot else '--situations'} does not apply to --classifier (it "
+                             "gathers episodes of experience scenarios, it draws no situations)")
+        from tailor.cli.evaluate_assertion import run_classifier
+
+        return run_classifier(args, domain_dir, binding, source.path)
+    plan = binding.require_evaluation()
+    if args.situations is not None:  # (checked before any experiment: a bad name is one line, whichever runs)
+        known = binding.entry.situations
+        if args.situations not in known:
+            raise UsageError(f"--situations {args.situations!r} is not a situation generator of simulator "
+                             f"{binding.simulator!r} (known: {', '.join(known) or 'none'})")
     if args.pareto is not None and (args.meta or args.assertion):
         raise UsageError(f"--pareto and {'--meta' if args.meta else '--assertion'} are two experiments: give one")
     if args.meta:
@@ -264,14 +295,14 @@ def _evaluate(args: argparse.Namespace) -> int:
     if args.assertion or (args.plot and not args.learning_curve and args.pareto is None):
         from tailor.cli.evaluate_assertion import run_assertion
 
+        if args.situations is not None:
+            from dataclasses import replace
+
+            plan = replace(plan, assertion=args.situations)
         return run_assertion(args, domain_dir, binding, plan, source.path)
     if args.situations is not None:
         from dataclasses import replace
 
-        known = binding.entry.situations
-        if args.situations not in known:
-            raise UsageError(f"--situations {args.situations!r} is not a situation generator of simulator "
-                             f"{binding.simulator!r} (known: {', '.join(known) or 'none'})")
         plan = replace(plan, comparison=args.situations, horizons=args.situations)
     planned: dict = {}  # each problem the situations need, planned once
 

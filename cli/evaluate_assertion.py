@@ -1,9 +1,11 @@
-"""`tailor evaluate DOMAIN --assertion`: subgoal assertion measured in the simulator (Sec. 6.3, Table 6.1)."""
+"""`tailor evaluate DOMAIN --assertion`: subgoal assertion measured in the simulator (Sec. 6.3, Table 6.1); and
+`--classifier SCENARIO,...`: the success classifier on fresh episodes of experience scenarios (Table 4.4)."""
 
 from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from tailor.errors import ArgumentValueError, BindingError
 
@@ -47,18 +49,70 @@ def _print_text(report: dict) -> None:
     out(f"  optimizer                     {', '.join(s['optimizers']) or '-'}; median "
         f"{'-' if ms is None else f'{ms:.0f}'} ms per asserted situation\n")
     for key, title in (("table_before", "before assertion (plain)"), ("table_after", "after assertion")):
-        t = s[key]
-        out(f"\n  Table 6.1, {title}: predicted x observed (share of all situations)\n")
-        out("                       observed fail   observed success   total\n")
-        for p in ("fail", "success"):
-            f, ok = t[f"predicted_{p}_observed_fail"], t[f"predicted_{p}_observed_success"]
-            out(f"    predicted {p:<8} {_pct(f):>14} {_pct(ok):>18} {_pct(f + ok):>7}\n")
-        f = t["predicted_fail_observed_fail"] + t["predicted_success_observed_fail"]
-        out(f"    total              {_pct(f):>14} {_pct(1 - f):>18}\n")
+        _print_matrix(f"Table 6.1, {title}: predicted x observed (share of all situations)", s[key])
     if s.get("plot"):
         out(f"\nWrote {s['plot']}\n")
     if s.get("plot_search_space"):
         out(f"Wrote {s['plot_search_space']} (Fig. 6.5, situation {s['plot_search_space_situation']})\n")
+
+
+def _print_matrix(title: str, t: dict) -> None:
+    """Table 4.4 or 6.1: shares by predicted (rows) and observed (columns) outcome, with totals."""
+    out = sys.stdout.write
+    out(f"\n  {title}\n")
+    out("                       observed fail   observed success   total\n")
+    for p in ("fail", "success"):
+        f, ok = t[f"predicted_{p}_observed_fail"], t[f"predicted_{p}_observed_success"]
+        out(f"    predicted {p:<8} {_pct(f):>14} {_pct(ok):>18} {_pct(f + ok):>7}\n")
+    f = t["predicted_fail_observed_fail"] + t["predicted_success_observed_fail"]
+    out(f"    total              {_pct(f):>14} {_pct(1 - f):>18}\n")
+
+
+def _print_classifier(report: dict) -> None:
+    out = sys.stdout.write
+    out(f"Domain {report['domain']}: success classifiers on fresh episodes of experience scenarios (Table 4.4; "
+        f"seed {report['seed']}); false success: predicted success but failed, a share of all episodes\n")
+    out("  scenario              classifier                 episodes  failed  correct  false success  "
+        "always success\n")
+    rows = report["scenarios"]
+    for r in rows:
+        out(f"  {r['scenario']:<21} {r['classifier']:<26} {r['episodes']:>8}  {_pct(r['failed']):>6}  "
+            f"{_pct(r['correct']):>7}  {_pct(r['false_success']):>13}  {_pct(r['always_success']):>14}\n")
+    for r in rows:
+        _print_matrix(f"Table 4.4, {r['scenario']} ({r['classifier']}; correct {_pct(r['correct'])}): predicted x "
+                      "observed (share of all episodes)", r["table"])
+
+
+def run_classifier(args: argparse.Namespace, domain_dir, binding, models_dir) -> int:
+    """Table 4.4 per scenario of --classifier: the success classifier of the scenario's action (its file
+    ACTION.collision.json in the model folder) on --episodes fresh episodes, gathered with the seed stream
+    classifier_seed(--seed)."""
+    from tailor.refinement.evaluation.assertion_experiment import classifier_seed, classifier_table
+    from tailor.refinement.models.action_models import COLLISION_SUFFIX, load_success_models
+    from tailor.sims.experience import gather, scenario
+
+    if args.episodes < 1:
+        raise ArgumentValueError("--classifier needs at least 1 --episodes")
+    actions = {name: scenario(binding.simulator, name).action for name in args.classifier}  # unknown: one line
+    models = load_success_models(models_dir, set(actions.values()))  # a missing classifier fails before any work
+    seed = classifier_seed(args.seed)
+    rows = []
+    for name, action in actions.items():
+        episodes = gather(binding.simulator, name, args.episodes, seed=seed, jobs=args.jobs,
+                          progress=getattr(args, "progress", True))
+        rows.append({"scenario": name, "action": action, "classifier": f"{action}{COLLISION_SUFFIX}",
+                     **classifier_table(models[action], episodes)})
+    report = {"domain": binding.domain or domain_dir.name, "simulator": binding.simulator, "seed": args.seed,
+              "episode_seed": seed, "scenarios": rows}
+    if args.json:
+        from tailor.outputs import json_text, provenance, versioned
+
+        files = [Path(models_dir) / f"{action}{COLLISION_SUFFIX}" for action in sorted(models)]
+        origin = provenance(getattr(args, "argv", None), {"seed": args.seed}, files)
+        sys.stdout.write(json_text(versioned("evaluate_classifier", report, origin)) + "\n")
+    else:
+        _print_classifier(report)
+    return 0
 
 
 def _draw_search_space(plot, kept: list[dict], entry) -> dict:

@@ -121,7 +121,7 @@ def test_the_evaluation_plan_and_refinement_defaults_are_typed_data_in_the_bindi
     for table, message in (("", r"\[evaluation\] missing"),
                            ('[evaluation]\ncomparison = "tour"\n',
                             r"\[evaluation\] comparison = 'tour' is not a situation generator of simulator 'soccer' "
-                            r"\(known: score, score_anywhere, waypoints, approach\)"),
+                            r"\(known: score, score_anywhere, waypoints, approach, approach_far_side\)"),
                            ('[evaluation]\ncomparison = "score"\nhorizon = "waypoints"\n',
                             r"\[evaluation\] unknown key 'horizon'"),
                            ('[refinement]\nzero_baseline = 1\n',

@@ -207,10 +207,11 @@ def test_bad_input_raises_sim_error():
         sim.run(ActionCall("kick", (0.0, 0.0, 0.0, 0.0)))
     with pytest.raises(SimError, match="dribbleBall needs a ball"):
         sim.run(ActionCall("dribbleBall", (1.0, 0.0, 0.0, 0.0)))
-    assert set(SIMULATOR.scenarios) == {"goToPose", "approachBall", "dribbleBall", "goToPoseAtBall", "goToPosition"}
+    assert set(SIMULATOR.scenarios) == {"goToPose", "approachBall", "dribbleBall", "goToPoseAtBall",
+                                        "goToPoseFarSide", "goToPosition"}
     assert {n: s.action for n, s in SIMULATOR.scenarios.items()} == {
         "goToPose": "goToPose", "approachBall": "approachBall", "dribbleBall": "dribbleBall",
-        "goToPoseAtBall": "goToPose", "goToPosition": "goToPosition"}
+        "goToPoseAtBall": "goToPose", "goToPoseFarSide": "goToPose", "goToPosition": "goToPosition"}
 
 
 def test_reset_to_a_scene_is_place():

@@ -47,7 +47,7 @@ def test_every_way_point_after_the_first_is_a_subgoal_goto_pose_starts_from():
 
 def test_an_unknown_situation_generator_is_named():
     with pytest.raises(TailorError, match=r"simulator 'soccer' has no situation generator 'tour' "
-                                          r"\(known: score, score_anywhere, waypoints, approach\)"):
+                                          r"\(known: score, score_anywhere, waypoints, approach, approach_far_side\)"):
         gather_subgoal_experience(SOCCER, "tour", "goToPose", {}, 1, seed=0, progress=False)
 
 

@@ -221,22 +221,55 @@ def _learning_curve(domain: str, name: str, e: dict) -> list[str]:
     return out
 
 
-def _assertion(domain: str, name: str, e: dict) -> list[str]:
-    command = _command(e, f"tailor evaluate {domain} --assertion --episodes {e['episodes']} --seed {e['seed']} --json")
-    out = [f"## Subgoal assertion (Table 6.1): `{name}`\n",
-           f"From `domains/{domain}/training/{name}`, the report of `{command}`: {e['episodes']} random "
-           f"{code(e['generator'])} situations executed with the plain action and with assertion and refinement "
-           f"(risk {_num(e['risk'], 1)}, neighbourhood {_num(e['neighbourhood'])}), same simulator seed"
-           f"{'; a subgoal asserted only where its detour pays' if e.get('weighs_detour') else ''}.\n"]
-    rows = [["success without / with assertion", f"{_pct(e['success_without'])} / {_pct(e['success_with'])}"],
-            ["subgoal asserted", _pct(e["asserted"])],
-            ["asserted needlessly (plain would have succeeded)", _pct(e["needless_assertions"])],
+def _assertion(domain: str, reports: list[tuple[str, dict]]) -> list[str]:
+    """Table 6.1's measures, one column per kept report (the situations each drew), side by side."""
+    names = ", ".join(code(name) for name, _ in reports)
+    out = [f"## Subgoal assertion (Table 6.1): {names}\n",
+           f"From `domains/{domain}/training/`: random situations of each report's generator executed with the plain "
+           "action and with assertion and refinement, same simulator seed"
+           + ("; a subgoal asserted only where its detour pays" if all(e.get("weighs_detour") for _, e in reports)
+              else "") + ". The commands:\n"]
+    for name, e in reports:
+        command = _command(e, f"tailor evaluate {domain} --assertion --situations {e['generator']} --episodes "
+                              f"{e['episodes']} --seed {e['seed']} --json")
+        out.append(f"- {code(name)}: `{command}` (risk {_num(e['risk'], 1)}, neighbourhood {_num(e['neighbourhood'])})")
+    out.append("")
+    rows = [["situations", *(f"{e['episodes']} {code(e['generator'])}" for _, e in reports)],
+            ["plain action failed (collisions)", *(f"{_pct(1 - e['success_without'])} ({e['collisions']})"
+                                                   for _, e in reports)],
+            ["classifier before assertion: correct / false success (Table 6.1)",
+             *(f"{_pct(_correct(e['table_before']))} / {_pct(e['table_before']['predicted_success_observed_fail'])}"
+               for _, e in reports)],
+            ["success without / with assertion", *(f"{_pct(e['success_without'])} / {_pct(e['success_with'])}"
+                                                   for _, e in reports)],
+            ["subgoal asserted", *(_pct(e["asserted"]) for _, e in reports)],
+            ["asserted needlessly (plain would have succeeded)", *(_pct(e["needless_assertions"]) for _, e in reports)],
             ["slow-down where needless, mean / median",
-             f"{_pct(e['needless_cost'])} / {_pct(e.get('needless_cost_median'))}"]]
-    if "weighed_out" in e:
-        rows.append(["left plain by the weighing (of them failed)", f"{_pct(e['weighed_out'])} "
-                     f"({e['weighed_out_failed']})"])
-    out.append(table(["", "measured"], rows, align="ll"))
+             *(f"{_pct(e['needless_cost'])} / {_pct(e.get('needless_cost_median'))}" for _, e in reports)],
+            ["left plain by the weighing (of them failed)",
+             *(f"{_pct(e['weighed_out'])} ({e['weighed_out_failed']})" if "weighed_out" in e else "-"
+               for _, e in reports)]]
+    out.append(table(["", *(code(name) for name, _ in reports)], rows, align="l" + "r" * len(reports)))
+    return out
+
+
+def _correct(table: dict) -> float:
+    """The share a confusion table (Table 4.4, 6.1: shares of all episodes) has right."""
+    return table["predicted_fail_observed_fail"] + table["predicted_success_observed_success"]
+
+
+def _classifier(domain: str, name: str, e: dict) -> list[str]:
+    command = _command(e, f"tailor evaluate {domain} --classifier "
+                          f"{','.join(r['scenario'] for r in e['scenarios'])} --seed {e['seed']} --json")
+    out = [f"## Success classifiers on fresh episodes (Table 4.4): `{name}`\n",
+           f"From `domains/{domain}/training/{name}`, the report of `{command}`: each experience scenario's "
+           "action run on fresh episodes (none of them learned from), its success classifier predicting from each "
+           "start. False success: predicted success but failed, a share of all episodes; always success: the share "
+           "a classifier that always predicts success gets right.\n"]
+    rows = [[code(r["scenario"]), code(r["classifier"]), str(r["episodes"]), _pct(r["failed"]), _pct(r["correct"]),
+             _pct(r["false_success"]), _pct(r["always_success"]), _pct(r["predicted_fail"])] for r in e["scenarios"]]
+    out.append(table(["scenario", "classifier", "episodes", "failed", "correct", "false success", "always success",
+                      "predicted fail"], rows, align="llrrrrrr"))
     return out
 
 
@@ -264,9 +297,12 @@ def domain_page(training: Path) -> str:
            f"What the committed result files of the `{domain}` domain say (simulator `{report['simulator']}`). "
            "They are rewritten by the commands named with each section; this page is generated from them.\n"]
     out += _training(domain, report)
+    assertions, at = [], 0  # (one section where the first report is: their situations side by side)
     for path in sorted(training.glob("evaluate*.json")):
         evaluation = json.loads(path.read_text(encoding="utf-8"))
-        if "greedy_mean" in evaluation:
+        if str(evaluation.get("schema", "")).startswith("tailor.evaluate_classifier/"):
+            out += ["\n"] + _classifier(domain, path.name, evaluation)
+        elif "greedy_mean" in evaluation:
             out += ["\n"] + _evaluation(domain, path.name, evaluation)
         elif "recovered_share" in evaluation:
             out += ["\n"] + _closed_loop(domain, path.name, evaluation)
@@ -275,7 +311,10 @@ def domain_page(training: Path) -> str:
         elif "pareto" in evaluation:
             out += ["\n"] + _pareto(domain, path.name, evaluation)
         elif "needless_assertions" in evaluation:
-            out += ["\n"] + _assertion(domain, path.name, evaluation)
+            at = at if assertions else len(out)
+            assertions.append((path.name, evaluation))
+    if assertions:
+        out[at:at] = ["\n"] + _assertion(domain, assertions)
     for path in sorted(training.glob("*.txt")):
         if path.name in SKIPPED_TEXT:
             continue
@@ -311,6 +350,13 @@ def index_page(dirs: list[Path]) -> str:
             elif "mae_last" in e:
                 kept.append(f"{code(path.name)}: learning in operation, MAE {_num(e['mae_first'], 3)} -> "
                             f"{_num(e['mae_last'], 3)} s")
+            elif "needless_assertions" in e:
+                kept.append(f"{code(path.name)}: {e['generator']} success {_pct(e['success_without'])} -> "
+                            f"{_pct(e['success_with'])} with assertion")
+            elif str(e.get("schema", "")).startswith("tailor.evaluate_classifier/"):
+                kept.append(f"{code(path.name)}: classifier correct " + ", ".join(
+                    f"{_pct(r['correct'])} on {r['scenario']} (always success {_pct(r['always_success'])})"
+                    for r in e["scenarios"]))
         kept += [code(path.name) for path in sorted(training.glob("*.txt")) if path.name not in SKIPPED_TEXT]
         rows.append([f"[{domain}]({domain}.md)", escape(models), "; ".join(kept) or "-"])
     return "\n".join([

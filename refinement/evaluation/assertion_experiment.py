@@ -9,6 +9,10 @@ assertion avoided, the needless assertions (a subgoal inserted where the plain a
 time cost, and Table 6.1 (predicted x observed, before and after assertion). Assertion and refinement run as in
 `tailor refine`: the risk lambda and neighbourhood resolved from the binding and the models, and a predicted
 failure weighed against the detour (`assertion.Weighing`); how often that kept the plain action is reported.
+
+Beside it, Table 4.4 on fresh episodes of any experience scenario (`classifier_table`, `tailor evaluate
+--classifier`): how the success classifier does where the plain action fails more or less often than in the
+episodes it learned from, against the baseline that predicts success always.
 """
 
 from __future__ import annotations
@@ -19,12 +23,18 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from tailor.refinement.assertion import Detour, assert_subgoals
+from tailor.refinement.learning.classifiers import confusion, labels
+from tailor.refinement.models.action_models import CollisionModel
+from tailor.refinement.models.features import first_examples
 from tailor.refinement.pipeline import Options, refine_stage, resolve_options
 from tailor.refinement.situations import Job, job_binding, job_models, situation_sequence, stream_seed
 
 COLLISION = "collision"
 REFINE_HORIZON = 2
 ASSERTION_STREAM = 6  # seed word of the assertion experiment (its situations differ from the comparison's)
+# seed word of the classifier's fresh episodes: apart from those `tailor train` learned from (its seed) and
+# evaluated on (its seed + FRESH_SEED_OFFSET)
+CLASSIFIER_STREAM = 7
 
 
 @dataclass(frozen=True)
@@ -179,3 +189,26 @@ def pick_instances(rows: list[dict], count: int = 3) -> list[dict]:
     plain = [r for r in rows if not r["inserted"] and r["with_ok"]][:1]
     asserted = [r for r in rows if r["inserted"] and r["with_ok"] and not r["plain_ok"]][:count - len(plain)]
     return plain + asserted
+
+
+def classifier_seed(seed: int) -> int:
+    """The seed of the fresh episodes `tailor evaluate --classifier --seed SEED` gathers (every scenario's own)."""
+    return stream_seed(CLASSIFIER_STREAM, seed)
+
+
+def classifier_table(model: CollisionModel, episodes: list) -> dict:
+    """Table 4.4 of a success classifier on episodes of its action (predicted from each start, as in training:
+    classifiers.confusion), with the shares it is read by: correct, false success (predicted success but failed,
+    a share of all episodes), and the 'always success' baseline (the share that succeeded), which a classifier
+    must beat by more the fewer episodes fail."""
+    table = confusion(model.predict_success(first_examples(episodes)[0]), labels(episodes))
+    n = max(1, table["episodes"])
+    return {"episodes": table["episodes"],
+            "outcomes": _counts(e.outcome for e in episodes),
+            "failed": table["observed_fail"],
+            "correct": table["accuracy"],
+            "false_success": table["counts"]["predicted_success_observed_fail"] / n,
+            "failures_predicted_success": table["false_success"],  # of the failures, as the training report has it
+            "predicted_fail": table["predicted_fail"],
+            "always_success": 1.0 - table["observed_fail"],
+            "table": {key: count / n for key, count in table["counts"].items()}}
