@@ -11,6 +11,7 @@ import pytest
 from tailor.refinement.learning.duration_protocol import train_duration_model
 from tailor.refinement.learning.feature_selection import generic_space, select_features
 from tailor.refinement.models.auto_features import candidate_columns, generate, generic_row
+from tailor.refinement.models.auto_paths import fit_curvature
 from tailor.refinement.models.expression_space import ExpressionSpace
 from tailor.refinement.models.expressions import from_json
 from tailor.refinement.models.features import raw_space
@@ -187,3 +188,71 @@ def test_the_bundled_robots_get_candidates_from_their_declarations_alone(simulat
     if simulator == "arm":  # joint angles that never go round: differences not wrapped; their moves timed
         assert "transfer_max" in names
         assert any(c.expression.formula() == "theta_ga - theta_a" for c in candidates)
+
+
+# --- a path of bounded curvature (auto_paths, sims.dubins) -------------------------------------------------------
+TRUE_RADIUS, TRUE_START_BACK, TRUE_GOAL_BACK = 0.5, 0.2, 0.6  # m: the toy vehicle turns about a point behind
+
+
+def _drive_episodes(n: int, seed: int) -> list[Episode]:
+    """Synthetic drives of a vehicle that cannot turn on the spot: it follows the shortest path of radius
+    TRUE_RADIUS between points TRUE_START_BACK behind the start pose and TRUE_GOAL_BACK behind the goal pose, at
+    1 m/s on straights and 0.5 m/s on arcs."""
+    from tailor.sims import dubins
+
+    rng = np.random.default_rng(seed)
+    x, y, xg, yg = rng.uniform(-4, 4, (4, n))
+    phi, phig = rng.uniform(-np.pi, np.pi, (2, n))
+    v, vg = rng.uniform(0, 1, (2, n))
+    start = np.column_stack([x - TRUE_START_BACK * np.cos(phi), y - TRUE_START_BACK * np.sin(phi), phi])
+    goal = np.column_stack([xg - TRUE_GOAL_BACK * np.cos(phig), yg - TRUE_GOAL_BACK * np.sin(phig), phig])
+    length, arcs = dubins.shortest(start, goal, TRUE_RADIUS)
+    t = (length - arcs) / 1.0 + arcs / 0.5 + rng.normal(0, 0.02, n)
+    rows = np.column_stack([x, y, phi, v, xg, yg, phig, vg])
+    return [Episode("drive", rows[k], np.array([0.0]), rows[k:k + 1, :4], ("x", "y", "phi", "v"), "success",
+                    float(t[k]), k) for k in range(n)]
+
+
+def test_a_path_of_bounded_curvature_is_offered_where_start_and_goal_are_poses():
+    from tailor.refinement.models.features import first_examples
+
+    params, durations = first_examples(_drive_episodes(300, 0))
+    offered = names(PLANAR, params, durations)
+    assert {"dubins_x_y_phi_phig", "dubins_arcs_x_y_phi_phig", "dubins_transfer_x_y_phi_phig"} <= offered
+    assert not any(n.startswith("dubins") for n in names(PLANAR))  # its constants need data
+    x, y, phi, _, xg, yg, phig, _ = params.T  # a robot that turns on the spot: the turns at the ends, no path
+    bearing = np.arctan2(yg - y, xg - x)
+    turns = np.abs(np.angle(np.exp(1j * (bearing - phi)))) + np.abs(np.angle(np.exp(1j * (phig - bearing))))
+    assert not any(n.startswith("dubins") for n in names(PLANAR, params, np.hypot(xg - x, yg - y) + turns / 2))
+    rng = np.random.default_rng(1)
+    for spec in (JOINTS, RAIL, POINT):  # no plane, or no heading at the goal: no path
+        rows = rng.uniform(-3, 3, (200, len(spec.parameters)))
+        assert not any(n.startswith("dubins") for n in names(spec, rows, rng.uniform(1, 5, 200))), spec.name
+
+
+def test_the_turning_radius_and_the_points_it_turns_about_are_found_from_the_data():
+    episodes = _drive_episodes(800, 2)
+    selection = select_features(PLANAR, entry(PLANAR), episodes, seed=0)
+    first = selection.report["steps"][1]
+    assert first["feature"].startswith("dubins"), first
+    params, durations = _first(episodes)
+    x, y, phi, _, xg, yg, phig, _ = params.T
+    fit = fit_curvature(xg - x, yg - y, phi, phig, durations)
+    assert fit.radius == pytest.approx(TRUE_RADIUS, rel=0.1)
+    assert fit.start_back == pytest.approx(TRUE_START_BACK, abs=0.05)
+    assert fit.goal_back == pytest.approx(TRUE_GOAL_BACK, abs=0.05)
+    candidates = {c.name: c for c in generate(PLANAR, quantity, params, durations)}
+    assert candidates["dubins_x_y_phi_phig"].expression.formula().endswith(f"phi, phig; r={fit.radius:g})")
+    assert selection.report["generated_sets"]["forward"] < 0.1  # seconds, of durations of 3 to 20 s
+    # invariant to moving the scene, and enclosed by its bounds
+    path = [candidates[n] for n in ("dubins_x_y_phi_phig", "dubins_arcs_x_y_phi_phig")]
+    p = params[:100]
+    rng = np.random.default_rng(3)
+    assert np.allclose(candidate_columns(path, PLANAR.parameters, p),
+                       candidate_columns(path, PLANAR.parameters, _rigid(p, rng)), atol=1e-6)
+
+
+def _first(episodes: list[Episode]) -> tuple[np.ndarray, np.ndarray]:
+    from tailor.refinement.models.features import first_examples
+
+    return first_examples(episodes)

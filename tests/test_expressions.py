@@ -15,9 +15,9 @@ from tailor.errors import ModelFileError
 from tailor.refinement.models.action_models import ActionModel
 from tailor.refinement.models.expression_maths import evaluate, interval, transfer
 from tailor.refinement.models.expression_space import ExpressionSpace
-from tailor.refinement.models.expressions import (ARITY, MAX_DEPTH, MAX_NODES, Expr, ExpressionError, const,
-                                                  format_unit, from_json, node, param, parse_unit, unit_of,
-                                                  units_of)
+from tailor.refinement.models.expressions import (ARITY, CONSTANT_ARGUMENTS, MAX_DEPTH, MAX_NODES, Expr,
+                                                  ExpressionError, const, format_unit, from_json, node, param,
+                                                  parse_unit, unit_of, units_of)
 from tailor.refinement.models.model_tree import ModelTree
 
 PARAMS = ("x", "v", "xg", "vg", "h")
@@ -58,11 +58,13 @@ def test_transfer_is_the_double_integrator_time():
 def test_formulas_and_units():
     s = space(["hypot", ["sub", "xg", "x"], ["sub", "vg", "v"]], ["div", ["abs", ["sub", "xg", "x"]], "v"],
               ["abs", ["wrap", ["sub", ["atan2", "xg", "x"], "h"]]], ["sub", "x", ["sub", "xg", "x"]],
-              ["transfer", ["sub", "xg", "x"], "v", "vg", 1.0, 0.5], ["mul", -2.0, "x"])
+              ["transfer", ["sub", "xg", "x"], "v", "vg", 1.0, 0.5], ["mul", -2.0, "x"],
+              ["dubins", ["sub", "xg", "x"], "x", "h", ["neg", "h"], 0.4], ["dubins_arcs", "x", "v", "h", "h", 0.4])
     assert s.formulas == ("hypot(xg - x, vg - v)", "|xg - x| / v", "|wrap(atan2(xg, x) - h)|", "x - (xg - x)",
-                          "transfer(xg - x, v, vg; vmax=1, amax=0.5)", "(-2) * x")
+                          "transfer(xg - x, v, vg; vmax=1, amax=0.5)", "(-2) * x",
+                          "dubins(xg - x, x, h, -h; r=0.4)", "dubins_arcs(x, v, h, h; r=0.4)")
     units = s.with_units(UNITS).units
-    assert units == ("?", "s", "rad", "m", "s", "m")
+    assert units == ("?", "s", "rad", "m", "s", "m", "m", "?")
     assert format_unit(parse_unit("m/s^2")) == "m/s^2" and format_unit(parse_unit("")) == ""
     assert format_unit(unit_of(from_json(["sqrt", ["mul", "x", "xg"]], PARAMS), units_of(UNITS))) == "m"
     assert format_unit(parse_unit("1/s")) == "1/s"
@@ -82,6 +84,12 @@ def test_formulas_and_units():
     ([], "expected a parameter name"),
     (["transfer", "x", "v", "vg", "x", 1.0], "positive constant"),
     (["transfer", "x", "v", "vg", -1.0, 1.0], "positive constant"),
+    (["dubins", "x", "xg", "h", "h", "x"], "positive constant"),
+    (["dubins", "x", "xg", "h", "h", 0.0], "positive constant"),
+    (["dubins_arcs", "x", "xg", "h", "h", -0.4], "positive constant"),
+    (["dubins", "x", "xg", "h", 0.4], "takes 5 arguments"),
+    (["dubins", "x", "xg", "h", "h", 0.4, 0.1], "takes 5 arguments"),
+    (["dubins", "x", "xg", "h", "phig", 0.4], "not a parameter"),
 ])
 def test_malformed_expressions_are_refused(data, message):
     with pytest.raises(ExpressionError, match=message):
@@ -135,9 +143,42 @@ def test_a_model_file_keeps_its_features_as_expressions(tmp_path):
     assert np.all(low <= loaded.features(X)) and np.all(loaded.features(X) <= high)
 
 
+def test_a_model_file_keeps_a_path_of_bounded_curvature_and_bounds_it(tmp_path):
+    """dubins and dubins_arcs (sims.dubins): stored as data, read back exactly, the same predictions, and the
+    certified optimizer's enclosure holding the features of every point of a box."""
+    length = ["dubins", ["sub", ["sub", "xg", "x"], ["mul", 0.3, ["cos", "h"]]], ["mul", 0.3, ["sin", "h"]], "h",
+              ["neg", "h"], 0.4]
+    arcs = ["dubins_arcs", *length[1:]]
+    s = space(length, arcs, ["transfer", length, "v", "vg", 1.0, 0.5]).with_units(UNITS)
+    assert s.units == ("?", "?", "s")  # (a constant has no unit: xg - x - 0.3 cos(h) cannot be told metres)
+    model = _model(s)
+    path = tmp_path / "move.json"
+    path.write_text(json.dumps(model.to_json()))
+    data = json.loads(path.read_text())
+    assert data["expressions"]["features"][0]["expression"] == length
+    assert data["expressions"]["features"][1]["formula"].startswith("dubins_arcs(xg - x - 0.3 * cos(h), ")
+    loaded = ActionModel.from_json(data, str(path))
+    assert loaded.space.parameters == PARAMS
+    rng = np.random.default_rng(4)
+    X = rng.uniform(-2, 2, (200, len(PARAMS)))
+    assert np.array_equal(loaded.predict_duration(X), model.predict_duration(X))
+    assert np.all(loaded.features(X)[:, 1] <= loaded.features(X)[:, 0] + 1e-12)  # the arcs are part of the path
+    low, high = loaded.space.bounds(X - 0.05, X + 0.05)
+    for k in range(0, 200, 20):
+        values = loaded.features(rng.uniform(X[k] - 0.05, X[k] + 0.05, (300, len(PARAMS))))
+        assert np.all(low[k] <= values) and np.all(values <= high[k])
+    point_low, point_high = loaded.space.bounds(X, X)  # at a point: the path's features themselves
+    assert np.allclose(point_low[:, :2], loaded.features(X)[:, :2], atol=1e-7)
+    assert np.allclose(point_high[:, :2], loaded.features(X)[:, :2], atol=1e-7)
+
+
 @pytest.mark.parametrize("change, message", [
     (lambda d: d["expressions"]["features"][0].update(expression=["system", "x"]), "unknown operator"),
     (lambda d: d["expressions"]["features"][0].update(expression="theta"), "not a parameter"),
+    (lambda d: d["expressions"]["features"][0].update(expression=["dubins", "x", "xg", "h", "h", -0.4]),
+     "positive constant"),
+    (lambda d: d["expressions"]["features"][0].update(expression=["dubins", "x", "xg", "h", 0.4]),
+     "takes 5 arguments"),
     (lambda d: d["expressions"].update(features=[]), "1 to 32"),
     (lambda d: d["expressions"].update(parameters="x"), "parameter names"),
     (lambda d: d["expressions"]["features"][1].update(name="f0"), "distinct"),
@@ -172,7 +213,9 @@ def _grow(children):
         lambda t: node(t[0], t[1], t[2]))
     moving = st.tuples(children, children, children, st.floats(0.1, 3), st.floats(0.1, 3)).map(
         lambda t: node("transfer", t[0], t[1], t[2], const(t[3]), const(t[4])))
-    return st.one_of(unary, binary, moving)
+    path = st.tuples(st.sampled_from(["dubins", "dubins_arcs"]), children, children, children, children,
+                     st.floats(0.05, 2)).map(lambda t: node(t[0], *t[1:5], const(t[5])))
+    return st.one_of(unary, binary, moving, path)
 
 
 EXPRESSIONS = st.recursive(LEAVES, _grow, max_leaves=8)
@@ -208,16 +251,31 @@ def test_bounds_enclose_every_value_over_every_box(expression: Expr, seed: int):
 @pytest.mark.parametrize("op", sorted(ARITY))
 def test_each_operator_alone_is_enclosed_densely(op: str):
     rng = np.random.default_rng(sum(map(ord, op)))
-    n = ARITY[op] if op != "transfer" else 3
+    n = ARITY[op] - len(CONSTANT_ARGUMENTS.get(op, ()))
     for _ in range(200):
         centre = rng.uniform(-7, 7, n) * rng.choice([1e-3, 1.0, 10.0], n)
         width = rng.choice([0.0, 1e-6, 0.3, 2.0, 7.0], n)
         low, high = centre - width / 2, centre + width / 2
-        constants = (float(rng.uniform(0.2, 2)), float(rng.uniform(0.2, 3))) if op == "transfer" else ()
+        constants = tuple(float(rng.uniform(0.2, 2)) for _ in CONSTANT_ARGUMENTS.get(op, ()))
         lo, hi = interval(op, [(np.array([a]), np.array([b])) for a, b in zip(low, high)], constants)
         points = _samples(low, high, rng, 300)
         values = evaluate(op, [points[:, j] for j in range(n)], constants)
         assert np.all(lo[0] <= values) and np.all(values <= hi[0]), (op, low, high)
+
+
+@pytest.mark.parametrize("op", ["transfer", "dubins", "dubins_arcs"])
+def test_times_and_paths_are_enclosed_exactly_at_a_point(op: str):
+    """The certified optimizer splits boxes down to points and refuses an enclosure wider there than 1e-6
+    relative (optimizers.certified._check_tight): a generated space whose transfer or path bound stayed wide at a
+    point could never be certified."""
+    rng = np.random.default_rng(5)
+    n = ARITY[op] - len(CONSTANT_ARGUMENTS[op])
+    points = rng.uniform(-4, 4, (500, n))
+    constants = (0.8, 1.5) if op == "transfer" else (0.4,)
+    values = evaluate(op, list(points.T), constants)
+    lo, hi = interval(op, [(points[:, j], points[:, j]) for j in range(n)], constants)
+    assert np.all(lo <= values) and np.all(values <= hi)
+    assert np.all(hi - lo <= 1e-6 * (1.0 + np.abs(values)))
 
 
 def test_bounds_of_angles_are_tight_where_they_can_be_and_whole_where_not():

@@ -14,7 +14,10 @@ the kind the dissertation names, we build candidates that exploit the invariance
 - speeds: a quantity in unit/s beside an axis of that unit (v beside x, or beside a plane's distance): the
   speeds signed toward the goal, their squares and product, and the transfer time of a double integrator
   (expression_maths.transfer) whose limits are constants discovered from the data; the largest transfer time
-  of several axes (a move is as slow as its slowest part); maxima of like differences.
+  of several axes (a move is as slow as its slowest part); maxima of like differences;
+- paths: where the start and the goal are both poses in a plane (a heading each), the shortest path of bounded
+  curvature between them (a Dubins path), its arcs and the transfer time along it, its radius and the points it
+  turns about discovered from the data (auto_paths).
 Which of them a model uses is chosen by cross-validated model-tree error (learning.feature_selection). The
 rows of Table 4.1 that such a structure matches (the pose row, the reach row in a space of angles, a move along
 one axis) are built the same way: `generic_row`.
@@ -29,6 +32,7 @@ from fractions import Fraction
 import numpy as np
 from scipy.optimize import minimize
 
+from tailor.refinement.models.auto_paths import fit_curvature, path_expressions
 from tailor.refinement.models.expression_maths import evaluate, transfer
 from tailor.refinement.models.model_tree import ModelTree
 from tailor.refinement.models.expressions import (CONSTANT_ARGUMENTS, MAX_DEPTH, MAX_NODES, Expr, const, node, param,
@@ -220,7 +224,39 @@ def generate(spec: ActionSpec, quantity: Callable[[str], Quantity], params: np.n
         out += _transfers(moves, spec, params, durations)
         out += _composed(ps, spec, params, durations)
         out += _approaches(planes, ps, spec, params, durations)
+        out += _paths(planes, ps, speeds, spec, params, durations)
     return _distinct(out, spec, params)
+
+
+def _paths(planes, ps: list[Parameter], speeds, spec: ActionSpec, params: np.ndarray, durations: np.ndarray
+           ) -> list[Candidate]:
+    """Where the start and the goal each have a pose in the first plane (with each group's first angle of one
+    quantity as its heading): the shortest path of bounded curvature between them, its radius and the points it
+    turns about discovered (auto_paths), the length of its arcs, and the transfer time along it (with the plane's
+    speeds where it has them, its limits discovered as _transfers' are); none where the durations show a robot
+    that turns on the spot (Curvature.pays)."""
+    start = next((p for p in ps if p.group == "observed" and p.angle), None)
+    goal = next((p for p in ps if p.group == "internal" and p.angle and start is not None
+                 and p.quantity == start.quantity), None)
+    if not planes or goal is None:
+        return []
+    (a, b), rows = planes[0], slice(0, DISCOVERY_ROWS)
+    columns = {name: values[rows] for name, values in zip(spec.parameters, params.T)}
+    fit = fit_curvature(_evaluate(a.difference, columns), _evaluate(b.difference, columns), columns[start.name],
+                        columns[goal.name], durations[rows])
+    if not fit.pays:  # it turns on the spot: the distance and the turns at its ends are candidates already
+        return []
+    length, arcs = path_expressions(a.difference, b.difference, param(start.name), param(goal.name), fit)
+    fast = [(s, g) for s, g in speeds if s.speed_of == a.start.unit]
+    s, g = fast[0] if len(fast) == 1 else (None, None)
+    v0, vg = _speed_or_zero(s), _speed_or_zero(g)
+    vmax, amax = _discover([_evaluate(length, columns)], [_evaluate(v0, columns)], [_evaluate(vg, columns)],
+                           durations[rows])
+    tag = f"{a.label}_{b.label}_{start.name}_{goal.name}"
+    return [Candidate(f"dubins_{tag}", length, "path of bounded curvature"),
+            Candidate(f"dubins_arcs_{tag}", arcs, "path of bounded curvature"),
+            Candidate(f"dubins_transfer_{tag}", node("transfer", length, v0, vg, const(vmax), const(amax)),
+                      "transfer time")]
 
 
 def _approaches(planes, ps: list[Parameter], spec: ActionSpec, params: np.ndarray, durations: np.ndarray

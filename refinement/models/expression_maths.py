@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from tailor.sims import dubins
+from tailor.sims.intervals import transfer_time_bounds
 from tailor.sims.kinematics import transfer_time
 
 PI, TWO_PI = np.pi, 2.0 * np.pi
@@ -45,11 +47,14 @@ def transfer(d: np.ndarray, v0: np.ndarray, vg: np.ndarray, vmax: float, amax: f
     return transfer_time(d, v0, vg, vmax, amax, TRANSFER_TOL)
 
 
-def _rest_to_rest(distance: np.ndarray, vmax: float, amax: float) -> np.ndarray:
-    """The transfer time from rest to rest over |distance| (increasing in it)."""
-    d = np.abs(distance)
-    knee = vmax * vmax / amax
-    return 2.0 * np.sqrt(np.minimum(d, knee) / amax) + np.maximum(d - knee, 0.0) / vmax
+def _poses(dx, dy, heading, goal_heading) -> tuple:
+    """The start pose at the origin and the goal pose, as sims.dubins takes them (rows, or (low, high) pairs)."""
+    if isinstance(dx, tuple):
+        zero = (np.zeros_like(dx[0]), np.zeros_like(dx[0]))
+        return (zero, zero, heading), (dx, dy, goal_heading)
+    dx, dy, heading, goal_heading = np.broadcast_arrays(dx, dy, heading, goal_heading)
+    zero = np.zeros_like(dx, dtype=float)
+    return np.column_stack([zero, zero, heading]), np.column_stack([dx, dy, goal_heading])
 
 
 def evaluate(op: str, args: list[np.ndarray], constants: tuple[float, ...] = ()) -> np.ndarray:
@@ -92,6 +97,9 @@ def evaluate(op: str, args: list[np.ndarray], constants: tuple[float, ...] = ())
                 return np.cos(x)
             case "transfer":
                 return transfer(x, y, args[2], *constants)
+            case "dubins" | "dubins_arcs":
+                length, arcs = dubins.shortest(*_poses(*args), constants[0])
+                return length if op == "dubins" else arcs
     raise ValueError(f"unknown operator {op!r}")
 
 
@@ -159,19 +167,6 @@ def _sin(lo: np.ndarray, hi: np.ndarray, shift: float = 0.0) -> tuple[np.ndarray
     return np.where(wide, -1.0, low), np.where(wide, 1.0, high)
 
 
-def _transfer(d: tuple, v0: tuple, vg: tuple, vmax: float, amax: float) -> tuple[np.ndarray, np.ndarray]:
-    """Below: the speed change it needs and the distance at top speed; above: braking to rest, the transfer
-    from rest to rest over the remaining distance, and speeding up to vg (a profile it never beats)."""
-    v0 = (np.clip(v0[0], -vmax, vmax), np.clip(v0[1], -vmax, vmax))
-    vg = (np.clip(vg[0], -vmax, vmax), np.clip(vg[1], -vmax, vmax))
-    change = _abs(vg[0] - v0[1], vg[1] - v0[0])[0]
-    low = np.maximum(change / amax, _abs(*d)[0] / vmax)
-    s0, sg = _abs(*v0)[1], _abs(*vg)[1]
-    far = _abs(*d)[1] + (s0 * s0 + sg * sg) / (2.0 * amax)
-    high = s0 / amax + _rest_to_rest(far, vmax, amax) + sg / amax
-    return np.maximum(low, 0.0), high
-
-
 def interval(op: str, args: list[tuple[np.ndarray, np.ndarray]], constants: tuple[float, ...] = ()
              ) -> tuple[np.ndarray, np.ndarray]:
     """(low, high) of operator `op` over the boxes of its arguments' intervals, widened for rounding."""
@@ -219,7 +214,10 @@ def interval(op: str, args: list[tuple[np.ndarray, np.ndarray]], constants: tupl
             case "cos":
                 out = _sin(*x, shift=0.5 * PI)
             case "transfer":
-                out = _transfer(x, y, args[2], *constants)
+                out = transfer_time_bounds(x, y, args[2], *constants, TRANSFER_TOL)
+            case "dubins" | "dubins_arcs":
+                length, arcs = dubins.shortest_bounds(*_poses(*args), constants[0])
+                out = length if op == "dubins" else arcs
             case _:
                 raise ValueError(f"unknown operator {op!r}")
     lo, hi = _widen(np.asarray(out[0], dtype=float), np.asarray(out[1], dtype=float))
@@ -235,4 +233,6 @@ def interval(op: str, args: list[tuple[np.ndarray, np.ndarray]], constants: tupl
         lo, hi = np.maximum(lo, -1.0), np.minimum(hi, 1.0)
     elif op == "sgn":
         lo, hi = np.maximum(lo, -1.0), np.minimum(hi, 1.0)
+    elif op in ("dubins", "dubins_arcs"):
+        lo = np.maximum(lo, 0.0)
     return lo, hi

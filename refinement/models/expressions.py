@@ -25,8 +25,10 @@ ARITY: dict[str, int] = {
     "add": 2, "sub": 2, "mul": 2, "div": 2, "min": 2, "max": 2, "hypot": 2, "atan2": 2,
     "neg": 1, "abs": 1, "sqrt": 1, "square": 1, "wrap": 1, "sgn": 1, "sin": 1, "cos": 1,
     "transfer": 5,  # (displacement, start speed, goal speed, speed limit, acceleration limit): a time
+    "dubins": 5,  # (goal x - start x, goal y - start y, start heading, goal heading, turning radius): a length
+    "dubins_arcs": 5,  # the same arguments: the length of that shortest path's arcs (sims.dubins)
 }
-CONSTANT_ARGUMENTS = {"transfer": (3, 4)}  # arguments that must be positive constants
+CONSTANT_ARGUMENTS = {"transfer": (3, 4), "dubins": (4,), "dubins_arcs": (4,)}  # must be positive constants
 INFIX = {"add": ("+", 1), "sub": ("-", 1), "mul": ("*", 2), "div": ("/", 2)}
 
 
@@ -147,6 +149,9 @@ def _text(e: Expr, context: int) -> str:
     if e.op == "transfer":
         d, v0, vg, vmax, amax = (_text(a, 0) for a in e.args)
         return f"transfer({d}, {v0}, {vg}; vmax={vmax}, amax={amax})"
+    if e.op in ("dubins", "dubins_arcs"):
+        dx, dy, heading, goal_heading, radius = (_text(a, 0) for a in e.args)
+        return f"{e.op}({dx}, {dy}, {heading}, {goal_heading}; r={radius})"
     return f"{e.op}({', '.join(_text(a, 0) for a in e.args)})"
 
 
@@ -223,7 +228,7 @@ def unit_of(e: Expr, unit: Callable[[str], Unit]) -> Unit | None:
         return SECONDS
     if any(a is None for a in args):
         return None
-    if e.op in ("add", "sub", "min", "max", "hypot"):
+    if e.op in ("add", "sub", "min", "max", "hypot", "dubins", "dubins_arcs"):  # (dubins: of its dx and dy)
         return args[0] if dict(args[0]) == dict(args[1]) else None
     if e.op in ("neg", "abs"):
         return args[0]

@@ -26,16 +26,20 @@ on the pose features (5-fold cross-validated MAE 0.61 s on 6000 episodes) the op
 whose dribble the model predicted seconds too short; with the free shortest word (0.38 s) it chose headings
 whose free word would leave the field, so the robot drove a longer one; with the word inside the walls 0.31 s.
 
-Vectorized (numpy), Dubins (1957) in the normalized frame of Shkel & Lumelsky (2001) as in sims.soccer.dubins,
-whose scalar candidates(), word_bounds() and shortest_path_inside() it reproduces (tests): coordination predicts
-millions of approach times per run, and the genetic algorithm thousands of dribbles per window. Each space
-declares a guaranteed enclosure over boxes of parameters for the certified optimizer (sims.soccer.feature_bounds).
+Vectorized (numpy): the words are sims.dubins's (the generic Dubins maths, here with the controllers'
+TANGENT_SLACK), in the normalized frame of Shkel & Lumelsky (2001) as in sims.soccer.dubins, whose scalar
+candidates(), word_bounds() and shortest_path_inside() it reproduces (tests): coordination predicts millions of
+approach times per run, and the genetic algorithm thousands of dribbles per window. Each space declares a
+guaranteed enclosure over boxes of parameters for the certified optimizer (sims.soccer.feature_bounds).
 """
 
 from __future__ import annotations
 
 import numpy as np
+from tailor.sims import dubins
 from tailor.sims import intervals as I
+from tailor.sims.dubins import ARC, SIGN
+from tailor.sims.dubins import totals as _lengths
 from tailor.sims.protocol import FeatureSpace
 from tailor.sims.soccer import feature_bounds as B
 from tailor.sims.soccer.approach import PRE_DISTANCE, R_APPROACH
@@ -54,69 +58,16 @@ APPROACH_FEATURES = POSE + ("path", "arcs", "exact_path")
 # goToPose's: its planned word (inside the walls), that word's detour over the straight line (the switch to the
 # lure at MAX_DETOUR), the lure's length through the IP, the turn toward the IP and the turn at it
 GOTO_FEATURES = APPROACH_FEATURES + ("detour", "lure_path", "lure_bearing", "lure_turn")
-
-
-ARC = np.array([[kind != "S" for kind in word] for word in WORDS])  # (6, 3): which segments of each word are arcs
-SIGN = np.array([[{"L": 1.0, "R": -1.0, "S": 0.0}[kind] for kind in word] for word in WORDS])  # (6, 3) turn sense
 _COMPASS = np.array([0.0, 0.5 * np.pi, np.pi, 1.5 * np.pi])  # east, north, west, south on an arc's circle
 _EAST_X, _NORTH_Y = np.array([1.0, 0.0, -1.0, 0.0]), np.array([0.0, 1.0, 0.0, -1.0])
-
-
-def _lengths(words: np.ndarray) -> np.ndarray:
-    """(M, 6) total length of each word of `words` (M, 6, 3); inf where the word does not exist."""
-    return np.where(np.isnan(words).any(axis=2), np.inf, words.sum(axis=2))
-
-
-def _mod(a: np.ndarray) -> np.ndarray:
-    return np.mod(a, TWO_PI)
 
 
 def dubins_words(start: np.ndarray, goal: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
     """(M, 6, 3) segment lengths (m) of each word of WORDS from the poses `start` (M, 3) to `goal` (M, 3), NaN
     where a word does not exist (mixed words within TANGENT_SLACK of touching exist, as in candidates()), and
-    (M, 6) whether each is exact (not such a near-touching mixed word)."""
-    dx, dy = goal[:, 0] - start[:, 0], goal[:, 1] - start[:, 1]
-    d = np.hypot(dx, dy) / radius
-    th0 = np.where(d > 1e-9, np.arctan2(dy, dx), 0.0)
-    alpha, beta = _mod(start[:, 2] - th0), _mod(goal[:, 2] - th0)
-    sa, ca, sb, cb = np.sin(alpha), np.cos(alpha), np.sin(beta), np.cos(beta)
-    cab = np.cos(alpha - beta)
-    out = np.empty((len(d), 6, 3))
-    exact = np.ones((len(d), 6), dtype=bool)
-    exists = np.empty((len(d), 6), dtype=bool)
-    with np.errstate(invalid="ignore"):
-        p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb)  # LSL
-        th = np.arctan2(cb - ca, d + sa - sb)
-        exists[:, 0] = p2 >= 0.0
-        out[:, 0, 0], out[:, 0, 1], out[:, 0, 2] = _mod(th - alpha), np.sqrt(p2), _mod(beta - th)
-        p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa)  # RSR
-        th = np.arctan2(ca - cb, d - sa + sb)
-        exists[:, 1] = p2 >= 0.0
-        out[:, 1, 0], out[:, 1, 1], out[:, 1, 2] = _mod(alpha - th), np.sqrt(p2), _mod(th - beta)
-        p2 = -2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb)  # LSR
-        p = np.sqrt(np.maximum(p2, 0.0))
-        th = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, p)
-        exact[:, 2], exists[:, 2] = p2 >= 0.0, p2 >= -TANGENT_SLACK
-        out[:, 2, 0], out[:, 2, 1], out[:, 2, 2] = _mod(th - alpha), p, _mod(th - beta)
-        p2 = -2.0 + d * d + 2.0 * cab - 2.0 * d * (sa + sb)  # RSL
-        p = np.sqrt(np.maximum(p2, 0.0))
-        th = np.arctan2(ca + cb, d - sa - sb) - np.arctan2(2.0, p)
-        exact[:, 3], exists[:, 3] = p2 >= 0.0, p2 >= -TANGENT_SLACK
-        out[:, 3, 0], out[:, 3, 1], out[:, 3, 2] = _mod(alpha - th), p, _mod(beta - th)
-        c = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0  # RLR
-        p = _mod(TWO_PI - np.arccos(np.clip(c, -1.0, 1.0)))
-        t = _mod(alpha - np.arctan2(ca - cb, d - sa + sb) + p / 2.0)
-        exists[:, 4] = np.abs(c) <= 1.0
-        out[:, 4, 0], out[:, 4, 1], out[:, 4, 2] = t, p, _mod(alpha - beta - t + p)
-        c = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa)) / 8.0  # LRL
-        p = _mod(TWO_PI - np.arccos(np.clip(c, -1.0, 1.0)))
-        t = _mod(-alpha + np.arctan2(-ca + cb, d + sa - sb) + p / 2.0)
-        exists[:, 5] = np.abs(c) <= 1.0
-        out[:, 5, 0], out[:, 5, 1], out[:, 5, 2] = t, p, _mod(beta - alpha - t + p)
-    out[~exists] = np.nan
-    full = TWO_PI - 1e-9  # an arc of (almost) a full turn is numerically zero, as in candidates()
-    out = np.where((out > full) & ARC[None], 0.0, out)
-    return out * radius, exact
+    (M, 6) whether each is exact (not such a near-touching mixed word): sims.dubins.words, as the controllers
+    take words."""
+    return dubins.words(start, goal, radius, TANGENT_SLACK)
 
 
 def shortest_word(start: np.ndarray, pre: np.ndarray, radius: float, final: float) -> np.ndarray:
