@@ -22,8 +22,8 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
+from tailor.refinement.learning.threads import one_thread
 from tailor.refinement.models.auto_features import Candidate, candidate_columns, generate, generic_row
 from tailor.refinement.models.expression_space import AUTO, ExpressionSpace
 from tailor.refinement.models.features import first_examples
@@ -69,7 +69,7 @@ def cv_mae(X: np.ndarray, y: np.ndarray, folds: list[np.ndarray], leaf: int) -> 
             rest = np.setdiff1d(np.arange(len(y)), fold)
             predicted[fold] = np.median(y[rest])
     else:
-        with threadpool_limits(limits=1):
+        with one_thread():
             for fold in folds:
                 rest = np.setdiff1d(np.arange(len(y)), fold)
                 predicted[fold] = ModelTree(min_samples_leaf=leaf).fit(X[rest], y[rest]).predict(X[fold])

@@ -3,14 +3,15 @@
 HistGradientBoostingRegressor starts an OpenMP thread per CPU; on a busy machine its threads wait for one
 another (a fit of 200 examples took 31 s with 2 threads under load, 0.14 s with one). threadpoolctl's
 `threadpool_limits` scans the process's loaded libraries on every call (about 4 ms, a few seconds over the
-thousand fits of one training); one controller per process, made at first use (after numpy and scikit-learn
-have loaded their libraries), limits without scanning again.
+thousand fits of one training); one controller per process, made at first use (after numpy and scikit-learn,
+imported here, have loaded their libraries), limits without scanning again.
 """
 
 from __future__ import annotations
 
 import threading
 
+from sklearn.ensemble import HistGradientBoostingRegressor  # noqa: F401  loads the OpenMP runtime the controller limits
 from threadpoolctl import ThreadpoolController
 
 _controller: ThreadpoolController | None = None
