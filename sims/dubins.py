@@ -106,6 +106,9 @@ def shortest(start: np.ndarray, goal: np.ndarray, radius: float) -> tuple[np.nda
 Pose = tuple[I.Pair, I.Pair, I.Pair]  # x, y, heading (unwrapped) intervals
 
 
+CHUNK = 512  # rows: WordBounds encloses more boxes in chunks of this many
+
+
 def _add(a: I.Pair, b: I.Pair) -> I.Pair:
     return a[0] + b[0], a[1] + b[1]
 
@@ -118,8 +121,27 @@ def _scale(a: I.Pair, c: float) -> I.Pair:
     return (a[0] * c, a[1] * c) if c >= 0 else (a[1] * c, a[0] * c)
 
 
+def _const(c: float, like: np.ndarray) -> I.Pair:
+    return np.full_like(like, c), np.full_like(like, c)
+
+
 def _slack(a: I.Pair, absolute: float = SLACK) -> I.Pair:
     return I.widen(a[0], a[1], absolute)
+
+
+def _stack(*pairs: I.Pair) -> I.Pair:
+    """Intervals of one shape stacked along a new first axis: one interval operation for them all (every
+    operation here is elementwise, so each row gets the bits it would get alone)."""
+    return np.stack([p[0] for p in pairs]), np.stack([p[1] for p in pairs])
+
+
+def _rows(a: I.Pair, rows) -> I.Pair:
+    return a[0][rows], a[1][rows]
+
+
+def _scale_by(a: I.Pair, c: np.ndarray) -> I.Pair:
+    """_scale with a factor per element (broadcast): the same products."""
+    return np.where(c >= 0, a[0] * c, a[1] * c), np.where(c >= 0, a[1] * c, a[0] * c)
 
 
 def modulo(lo: np.ndarray, hi: np.ndarray) -> I.Pair:
@@ -133,10 +155,12 @@ def modulo(lo: np.ndarray, hi: np.ndarray) -> I.Pair:
     return np.where(inside, a, 0.0), np.where(inside, b, TWO_PI)
 
 
+
+
 def _arc(lo: np.ndarray, hi: np.ndarray) -> I.Pair:
-    """An arc's length (rad): x mod 2 pi over [lo, hi], an arc of more than FULL being 0 (words). Across a
-    multiple of 2 pi whose values below lie within 2 pi - FULL of it (a numerically full turn), [0, the values
-    above]."""
+    """An arc's length (rad): x mod 2 pi over [lo, hi], an arc of more than FULL being 0 (dubins_words). Across
+    a multiple of 2 pi whose values below lie within 2 pi - FULL of it (a numerically full turn), [0, the
+    values above]."""
     a, b = modulo(lo, hi)
     a, b = np.where(a > FULL, 0.0, a), np.where(a > FULL, 0.0, np.minimum(b, FULL))
     a = np.where(b >= FULL, 0.0, a)
@@ -154,109 +178,118 @@ def _meet(a: I.Pair, b: I.Pair) -> I.Pair:
 
 
 class WordBounds:
-    """Enclosures of `words` over k boxes of start and goal poses: per word (k, 6) the lower and upper total length
-    (m; lower inf where it surely does not exist), its arcs' length, whether it surely / may exist, whether it is
-    surely / may be exact, and (k, 6, 3) its segments' lengths; `d` the ends' distance in radii."""
+    """Enclosures of `words` over k boxes of start and goal poses: per word (k, 6) lower and upper total
+    length (m; inf where it surely does not exist), its arcs' length, whether it surely / may exist, and whether
+    it is surely / may be exact, and (k, 6, 3) its segments' lengths (m). The words' formulas run stacked: a
+    pair of mirror words (LSL and RSR, LSR and RSL, RLR and LRL) is one operation, and every sine, direction
+    and arc of all six words one call (an enclosure call costs more in calls than in rows)."""
 
     def __init__(self, start: Pose, goal: Pose, radius: float, tangent_slack: float = 0.0):
+        k = max(len(np.atleast_1d(end)) for pose in (start, goal) for pair in pose for end in pair)
+        if k > CHUNK:  # in chunks: the stacked arrays of many rows outgrow the cache
+            parts = []
+            for at in range(0, k, CHUNK):
+                rows = slice(at, at + CHUNK)
+                parts.append(WordBounds(*(tuple(tuple(np.broadcast_to(end, (k,))[rows] for end in pair) for pair in pose)
+                                       for pose in (start, goal)), radius, tangent_slack))
+            for name in ("lo", "hi", "arcs_lo", "arcs_hi", "surely", "maybe", "exact_surely", "exact_maybe", "seg_lo",
+                         "seg_hi"):
+                setattr(self, name, np.concatenate([getattr(part, name) for part in parts]))
+            self.d = tuple(np.concatenate([part.d[j] for part in parts]) for j in (0, 1))
+            return
         dx, dy = _sub(goal[0], start[0]), _sub(goal[1], start[1])
         d = _slack(_scale(I.hypot(dx, dy), 1.0 / radius))
         th0 = I.direction(dx, dy)
         tiny = d[0] <= 1e-9  # th0 may be the 0 of a goal at the start
         th0 = (np.where(tiny, -PI - SLACK, th0[0]), np.where(tiny, PI + SLACK, th0[1]))
         alpha, beta = _sub(start[2], th0), _sub(goal[2], th0)
-        (sa, ca), (sb, cb) = I.sin_cos(*alpha), I.sin_cos(*beta)
-        sa, ca, sb, cb = (_slack(q) for q in (sa, ca, sb, cb))
-        cab = _slack(I.sin_cos(*_sub(start[2], goal[2]))[1])  # cos(alpha - beta): th0 cancels
+        headings = [(np.broadcast_to(h[0], d[0].shape), np.broadcast_to(h[1], d[0].shape)) for h in (start[2], goal[2])]
+        # alpha, beta, alpha - beta (cos(alpha - beta): th0 cancels), and both headings
+        s, c = I.sin_cos(*_stack(alpha, beta, _sub(start[2], goal[2]), *headings))
+        sa, sb = _slack(_rows(s, 0)), _slack(_rows(s, 1))
+        ca, cb, cab = _slack(_rows(c, 0)), _slack(_rows(c, 1)), _slack(_rows(c, 2))
         dd = I.square(*d)
-        k = len(d[0])
         self.d = d
-        # the same squared distances in the plane: the turning circles' centres (left 0, right 1) at both ends, a
-        # box each, their distances squared in radii (no dependency between the terms, and never below 0)
-        ends = []
-        for x, y, h in (start, goal):
-            sh, ch = I.sin_cos(*h)
-            ends.append([(_slack(_sub(x, _scale(sh, side * radius))), _slack(_add(y, _scale(ch, side * radius))))
-                         for side in (1.0, -1.0)])
-        centres = {(a, b): _slack(_scale(I.square(*I.hypot(_sub(ends[1][b][0], ends[0][a][0]),
-                                                           _sub(ends[1][b][1], ends[0][a][1]))), radius ** -2))
-                   for a in (0, 1) for b in (0, 1)}
-        self.lo, self.hi = np.full((k, 6), np.inf), np.full((k, 6), np.inf)
-        self.arcs_lo, self.arcs_hi = np.zeros((k, 6)), np.zeros((k, 6))
-        self.surely, self.maybe = np.zeros((k, 6), bool), np.zeros((k, 6), bool)
-        self.exact_surely, self.exact_maybe = np.ones((k, 6), bool), np.ones((k, 6), bool)
-        self.seg_lo, self.seg_hi = np.zeros((k, 6, 3)), np.zeros((k, 6, 3))  # m
-        p2s: dict[int, I.Pair] = {}
-        two, six = np.full(k, 2.0), np.full(k, 6.0)
-
-        def word(w: int, segments: list[I.Pair], arcs: tuple[bool, bool, bool], exists: tuple) -> None:
-            """Record word w from its three normalized segment intervals and its existence (surely, maybe)."""
-            lo, hi = _slack((sum(s[0] for s in segments) * radius, sum(s[1] for s in segments) * radius), 1e-9)
-            self.lo[:, w], self.hi[:, w] = np.where(exists[1], lo, np.inf), hi
-            self.arcs_lo[:, w] = sum(s[0] for s, a in zip(segments, arcs) if a) * radius
-            self.arcs_hi[:, w] = sum(s[1] for s, a in zip(segments, arcs) if a) * radius
-            self.surely[:, w], self.maybe[:, w] = exists
-            for j, segment in enumerate(segments):
-                self.seg_lo[:, w, j], self.seg_hi[:, w, j] = _slack(_scale(segment, radius), 1e-9)
-
+        # the same squared distances in the plane: the turning circles' centres (left, right) at both ends, a box
+        # each (rows: start left, start right, goal left, goal right), their distances squared in radii (no
+        # dependency between the terms, and never below 0)
+        end = [0, 0, 1, 1]
+        side = np.array([1.0, -1.0, 1.0, -1.0])[:, None] * radius
+        x, y = _stack(start[0], start[0], goal[0], goal[0]), _stack(start[1], start[1], goal[1], goal[1])
+        ex = _slack(_sub(x, _scale_by(_rows(s, [3 + e for e in end]), side)))
+        ey = _slack(_add(y, _scale_by(_rows(c, [3 + e for e in end]), side)))
+        at, to = [0, 0, 1, 1], [2, 3, 2, 3]  # centres (start side, goal side): LL, LR, RL, RR
+        centres = _slack(_scale(I.square(*I.hypot(_sub(_rows(ex, to), _rows(ex, at)),
+                                                   _sub(_rows(ey, to), _rows(ey, at)))), radius ** -2))
+        two, six = _const(2.0, d[0]), _const(6.0, d[0])
+        diff = _sub(_stack(sa, sb), _stack(sb, sa))  # sa - sb, sb - sa
+        spread = I.product(d, diff)
+        total = _add(sa, sb)
         # LSL, RSR: p2 = 2 + d^2 - 2 cab +- 2 d (sa - sb), the squared distance of the circles' centres
-        for w, sign in ((0, 1.0), (1, -1.0)):
-            diff = _sub(sa, sb) if sign > 0 else _sub(sb, sa)
-            p2 = _slack(_add(_sub(_add((two, two), dd), _scale(cab, 2.0)), _scale(I.product(d, diff), 2.0)))
-            p2 = p2s[w] = _meet(p2, centres[(w, w)])
-            p = (np.sqrt(np.maximum(p2[0], 0.0)), np.sqrt(np.maximum(p2[1], 0.0)))
-            if sign > 0:  # th = atan2(cb - ca, d + sa - sb)
-                th = I.direction(_slack(_add(d, _sub(sa, sb))), _slack(_sub(cb, ca)))
-                t, q = _arc(*_sub(th, alpha)), _arc(*_sub(beta, th))
-            else:  # th = atan2(ca - cb, d - sa + sb)
-                th = I.direction(_slack(_add(d, _sub(sb, sa))), _slack(_sub(ca, cb)))
-                t, q = _arc(*_sub(alpha, th)), _arc(*_sub(th, beta))
-            word(w, [t, p, q], (True, False, True), (p2[0] >= 0.0, p2[1] >= 0.0))
-        # LSR, RSL: p2 = -2 + d^2 + 2 cab +- 2 d (sa + sb); exact where p2 >= 0, exist within tangent_slack
-        for w, sign in ((2, 1.0), (3, -1.0)):
-            total = _add(sa, sb)
-            p2 = _slack(_add(_sub(_add(dd, _scale(cab, 2.0)), (two, two)), _scale(I.product(d, total), 2.0 * sign)))
-            between = centres[(0, 1) if sign > 0 else (1, 0)]  # less the circles' touching distance squared
-            p2 = _meet(p2, (between[0] - 4.0, between[1] - 4.0))
-            p = (np.sqrt(np.maximum(p2[0], 0.0)), np.sqrt(np.maximum(p2[1], 0.0)))
-            if sign > 0:  # th = atan2(-ca - cb, d + sa + sb) - atan2(-2, p): atan2(-2, p) increasing in p >= 0
-                corner = (np.arctan2(-2.0, p[0]), np.arctan2(-2.0, p[1]))
-                th = _sub(I.direction(_slack(_add(d, total)), _slack(_scale(_add(ca, cb), -1.0))), _slack(corner))
-                t, q = _arc(*_sub(th, alpha)), _arc(*_sub(th, beta))
-            else:  # th = atan2(ca + cb, d - sa - sb) - atan2(2, p): atan2(2, p) decreasing in p >= 0
-                corner = (np.arctan2(2.0, p[1]), np.arctan2(2.0, p[0]))
-                th = _sub(I.direction(_slack(_sub(d, total)), _slack(_add(ca, cb))), _slack(corner))
-                t, q = _arc(*_sub(alpha, th)), _arc(*_sub(beta, th))
-            word(w, [t, p, q], (True, False, True), (p2[0] >= -tangent_slack, p2[1] >= -tangent_slack))
-            self.exact_surely[:, w], self.exact_maybe[:, w] = p2[0] >= 0.0, p2[1] >= 0.0
-        # RLR, LRL: c = (6 - d^2 + 2 cab +- 2 d (sa - sb)) / 8, p = mod(2 pi - arccos(c)), t and q through p / 2
-        for w, sign in ((4, 1.0), (5, -1.0)):
-            diff = _sub(sa, sb) if sign > 0 else _sub(sb, sa)
-            c = _slack(_scale(_add(_add(_sub((six, six), dd), _scale(cab, 2.0)), _scale(I.product(d, diff), 2.0)),
-                              0.125))
-            outer = p2s[1 if sign > 0 else 0]  # c = 1 - (the outer circles' centres' distance)^2 / 8
-            c = _meet(c, _slack((1.0 - outer[1] / 8.0, 1.0 - outer[0] / 8.0)))
-            ac = (np.arccos(np.clip(c[1], -1.0, 1.0)), np.arccos(np.clip(c[0], -1.0, 1.0)))  # arccos decreasing
-            raw = _slack((TWO_PI - ac[1], TWO_PI - ac[0]))
-            if sign > 0:  # t = mod(alpha - atan2(ca - cb, d - sa + sb) + p/2), q = mod(th - beta + p/2)
-                th = I.direction(_slack(_add(d, _sub(sb, sa))), _slack(_sub(ca, cb)))
-            else:  # t = mod(-alpha + atan2(-ca + cb, d + sa - sb) + p/2), q = mod(beta - th + p/2)
-                th = I.direction(_slack(_add(d, _sub(sa, sb))), _slack(_sub(cb, ca)))
-            wraps = raw[1] >= TWO_PI  # p = mod(2 pi - arccos) may be 0: t and q through p = 0 as well
-            segments = None
-            for p_raw in (raw, (np.zeros(k), np.zeros(k))):
-                p = _arc(*p_raw)
-                half = _scale(p_raw, 0.5) if p_raw is raw else p_raw
-                if sign > 0:
-                    t, q = _arc(*_add(_sub(alpha, th), half)), _arc(*_add(_sub(th, beta), half))
-                else:
-                    t, q = _arc(*_add(_sub(th, alpha), half)), _arc(*_add(_sub(beta, th), half))
-                if segments is None:
-                    segments = [t, p, q]
-                else:  # the hull with the p = 0 branch where p may wrap
-                    segments = [(np.where(wraps, np.minimum(a[0], b[0]), a[0]),
-                                 np.where(wraps, np.maximum(a[1], b[1]), a[1])) for a, b in zip(segments, [t, p, q])]
-            word(w, segments, (True, True, True), ((c[0] >= -1.0) & (c[1] <= 1.0), (c[1] >= -1.0) & (c[0] <= 1.0)))
+        p2 = _slack(_add(_sub(_add(two, dd), _scale(cab, 2.0)), _scale(spread, 2.0)))
+        straight = _meet(p2, _rows(centres, [0, 3]))
+        # LSR, RSL: p2 = -2 + d^2 + 2 cab +- 2 d (sa + sb) less the touching distance squared of their circles
+        p2 = _slack(_add(_sub(_add(dd, _scale(cab, 2.0)), two),
+                         _scale_by(I.product(d, total), np.array([2.0, -2.0])[:, None])))
+        between = _rows(centres, [1, 2])
+        mixed = _meet(p2, (between[0] - 4.0, between[1] - 4.0))
+        root = (np.sqrt(np.maximum(np.concatenate([straight[0], mixed[0]]), 0.0)),
+                np.sqrt(np.maximum(np.concatenate([straight[1], mixed[1]]), 0.0)))
+        # the directions: LSL's atan2(cb - ca, d + sa - sb), RSR's atan2(ca - cb, d - sa + sb), and LSR's and RSL's
+        # atan2(-ca - cb, d + sa + sb), atan2(ca + cb, d - sa - sb) (less atan2(-+2, p), increasing resp.
+        # decreasing in p >= 0)
+        both = _add(ca, cb)
+        dx_th = _slack(_stack(_add(d, _rows(diff, 0)), _add(d, _rows(diff, 1)), _add(d, total), _sub(d, total)))
+        dy_th = _slack(_stack(_sub(cb, ca), _sub(ca, cb), _scale(both, -1.0), both))
+        th = I.direction(dx_th, dy_th)
+        corner = (np.arctan2(np.array([[-2.0], [2.0]]), np.stack([root[0][2], root[1][3]])),
+                  np.arctan2(np.array([[-2.0], [2.0]]), np.stack([root[1][2], root[0][3]])))
+        th_mixed = _sub(_rows(th, [2, 3]), _slack(corner))
+        # RLR, LRL: c = (6 - d^2 + 2 cab +- 2 d (sa - sb)) / 8 = 1 - (the outer circles' centres' distance)^2 / 8,
+        # p = mod(2 pi - arccos(c)), t and q through p / 2, their directions RSR's and LSL's
+        cc = _slack(_scale(_add(_add(_sub(six, dd), _scale(cab, 2.0)), _scale(spread, 2.0)), 0.125))
+        outer = _rows(straight, [1, 0])
+        cc = _meet(cc, _slack((1.0 - outer[1] / 8.0, 1.0 - outer[0] / 8.0)))
+        ac = (np.arccos(np.clip(cc[1], -1.0, 1.0)), np.arccos(np.clip(cc[0], -1.0, 1.0)))  # arccos decreasing
+        raw = _slack((TWO_PI - ac[1], TWO_PI - ac[0]))
+        half, zero = _scale(raw, 0.5), (np.zeros((2, k)), np.zeros((2, k)))
+        # t and q: LSL's th - alpha and beta - th, RSR's alpha - th and th - beta, LSR's th - alpha and th - beta,
+        # RSL's alpha - th and beta - th; RLR's alpha - th + p/2 and th - beta + p/2 (th RSR's), LRL's th - alpha +
+        # p/2 and beta - th + p/2 (th LSL's), through the raw p and through p = 0; and p itself: one call
+        th_lsl, th_rsr = _rows(th, 0), _rows(th, 1)
+        t_straight = _sub(_stack(th_lsl, alpha), _stack(alpha, th_rsr))
+        q_straight = _sub(_stack(beta, th_rsr), _stack(th_lsl, beta))
+        t_mixed = _sub(_stack(_rows(th_mixed, 0), alpha), _stack(alpha, _rows(th_mixed, 1)))
+        q_mixed = _sub(_stack(_rows(th_mixed, 0), beta), _stack(beta, _rows(th_mixed, 1)))
+        t_curl = _sub(_stack(alpha, th_lsl), _stack(th_rsr, alpha))
+        q_curl = _sub(_stack(th_rsr, beta), _stack(beta, th_lsl))
+        angles = [t_straight, t_mixed, q_straight, q_mixed, raw, zero, _add(t_curl, half), _add(q_curl, half),
+                  _add(t_curl, zero), _add(q_curl, zero)]
+        arcs = _arc(np.concatenate([a[0] for a in angles]), np.concatenate([a[1] for a in angles]))
+        t, q = _rows(arcs, slice(0, 4)), _rows(arcs, slice(4, 8))  # LSL, RSR, LSR, RSL
+        p_raw, p_zero, t_raw, q_raw, t_zero, q_zero = (_rows(arcs, slice(8 + 2 * i, 10 + 2 * i)) for i in range(6))
+        wraps = raw[1] >= TWO_PI  # p = mod(2 pi - arccos) may be 0: t and q through p = 0 as well, the hull
+
+        def hull(a: I.Pair, b: I.Pair) -> I.Pair:
+            return (np.where(wraps, np.minimum(a[0], b[0]), a[0]), np.where(wraps, np.maximum(a[1], b[1]), a[1]))
+
+        curl = [hull(t_raw, t_zero), hull(p_raw, p_zero), hull(q_raw, q_zero)]
+        seg = [(np.concatenate([a[0], b[0]]), np.concatenate([a[1], b[1]])) for a, b in zip((t, root, q), curl)]
+        # per word (6, k): the sums of its segments (as sum() adds them, from 0), existence and exactness
+        length = _slack(((0 + seg[0][0] + seg[1][0] + seg[2][0]) * radius,
+                         (0 + seg[0][1] + seg[1][1] + seg[2][1]) * radius), 1e-9)
+        arc_lo = np.concatenate([0 + t[0] + q[0], 0 + curl[0][0] + curl[1][0] + curl[2][0]])
+        arc_hi = np.concatenate([0 + t[1] + q[1], 0 + curl[0][1] + curl[1][1] + curl[2][1]])
+        surely = np.concatenate([straight[0] >= 0.0, mixed[0] >= -tangent_slack, (cc[0] >= -1.0) & (cc[1] <= 1.0)])
+        maybe = np.concatenate([straight[1] >= 0.0, mixed[1] >= -tangent_slack, (cc[1] >= -1.0) & (cc[0] <= 1.0)])
+        self.lo, self.hi = np.where(maybe, length[0], np.inf).T, length[1].T
+        self.arcs_lo, self.arcs_hi = (arc_lo * radius).T, (arc_hi * radius).T
+        self.surely, self.maybe = surely.T, maybe.T
+        self.exact_surely, self.exact_maybe = np.ones((k, 6), bool), np.ones((k, 6), bool)
+        self.exact_surely[:, 2:4], self.exact_maybe[:, 2:4] = (mixed[0] >= 0.0).T, (mixed[1] >= 0.0).T
+        scaled = [_slack(_scale(x, radius), 1e-9) for x in seg]
+        self.seg_lo = np.stack([x[0] for x in scaled], axis=2).transpose(1, 0, 2)  # (6, k, 3) -> (k, 6, 3)
+        self.seg_hi = np.stack([x[1] for x in scaled], axis=2).transpose(1, 0, 2)
 
 
 def shortest_bounds(start: Pose, goal: Pose, radius: float) -> tuple[I.Pair, I.Pair]:

@@ -4,6 +4,7 @@ algorithm misses, and `auto` says which optimizer ran and why the others did not
 
 from __future__ import annotations
 
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -356,3 +357,19 @@ def test_a_validity_check_is_never_asked_about_no_points(seed):
 
     result = certified.minimize(Objective(objective.free, (replace(term, valid=strict),) + objective.terms[1:]))
     assert result.gap <= certified.tolerance_of(result.cost)
+
+
+def test_auto_gives_up_at_once_on_a_gap_its_budget_could_not_close_and_not_on_one_it_can():
+    """Six free parameters and a gap of 5700% after the first 64 boxes: closing it within auto's budget would take
+    it falling faster than certified.FASTEST / 6 halvings per doubling of the boxes, so auto stops there and runs
+    the GA (certified alone, without a prospect, searches on); four free parameters whose gap closes within the
+    budget (after 27,000 boxes) are searched to the end."""
+    wide = random_objective(np.random.default_rng(1), 6, 3, n_leaves=30, extra_kind="curved")
+    result = optimize(wide, seed=0)
+    assert result.method == "ga" and "even at the fastest fall" in result.note
+    assert int(re.search(r"(\d+) boxes", result.note).group(1)) <= certified.WIDE
+    alone = certified.minimize(wide, budget=2000)
+    assert "fastest" not in alone.note and int(re.search(r"(\d+) boxes", alone.note).group(1)) >= 2000
+    closing = random_objective(np.random.default_rng(0), 4, 3, n_leaves=30, extra_kind="curved")
+    result = optimize(closing, seed=0)
+    assert result.method == "certified" and result.gap <= certified.tolerance_of(result.cost)

@@ -12,6 +12,8 @@ from tailor.sims.arm import world as AW
 from tailor.sims.arm.features import RAMPS
 from tailor.sims.kinematics import transfer_time
 from tailor.sims.kitchen.features import GRASP, ROUTE
+from tailor.sims.soccer import dubins
+from tailor.sims.soccer import feature_bounds as B
 from tailor.sims.soccer.features import APPROACH, DRIBBLE, GOTO_SPACE
 from tailor.sims.soccer.walls import POSE_WALLS
 
@@ -196,3 +198,31 @@ def test_the_soccer_bounds_at_the_seams_of_wrapped_angles():
         f_lo, f_hi = space.bounds(point, point)
         np.testing.assert_allclose(f_lo, space(point), atol=1e-6)
         np.testing.assert_allclose(f_hi, space(point), atol=1e-6)
+
+
+def test_the_soccer_word_extent_holds_every_path_of_its_boxes():
+    """feature_bounds.word_extent, every (start box, word) pair at once: every pose along every word driven from
+    a start pose of the box with segment lengths within their intervals lies inside it (the hard case of the
+    walls decides on it), and 10% less would miss some."""
+    rng = np.random.default_rng(5)
+    radius, n = 0.4, 60
+    low = np.column_stack([rng.uniform(-2, 2, n), rng.uniform(-2, 2, n), rng.uniform(-7, 7, n)])
+    high = low + rng.uniform(size=(n, 3)) ** 2 * rng.choice([0.0, 0.05, 0.5], size=(n, 1))
+    words = rng.integers(0, 6, n)
+    seg_lo = rng.uniform(0, 1.5, (n, 3)) * rng.choice([0.0, 1.0], (n, 3), p=[0.2, 0.8])
+    seg_hi = seg_lo + rng.uniform(0, 0.5, (n, 3)) * rng.choice([0.0, 1.0], (n, 1))
+    (x_lo, x_hi), (y_lo, y_hi) = B.word_extent(tuple((low[:, j], high[:, j]) for j in range(3)), seg_lo, seg_hi,
+                                               words, radius)
+    caught = False
+    for i in range(n):
+        poses = []
+        for start, lengths in zip(sample(low[i:i + 1], high[i:i + 1], rng, 12)[0],
+                                  sample(seg_lo[i:i + 1], seg_hi[i:i + 1], rng, 12)[0]):
+            path = dubins.DubinsPath(dubins.WORDS[words[i]], tuple(lengths), radius)
+            poses += dubins.sample(tuple(start), path, 0.02)
+        x, y = np.array(poses)[:, 0], np.array(poses)[:, 1]
+        assert np.all((x >= x_lo[i]) & (x <= x_hi[i]) & (y >= y_lo[i]) & (y <= y_hi[i])), i
+        shrink = [SHRINK * (x_hi[i] - x_lo[i]), SHRINK * (y_hi[i] - y_lo[i])]
+        caught |= bool(np.any((x < x_lo[i] + shrink[0]) | (x > x_hi[i] - shrink[0])
+                              | (y < y_lo[i] + shrink[1]) | (y > y_hi[i] - shrink[1])))
+    assert caught, "a 10% shrink went unnoticed: the sampling has no teeth"

@@ -123,16 +123,13 @@ def test_unbounded_boxes_give_sound_whole_ranges():
     assert l_lo[0] >= 1.0 - 2e-9 and l_hi[0] <= 1.0 + D.LOOP * RADIUS + 1e-9  # any headings: LSL's bound
 
 
-def test_the_soccer_robots_word_enclosure_is_this_one_with_its_tangent_slack():
-    """sims.soccer.feature_bounds.Words computes what WordBounds does (it could import it)."""
-    from tailor.sims.soccer import feature_bounds as B
-    from tailor.sims.soccer.dubins import TANGENT_SLACK
-
+def test_many_boxes_are_enclosed_in_chunks_exactly_as_each_alone():
+    """WordBounds encloses more than CHUNK boxes a chunk at a time: every row as it is when enclosed alone."""
     rng = np.random.default_rng(3)
-    for width in (0.0, 0.1, 2.0):
-        low, high = _boxes(rng, 100, width)
-        ours = D.WordBounds(_pose_boxes(low, high, 0), _pose_boxes(low, high, 3), RADIUS, TANGENT_SLACK)
-        theirs = B.Words(_pose_boxes(low, high, 0), _pose_boxes(low, high, 3), RADIUS)
-        for name in ("lo", "hi", "arcs_lo", "arcs_hi", "surely", "maybe", "exact_surely", "exact_maybe", "seg_lo",
-                     "seg_hi"):
-            assert np.array_equal(getattr(ours, name), getattr(theirs, name)), (width, name)
+    low, high = _boxes(rng, D.CHUNK + 150, 0.1)
+    many = D.WordBounds(_pose_boxes(low, high, 0), _pose_boxes(low, high, 3), RADIUS, 1e-3)
+    rows = [0, D.CHUNK - 1, D.CHUNK, D.CHUNK + 149]
+    few = D.WordBounds(_pose_boxes(low[rows], high[rows], 0), _pose_boxes(low[rows], high[rows], 3), RADIUS, 1e-3)
+    for name in ("lo", "hi", "arcs_lo", "arcs_hi", "surely", "maybe", "exact_surely", "exact_maybe", "seg_lo",
+                 "seg_hi"):
+        assert np.array_equal(getattr(many, name)[rows], getattr(few, name)), name

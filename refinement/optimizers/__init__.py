@@ -47,11 +47,14 @@ __all__ = [
 # parameters need up to 37,000 boxes, 0.3 s), divided by AUTO_WIDE for each one more (no bundled window of 6
 # free parameters measured closed its gap in 40,000 boxes: 625 cost one of the costlier ones 0.07 s), and at most
 # AUTO_ROWS boxes times stencil rows under a neighbourhood (each box is bounded once per offset: the bundled
-# robust windows that close need 2,000-8,000 boxes of 9 rows); and none where the gap stalls or closing it looks
+# robust windows that close need 2,000-8,000 boxes of 9 rows); and none where closing the gap within that budget
+# would take it falling faster than certified.FASTEST / n halvings per doubling of the boxes while they are wide
+# (n free parameters; judged from 64 boxes on, no window measured that closes is given up so: the chains of four
+# or six free parameters whose gap stays above 1000% for thousands of boxes stop after 64 to 450 boxes, the
+# other bundled windows of six free parameters after 64), where it stalls, or where closing it looks
 # like taking more than AUTO_PROSPECT boxes (certified.minimize's prospect, judged from 500 boxes on: the windows
 # that closed looked like at most 270,000 after 2,000 boxes; those near a jump of the planned path or an unbounded
-# guard, and the chains of four or six free parameters whose gap stays above 1000% for thousands of
-# boxes, like millions already after 500)
+# guard like millions)
 AUTO_BUDGET = 40_000
 AUTO_FREE = 4
 AUTO_WIDE = 8

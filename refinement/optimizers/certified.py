@@ -7,11 +7,13 @@ the smallest leaf minimum the box meets (intervals.minimum): a lower bound of th
 a lower bound of the objective. The search splits the boxes with the lowest bounds in two, along the widest
 free parameter (relative to its range) while a box is wide, else along the one whose halves gain most bound
 (a jump of a feature, whose enclosure stays wide however small the box, is cut off across its parameter; the
-halves share no float, so a jump between two floats is cut too); it bounds both halves, evaluates their
-middles (and the point of each nearest the best so far) with the true objective for a better choice, and stops
-when the best choice is within the tolerance of the lowest bound still open: the returned gap is then a proof
-that no valid choice is more than that below it (under the enclosures). An enclosure that does not shrink to
-the features' values at a single point could never close the gap: such a term is refused at once.
+halves share no float, so a jump between two floats is cut too; while few boxes are open, a wide one is halved
+more than once, so a step bounds as many boxes as a full one); it bounds the halves, evaluates their middles
+(and the point of each nearest the best so far; once the boxes are narrow, only of the halves bounded lowest)
+with the true objective for a better choice, and stops when the best choice is within the tolerance of the
+lowest bound still open: the returned gap is then a proof that no valid choice is more than that below it
+(under the enclosures). An enclosure that does not shrink to the features' values at a single point could
+never close the gap: such a term is refused at once.
 
 Robust objective (a neighbourhood): the worst case at x is the largest cost over the stencil x + o (clipped to
 the ranges), so over a box B it is at least, for every offset o, the cost's bound over the box B + o; the
@@ -22,8 +24,8 @@ free parameter meets none (a valid choice needs success there too), holds no val
 every other box stays, so a bound is never raised by a validity the bounds cannot prove.
 
 Deterministic: no random step, and the work is bounded by a number of boxes (`budget`, and a `prospect` that
-gives up on a gap that stalls or falls too slowly), not by a clock, so the same problem gives the same answer on
-any machine.
+gives up on a gap that could not close within the budget unless it fell faster than the gaps that closed did, or
+that stalls or falls too slowly), not by a clock, so the same problem gives the same answer on any machine.
 """
 
 from __future__ import annotations
@@ -41,16 +43,20 @@ from tailor.refinement.optimizers.structure import NotApplicable
 TOLERANCE = 5e-4  # the gap allowed, as a share of the best cost ...
 ABSOLUTE_TOLERANCE = 1e-6  # ... and in the objective's unit (s) where the cost is near 0
 BUDGET = 200_000  # boxes bounded at most by a call of `minimize` (the `certified` optimizer)
-BATCH = 64  # boxes split per step
-STRONG_WIDTH = 1 / 16  # boxes narrower than this share of every range are split where it helps most
+BATCH = 64  # boxes split per step (while fewer are open, each wide one more than once, to as many pieces)
+STRONG_WIDTH = 1 / 8  # boxes narrower than this share of every range are split where it helps most
 ACTIVE_WIDTH = 2.0  # a neighbourhood's offset along a free parameter bounds boxes at most this many radii wide
 POINT_CHECKS = (0.5, 0.25, 0.8)  # where along the diagonal of the ranges an enclosure is checked at a point
 POINT_TOLERANCE = 1e-6  # relative: how wide an enclosure of a single point may be
 TIE = 1e-9  # relative: bounds of halves this close count as equal (the widest parameter is split then)
-CHECKPOINT = 250  # boxes: a search with a `prospect` is judged after twice this many, and after each doubling
-STALLED = 0.1  # ... and given up where its gap fell by less than this share over the last doubling ...
-STALL_FROM = 8000  # ... from this many boxes on (some gaps stall for a doubling before they close), and where
-UNBOUNDED_FROM = 1000  # its lower bound is still unbounded after this many
+EVALUATED = 4  # after WIDE boxes, the 1 / EVALUATED of the halves of a step with the lowest bounds are evaluated
+CHECKPOINT = 64  # boxes: a search with a `prospect` is judged from this many on, at each doubling, and given up
+FASTEST = 12  # ... while it has bounded at most WIDE boxes, where closing its gap within its budget would take a
+WIDE = 512  # fall faster than FASTEST / n halvings per doubling of the boxes (n free parameters; see `minimize`);
+SLOW_FROM = 500  # ... from this many boxes on, where the gap falls too slowly for the prospect (see `minimize`)
+STALLED = 0.1  # ... or by less than this share over the last two doublings (a bound stuck at a jump) ...
+STALL_FROM = 2000  # ... from this many boxes on (some gaps stall for one doubling before they close), and where
+UNBOUNDED_FROM = 256  # its lower bound is still unbounded after this many
 
 
 @dataclass(frozen=True, eq=False)
@@ -166,12 +172,18 @@ class _Search:
             # the grown box (the leaves its neighbourhood may meet), and the box moved by each stencil offset that
             # can change the term (its bound): one enclosure call for both (a call costs more than its rows)
             if self.radius.any():  # (without a neighbourhood the grown box is the box itself)
-                shift = self.offsets[use]  # (U, n)
-                s_lo = np.clip(lo[None] + shift[:, None], self.low, self.high).reshape(-1, lo.shape[1])
-                s_hi = np.clip(hi[None] + shift[:, None], self.low, self.high).reshape(-1, lo.shape[1])
+                # only the moved boxes whose offset is active are enclosed (an inactive one bounds nothing; its
+                # rows stay unbounded and out of the minimum below)
+                on_rows = np.flatnonzero(active[use].ravel())  # (offset, box) rows, offset-major
+                shift = self.offsets[use][on_rows // k]
+                s_lo = np.clip(lo[on_rows % k] + shift, self.low, self.high)
+                s_hi = np.clip(hi[on_rows % k] + shift, self.low, self.high)
                 e_lo, e_hi = _enclosure(term.features, np.concatenate([grown_lo, s_lo]),
                                         np.concatenate([grown_hi, s_hi]))
-                g_lo, g_hi, f_lo, f_hi = e_lo[:k], e_hi[:k], e_lo[k:], e_hi[k:]
+                g_lo, g_hi = e_lo[:k], e_hi[:k]
+                f_lo = np.full((len(use) * k, e_lo.shape[1]), -np.inf)
+                f_hi = np.full((len(use) * k, e_lo.shape[1]), np.inf)
+                f_lo[on_rows], f_hi[on_rows] = e_lo[k:], e_hi[k:]
             else:
                 g_lo, g_hi = f_lo, f_hi = _enclosure(term.features, grown_lo, grown_hi)
             hit = intervals.meets(term.table, pairs, g_lo, g_hi)
@@ -260,11 +272,13 @@ def _halves(lo: np.ndarray, hi: np.ndarray, axis: np.ndarray) -> tuple[np.ndarra
     return np.concatenate([lo, right_lo]), np.concatenate([left_hi, hi])
 
 
-def _split(search: _Search, lo, hi, parent_bound, parent_leaves, cap: float):
+def _split(search: _Search, lo, hi, parent_bound, parent_leaves, cap: float, levels: int = 1):
     """Each box halved, bounded and checked (the lower halves, then the upper ones): along its widest free
     parameter (relative to its range) while it is wider than STRONG_WIDTH of it, else along the parameter
     whose halves gain most bound over it, up to `cap` (strong branching: a jump of a feature, whose enclosure
-    stays wide however small the box, is cut off along the parameter it lies across)."""
+    stays wide however small the box, is cut off along the parameter it lies across). A wide box is halved
+    `levels` times over (each piece along its widest parameter, while every piece is still wide), and only the
+    last pieces bounded: the step of a search with few boxes open bounds as many as a full one."""
     k, n = lo.shape
     relative = (hi - lo) / search.scale
     axis = np.argmax(relative, axis=1)
@@ -272,13 +286,20 @@ def _split(search: _Search, lo, hi, parent_bound, parent_leaves, cap: float):
     plain, rows = np.flatnonzero(~strong), np.flatnonzero(strong)
     m = len(rows)
     c_lo, c_hi = _halves(lo[plain], hi[plain], axis[plain])
+    half = np.concatenate([plain, plain])  # each piece's box
+    for _ in range(levels - 1):
+        relative_piece = (c_hi - c_lo) / search.scale
+        piece_axis = np.argmax(relative_piece, axis=1)
+        if not np.all(relative_piece[np.arange(len(c_lo)), piece_axis] > STRONG_WIDTH):
+            break
+        c_lo, c_hi = _halves(c_lo, c_hi, piece_axis)
+        half = np.concatenate([half, half])
     axes = np.tile(np.arange(n), m)  # every strong box halved along every parameter, its best pair kept below
     s_lo, s_hi = _halves(np.repeat(lo[rows], n, axis=0), np.repeat(hi[rows], n, axis=0), axes)
     p = len(c_lo)  # both bounded in one call (a call of the enclosures costs more than its rows)
     bound, possible, leaves = search.evaluate(
         np.concatenate([c_lo, s_lo]), np.concatenate([c_hi, s_hi]),
-        [[part[r] for r in plain] * 2 + [part[r] for r in rows for _ in range(n)] * 2 for part in parent_leaves])
-    half = np.concatenate([plain, plain])
+        [[part[r] for r in half] + [part[r] for r in rows for _ in range(n)] * 2 for part in parent_leaves])
     if m:
         s_bound, s_possible, s_spread = bound[p:], possible[p:], search.spread[p:]
         s_leaves = [part[p:] for part in leaves]
@@ -321,12 +342,18 @@ def minimize(objective: Objective, seed: int = 0, budget: int = BUDGET, toleranc
     """Branch and bound to within `tolerance` of the optimum, or until `budget` boxes are bounded (the gap then
     says how far it got); NotApplicable where a term cannot be bounded or no valid choice is found.
 
-    With a `prospect` (boxes), also where, at a checkpoint (2 CHECKPOINT boxes and each doubling), the gap fell
-    by less than STALLED over the last doubling of the boxes (from STALL_FROM on: a bound stuck where an
-    enclosure stays wide), or closing it looks like taking more than `prospect` boxes both at the rate it fell
-    over that doubling and as if it fell in proportion to the boxes (the searches that close fall one way or the
-    other: some slowly until the boxes are small, then at once; some fast from a wide start). All in boxes:
-    the same problem stops at the same box on any machine."""
+    With a `prospect` (boxes), also at a checkpoint (CHECKPOINT boxes and each doubling): while the boxes are
+    wide (at most WIDE bounded), where closing the gap within `budget` would take it falling faster than
+    FASTEST / n halvings per doubling of the boxes, n free parameters (a box's widths halve once per n doublings;
+    of the bundled windows measured, those of the evaluations and of the way-point chain, none that
+    closed its gap is given up so, nor with 8 in place of FASTEST, while the windows of four or six free
+    parameters whose gap stays above 1000% are given up after 64 to 450 boxes); from SLOW_FROM boxes on, where
+    the gap fell by less than STALLED over the last two doublings of the boxes (from STALL_FROM on: a bound stuck
+    at a jump; of the windows measured that closed, two stalled for one doubling, none for two), or where closing
+    it looks like taking more than `prospect` boxes both at the rate it fell over the last doubling and as if it
+    fell in proportion to the boxes (the searches that close fall one way or the other: some slowly until the boxes
+    are small, then at once; some fast from a wide start); or where the lower bound is still unbounded after
+    UNBOUNDED_FROM boxes. All in boxes: the same problem stops at the same box on any machine."""
     del seed  # deterministic; the argument keeps the optimizers interchangeable
     start = time.perf_counter()
     search = _Search(objective, bounded_terms(objective))
@@ -351,21 +378,30 @@ def minimize(objective: Objective, seed: int = 0, budget: int = BUDGET, toleranc
     def tol() -> float:
         return tolerance_of(best_cost, tolerance) if np.isfinite(best_cost) else 0.0
 
-    checkpoint, last_gap, hopeless = CHECKPOINT, np.inf, ""
+    checkpoint, gaps, hopeless = CHECKPOINT, [(0, np.inf), (0, np.inf)], ""  # (boxes, gap) at the checkpoints
+    free = int(np.sum(high > low))  # the parameters a box is split along
 
     def beyond_prospect(gap: float) -> str:
         """Why the gap looks too far to close within `prospect` boxes (at a checkpoint), or ""."""
-        nonlocal checkpoint, last_gap
+        nonlocal checkpoint
         if prospect is None or search.boxes < checkpoint:
             return ""
-        checkpoint, before, last_gap = 2 * search.boxes, last_gap, gap
+        checkpoint, before, (earlier_boxes, earlier) = 2 * search.boxes, gaps[-1][1], gaps[-2]
+        gaps.append((search.boxes, gap))
         if np.isinf(gap) and np.isinf(before) and search.boxes >= UNBOUNDED_FROM:
             return f"stopped after {search.boxes} boxes: its lower bound still unbounded"
         if not (np.isfinite(gap) and gap > tol()):
             return ""
-        if gap > (1.0 - STALLED) * before and search.boxes >= STALL_FROM:
+        if search.boxes <= WIDE:
+            fastest = search.boxes * 2.0 ** min(free * np.log2(gap / tol()) / FASTEST, 1000.0)
+            if fastest > budget:
+                return (f"stopped after {search.boxes} boxes: its gap of {100 * gap / abs(best_cost):.3g}% would take "
+                        f"{fastest:.2g} boxes to close even at the fastest fall (over a budget of {budget})")
+        if search.boxes < SLOW_FROM:
+            return ""
+        if gap > (1.0 - STALLED) * earlier and search.boxes >= STALL_FROM:
             return (f"stopped after {search.boxes} boxes: its gap of {100 * gap / abs(best_cost):.3g}% fell by "
-                    f"{100 * (1 - gap / before):.2g}% over the last {search.boxes // 2}")
+                    f"{100 * (1 - gap / earlier):.2g}% over the last {search.boxes - earlier_boxes}")
         rate = np.log2(before / gap)  # halvings of the gap per doubling of the boxes (inf: unbounded before)
         doublings = np.log2(gap / tol()) * min(1.0, 1.0 / rate if rate > 0.0 else np.inf)
         projected = search.boxes * 2.0 ** min(doublings, 1000.0)  # the better of that rate and 1 / boxes
@@ -385,10 +421,15 @@ def minimize(objective: Objective, seed: int = 0, budget: int = BUDGET, toleranc
         slots = search.take(BATCH)
         lo, hi, parent_bound = search.lo[slots], search.hi[slots], search.bound[slots]
         parent_leaves = search.leaves_of(slots)
+        levels = int(np.log2(BATCH // len(slots)))  # few boxes open (at first): each halved more than once
         c_lo, c_hi, bound, possible, leaves = _split(search, lo, hi, parent_bound, parent_leaves,
-                                                      best_cost if np.isfinite(best_cost) else np.inf)
+                                                      best_cost if np.isfinite(best_cost) else np.inf, max(1, levels))
         # a half bounded within the tolerance of the best so far holds nothing worth evaluating
         promising = possible & (bound < best_cost - tol()) if np.isfinite(best_cost) else possible
+        if search.boxes > WIDE:  # once narrowed, where the bounds are lowest (and every single point: dropped below)
+            evaluated = ~np.any(c_hi > c_lo, axis=1)
+            evaluated[np.argsort(bound, kind="stable")[:max(1, len(bound) // EVALUATED)]] = True
+            promising &= evaluated
         candidates = [((c_lo + c_hi) / 2)[promising]]
         if best_point is not None:  # and the point of each half nearest the best so far (optima sit on edges)
             candidates.append(np.clip(best_point, c_lo, c_hi)[promising])
