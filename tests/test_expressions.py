@@ -150,7 +150,7 @@ def test_a_model_file_keeps_a_path_of_bounded_curvature_and_bounds_it(tmp_path):
               ["neg", "h"], 0.4]
     arcs = ["dubins_arcs", *length[1:]]
     s = space(length, arcs, ["transfer", length, "v", "vg", 1.0, 0.5]).with_units(UNITS)
-    assert s.units == ("?", "?", "s")  # (a constant has no unit: xg - x - 0.3 cos(h) cannot be told metres)
+    assert s.units == ("m", "m", "s")  # (a fitted number takes its place's unit: xg - x - 0.3 cos(h) is metres)
     model = _model(s)
     path = tmp_path / "move.json"
     path.write_text(json.dumps(model.to_json()))
@@ -306,3 +306,14 @@ def test_refine_with_a_hostile_model_file_is_one_line_and_exit_12(tmp_path, caps
     assert main(["refine", "arm", problem, "--models", str(models)]) == 12
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "reach.json" in err and "unknown operator '__import__'" in err
+
+
+def test_a_fitted_number_takes_the_unit_its_place_asks_for():
+    """A distance fitted behind a pose is metres where it is subtracted from metres; metres plus radians stays
+    unknown."""
+    units = units_of(UNITS)
+    behind = ["hypot", ["sub", ["sub", "xg", "x"], ["mul", 0.942, ["cos", "h"]]], ["mul", 0.942, ["sin", "h"]]]
+    assert format_unit(unit_of(from_json(behind, PARAMS), units)) == "m"
+    assert format_unit(unit_of(from_json(["mul", 2.0, "x"], PARAMS), units)) == "m"
+    assert format_unit(unit_of(from_json(["add", "x", "h"], PARAMS), units)) == "?"
+    assert format_unit(unit_of(from_json(["add", ["mul", 2.0, "x"], "v"], PARAMS), units)) == "m/s"  # 2 in 1/s

@@ -214,32 +214,45 @@ SECONDS: Unit = (("s", Fraction(1)),)
 
 
 def unit_of(e: Expr, unit: Callable[[str], Unit]) -> Unit | None:
-    """The unit of `e` given each parameter's (None where it cannot be told, e.g. metres plus seconds)."""
+    """The unit of `e` given each parameter's (None where it cannot be told, e.g. metres plus seconds). A number
+    fitted to the data (a distance behind a pose, a limit) has the unit its place asks for: a term scaled by one
+    takes the unit of what it is added to, compared with or measured beside."""
+    found = _unit_of(e, unit)
+    return None if found is None else found[0]
+
+
+def _unit_of(e: Expr, unit: Callable[[str], Unit]) -> tuple[Unit, bool] | None:
+    """(unit, free): `free` where a number's unknown unit scales the value, so that a sum may supply one."""
     if e.op == "param":
-        return unit(e.name)
+        return unit(e.name), False
     if e.op == "const":
-        return ()
-    args = [unit_of(a, unit) for a in e.args]
+        return (), True
     if e.op in ("atan2", "wrap"):
-        return RADIANS
+        return RADIANS, False
     if e.op in ("sgn", "sin", "cos"):
-        return ()
+        return (), False
     if e.op == "transfer":
-        return SECONDS
+        return SECONDS, False
+    args = [_unit_of(a, unit) for a in e.args]
     if any(a is None for a in args):
         return None
     if e.op in ("add", "sub", "min", "max", "hypot", "dubins", "dubins_arcs"):  # (dubins: of its dx and dy)
-        return args[0] if dict(args[0]) == dict(args[1]) else None
+        (a, free_a), (b, free_b) = args[0], args[1]
+        if dict(a) == dict(b):
+            return a, free_a and free_b
+        if free_a or free_b:
+            return (b, False) if free_a and not free_b else (a, False) if free_b and not free_a else None
+        return None
     if e.op in ("neg", "abs"):
         return args[0]
     if e.op == "mul":
-        return _combine(args[0], args[1], 1)
+        return _combine(args[0][0], args[1][0], 1), args[0][1] or args[1][1]
     if e.op == "div":
-        return _combine(args[0], args[1], -1)
+        return _combine(args[0][0], args[1][0], -1), args[0][1] or args[1][1]
     if e.op == "sqrt":
-        return _scale(args[0], Fraction(1, 2))
+        return _scale(args[0][0], Fraction(1, 2)), args[0][1]
     if e.op == "square":
-        return _scale(args[0], Fraction(2))
+        return _scale(args[0][0], Fraction(2)), args[0][1]
     return None
 
 
