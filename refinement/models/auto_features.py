@@ -32,7 +32,7 @@ from fractions import Fraction
 import numpy as np
 from scipy.optimize import minimize
 
-from tailor.refinement.models.auto_paths import fit_curvature, path_expressions
+from tailor.refinement.models.auto_paths import fit_curvature, line_error, path_expressions
 from tailor.refinement.models.expression_maths import evaluate, transfer
 from tailor.refinement.models.model_tree import ModelTree
 from tailor.refinement.models.expressions import (CONSTANT_ARGUMENTS, MAX_DEPTH, MAX_NODES, Expr, const, node, param,
@@ -346,8 +346,7 @@ def _composed(ps: list[Parameter], spec: ActionSpec, params: np.ndarray, duratio
                     points.append(_frame_point(mine, u, w))
                 dist = node("hypot", node("sub", points[1][0], points[0][0]), node("sub", points[1][1], points[0][1]))
                 d = _evaluate(dist, columns)
-                A = np.column_stack([d, np.ones_like(d)])
-                error = float(np.mean(np.abs(A @ np.linalg.lstsq(A, durations, rcond=None)[0] - durations)))
+                error = line_error([d], durations)
                 if best is None or error < best[0]:
                     best = (error, points)
     (start, goal) = best[1]
@@ -422,9 +421,7 @@ def _discover(ds, v0s, vgs, durations) -> tuple[float, float]:
         t = np.max([transfer(d, a, b, vmax, amax) for d, a, b in zip(ds, v0s, vgs)], axis=0)
         if not np.all(np.isfinite(t)):
             return np.inf
-        A = np.column_stack([t, np.ones_like(t)])
-        coef = np.linalg.lstsq(A, durations, rcond=None)[0]
-        return float(np.mean(np.abs(A @ coef - durations)))
+        return line_error([t], durations)
 
     best = min(((error(scale_v * fv, scale_a * fa), scale_v * fv, scale_a * fa)
                 for fv in (0.5, 0.7, 0.85, 1.0, 1.15, 1.3, 1.6) for fa in (0.25, 0.5, 0.7, 1.0, 1.4, 2.0, 2.8, 4.0)))

@@ -55,7 +55,8 @@ def _ends(dx, dy, heading, goal_heading, start_back: float, goal_back: float) ->
     return start, goal
 
 
-def _line_error(columns: list[np.ndarray], durations: np.ndarray) -> float:
+def line_error(columns: list[np.ndarray], durations: np.ndarray) -> float:
+    """Mean absolute error of the least-squares line of the durations on the columns (and a constant)."""
     A = np.column_stack([*columns, np.ones_like(durations)])
     coef = np.linalg.lstsq(A, durations, rcond=None)[0]
     return float(np.mean(np.abs(A @ coef - durations)))
@@ -77,7 +78,7 @@ def fit_curvature(dx: np.ndarray, dy: np.ndarray, heading: np.ndarray, goal_head
         length, arcs = dubins.shortest(*_ends(dx, dy, heading, goal_heading, start_back, goal_back), radius)
         if not np.all(np.isfinite(length)):
             return np.inf
-        return _line_error([length, arcs], durations)
+        return line_error([length, arcs], durations)
 
     grid = [(error(typical * r, typical * a, typical * b), typical * r, typical * a, typical * b)
             for r in RADII for a in BACKS for b in BACKS]
@@ -99,7 +100,7 @@ def fit_curvature(dx: np.ndarray, dy: np.ndarray, heading: np.ndarray, goal_head
     r, a, b = float(f"{r:.3g}"), short(a), short(b)
     bearing = np.arctan2(dy, dx)
     turns = [np.abs(np.mod(angle + np.pi, 2.0 * np.pi) - np.pi) for angle in (bearing - heading, goal_heading - bearing)]
-    return Curvature(r, a, b, error(r, a, b), _line_error([np.hypot(dx, dy), *turns], durations))
+    return Curvature(r, a, b, error(r, a, b), line_error([np.hypot(dx, dy), *turns], durations))
 
 
 def _back(offset: Expr, distance: float, heading: Expr, along) -> Expr:

@@ -13,8 +13,9 @@ import math
 from dataclasses import dataclass
 from operator import itemgetter
 
+from tailor.sims.dubins import WORDS  # noqa: F401  (the order every word table here follows)
+
 TWO_PI = 2.0 * math.pi
-WORDS = ("LSL", "RSR", "LSR", "RSL", "RLR", "LRL")
 _EPS = 1e-9
 _HALF_PI, _THREE_HALF_PI = 0.5 * math.pi, 1.5 * math.pi
 TANGENT_SLACK = 1.0  # (radius units)^2: a mixed word whose circles overlap this little is taken as tangent

@@ -16,17 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 from tailor.sims import intervals as I
-from tailor.sims.dubins import (
-    WordBounds,
-    _add,
-    _rows,
-    _scale,
-    _scale_by,
-    _slack,
-    _stack,
-    _sub,
-    modulo,
-)
+from tailor.sims.dubins import SIGN, WordBounds, _add, _rows, _scale, _scale_by, _slack, _stack, _sub, modulo
 from tailor.sims.soccer.dubins import TANGENT_SLACK
 from tailor.sims.soccer.pose import pose_parts
 from tailor.sims.soccer.world import BALL_POINT_OFFSET
@@ -169,9 +159,6 @@ def _within(pose: Pose, box: tuple[float, float, float, float], margin: float) -
             & (box[2] + margin <= y_lo) & (y_hi <= box[3] - margin))
 
 
-SIGNS = ((1, 0, 1), (-1, 0, -1), (1, 0, -1), (-1, 0, 1), (-1, 1, -1), (1, -1, 1))  # WORDS' turn senses
-
-
 def word_extent(start: Pose, seg_lo: np.ndarray, seg_hi: np.ndarray, words: np.ndarray, radius: float
                  ) -> tuple[I.Pair, I.Pair]:
     """Per (start box, word) pair, an outer box (x, y intervals) holding every point of the word's path from every
@@ -179,7 +166,7 @@ def word_extent(start: Pose, seg_lo: np.ndarray, seg_hi: np.ndarray, words: np.n
     and upper, m; `words` (P,) the words' indices in WORDS): per arc, its circle's centre box grown by the
     radius times the range of cos and sin over the angles it may sweep; per straight, its ends. Every pair at
     once, the words' turn senses per pair (a straight's arc formulas run too and are not taken)."""
-    sign = np.array(SIGNS, dtype=float)[words]  # (P, 3)
+    sign = SIGN[words]  # (P, 3): the words' turn senses
     x, y, h = start
     x_ext, y_ext = x, y
     s, c = I.sin_cos(*h)
