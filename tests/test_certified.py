@@ -107,6 +107,35 @@ def narrow_dip() -> Objective:
     return Objective((FreeParameter("p.phi", -np.pi, np.pi),), (term,))
 
 
+def inner_slot() -> Objective:
+    """One free value x in [-1, 1] with a neighbourhood of radius 0.1 (stencil 0, +-0.05, +-0.1): the tree predicts
+    1 + |x|, but 3 s on the slot (0.0375, 0.0625], which near x = 0 only the stencil's inner offset +0.05 meets.
+    The worst case's minimum is 1.1125 at x = -0.0125 and 0.0125; over the point and the stencil's ends alone it
+    would be 1.1 at x = 0, 1.1% lower."""
+    maps = [FeatureMap("affine", 0, 1.0, 0.0)]  # the feature is x itself
+    tree = RuleModel([rule([-INF], [0.0], [-1.0], 1.0), rule([0.0], [0.0375], [1.0], 1.0),
+                      rule([0.0375], [0.0625], [0.0], 3.0), rule([0.0625], [INF], [1.0], 1.0)])
+    term = Term(tree, feature_function(maps), label="slot", feature_bounds=feature_bounds(maps), reads=(0,))
+    return Objective((FreeParameter("p.x", -1.0, 1.0),), (term,), neighbourhood=(0.1,))
+
+
+def test_the_inner_offsets_of_the_stencil_bound_a_narrow_box():
+    """Where the worst case at the optimum lies at an inner offset of the stencil, the bound over the point and
+    the ends stays 1.1% below it however small the boxes: the inner offsets close the gap."""
+    objective = inner_slot()
+    assert sorted(objective.offsets[:, 0]) == pytest.approx([-0.1, -0.05, 0.0, 0.05, 0.1])
+    result = certified.minimize(objective, budget=4000)
+    assert 1.1125 - SLACK <= result.cost <= 1.1125 * (1 + certified.TOLERANCE)
+    assert 0.0125 <= abs(result.values[0]) <= 0.0125 + 1.1125 * certified.TOLERANCE  # (slope 1 s per unit)
+    assert result.gap <= certified.tolerance_of(result.cost) and bound_holds(result, objective)
+
+
+def test_without_the_inner_offsets_that_gap_does_not_close(monkeypatch):
+    monkeypatch.setattr(certified, "INNER_WIDTH", 0.0)
+    result = certified.minimize(inner_slot(), budget=4000)
+    assert result.gap > 0.01 and "budget of 4000 boxes spent" in result.note
+
+
 def test_a_constructed_tree_whose_optimum_the_ga_misses_and_the_certified_optimizer_finds():
     objective = narrow_dip()
     ga = optimize(objective, "ga", seed=0)

@@ -40,12 +40,13 @@ from tailor.refinement.optimizers.intervals import Candidates, LeafTable
 from tailor.refinement.optimizers.objective import Objective, OptimizationResult
 from tailor.refinement.optimizers.structure import NotApplicable
 
-TOLERANCE = 5e-4  # the gap allowed, as a share of the best cost ...
+TOLERANCE = 1e-3  # the gap allowed: the best cost at most this share above the lower bound (so above any choice) ...
 ABSOLUTE_TOLERANCE = 1e-6  # ... and in the objective's unit (s) where the cost is near 0
 BUDGET = 200_000  # boxes bounded at most by a call of `minimize` (the `certified` optimizer)
 BATCH = 64  # boxes split per step (while fewer are open, each wide one more than once, to as many pieces)
 STRONG_WIDTH = 1 / 8  # boxes narrower than this share of every range are split where it helps most
 ACTIVE_WIDTH = 2.0  # a neighbourhood's offset along a free parameter bounds boxes at most this many radii wide
+INNER_WIDTH = 0.5  # ... and an inner offset of the stencil (less than a radius) boxes at most this many
 POINT_CHECKS = (0.5, 0.25, 0.8)  # where along the diagonal of the ranges an enclosure is checked at a point
 POINT_TOLERANCE = 1e-6  # relative: how wide an enclosure of a single point may be
 TIE = 1e-9  # relative: bounds of halves this close count as equal (the widest parameter is split then)
@@ -121,16 +122,10 @@ class _Search:
                        else np.zeros(len(self.low)))
         self.offsets = objective.offsets if any(objective.neighbourhood) else np.zeros((1, len(self.low)))
         self.column = np.abs(self.offsets).argmax(axis=1)  # the free parameter each offset moves (row 0: none)
-        # the offsets a box is bounded over: the point and the stencil's ends (a subset of the stencil's rows
-        # bounds its worst case from below as well; the inner rows seldom raise it and cost as much)
+        # the stencil's inner rows (between the point and its ends): they bound a box only once it is at most
+        # INNER_WIDTH radii wide along them (see evaluate)
         extent = np.abs(self.offsets[np.arange(len(self.offsets)), self.column])
-        self.bounding = (np.arange(len(self.offsets)) == 0) | (extent >= self.radius[self.column])
-        self.rows_of = []  # per term: the stencil rows it is bounded over, and each stencil row's among them
-        for term in terms:
-            use = term.use[self.bounding[term.use]]
-            where = np.zeros(len(self.offsets), dtype=int)
-            where[use] = np.arange(len(use))
-            self.rows_of.append((use, np.where(self.bounding, where[term.use][term.position], 0)))
+        self.inner = (np.arange(len(self.offsets)) > 0) & (extent < self.radius[self.column])
         self.lo = np.empty((1024, len(self.low)))
         self.hi = np.empty((1024, len(self.low)))
         self.bound = np.empty(1024)
@@ -141,10 +136,11 @@ class _Search:
         self.widths: list[np.ndarray] = []  # per term: its features' enclosure widths over the whole range
         self.spread = np.empty(0)  # of the last boxes evaluated: their enclosures' widths, summed relative
 
-    def evaluate(self, lo: np.ndarray, hi: np.ndarray, parents: list[list[np.ndarray]] | None
+    def evaluate(self, lo: np.ndarray, hi: np.ndarray, parents: list[list[np.ndarray]] | None, cap: float = np.inf
                  ) -> tuple[np.ndarray, np.ndarray, list[list[np.ndarray]]]:
         """Bounds of the boxes [lo, hi] (k, n), whether each may hold a valid choice, and the leaves each may
-        meet per term (`parents`: per term, the leaves of each box's parent; None: every leaf)."""
+        meet per term (`parents`: per term, the leaves of each box's parent; None: every leaf). A box bounded at
+        `cap` or above is closed whatever its validity: it counts as possible, unchecked."""
         k = len(lo)
         if k == 0:
             return np.empty(0), np.empty(0, dtype=bool), [[] for _ in self.terms]
@@ -158,12 +154,15 @@ class _Search:
         if self.radius.any():
             column = self.column[1:]
             active[1:] = (hi - lo)[:, column].T <= ACTIVE_WIDTH * self.radius[column][:, None]
-            active &= self.bounding[:, None]
+            # an inner row, once the box is narrower than its spacing: where the worst case over the neighbourhood
+            # lies at an inner row, the ends alone bound it below that, and the gap at the optimum never closes
+            inner = (hi - lo)[:, column].T <= INNER_WIDTH * self.radius[column][:, None]
+            active[1:] &= ~self.inner[1:, None] | inner
         spread = np.zeros(k)
         possible = np.ones(k, dtype=bool)
         leaves = []
         for t, term in enumerate(self.terms):
-            use, position = self.rows_of[t]
+            use, position = term.use, term.position
             if parents is None:
                 pairs = Candidates.every(term.table, k)
             else:
@@ -202,11 +201,16 @@ class _Search:
             value = intervals.minimum(term.table, moved, f_lo, f_hi, u * k).reshape(u, k)
             with np.errstate(invalid="ignore"):  # (an inactive offset's +inf beside another term's -inf)
                 total += value[position]
-            if term.region is not None:
-                possible &= self.may_succeed(term, lo, hi)
         self.spread = spread
         bound = np.where(active, total, -np.inf).max(axis=0)
-        return np.where(np.isnan(bound), -np.inf, bound), possible, leaves  # (NaN: no bound)
+        bound = np.where(np.isnan(bound), -np.inf, bound)  # (NaN: no bound)
+        check = np.flatnonzero(bound < cap)
+        for term in self.terms:
+            if term.region is not None and len(check):
+                ok = self.may_succeed(term, lo[check], hi[check])
+                possible[check[~ok]] = False
+                check = check[ok]
+        return bound, possible, leaves
 
     def may_succeed(self, term: _Bounded, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """(k,) bool: whether the box may hold a choice the term's success classifier finds valid: its region
@@ -243,10 +247,13 @@ class _Search:
         for b, row in zip(bound.tolist(), rows.tolist()):
             heapq.heappush(self.heap, (b, row))
 
-    def take(self, count: int) -> np.ndarray:
-        """The rows of the `count` open boxes with the lowest bounds, closed: their leaves are handed over."""
-        rows = np.array([heapq.heappop(self.heap)[1] for _ in range(min(count, len(self.heap)))], dtype=int)
-        return rows
+    def take(self, count: int, below: float = np.inf) -> np.ndarray:
+        """The rows of the `count` open boxes with the lowest bounds, closed: their leaves are handed over. Only
+        boxes bounded below `below` (a box bounded there or above holds nothing better: it is left)."""
+        rows = []
+        while self.heap and len(rows) < count and self.heap[0][0] < below:
+            rows.append(heapq.heappop(self.heap)[1])
+        return np.array(rows, dtype=int)
 
     def leaves_of(self, rows: np.ndarray) -> list[list[np.ndarray]]:
         out = []
@@ -272,7 +279,8 @@ def _halves(lo: np.ndarray, hi: np.ndarray, axis: np.ndarray) -> tuple[np.ndarra
     return np.concatenate([lo, right_lo]), np.concatenate([left_hi, hi])
 
 
-def _split(search: _Search, lo, hi, parent_bound, parent_leaves, cap: float, levels: int = 1):
+def _split(search: _Search, lo, hi, parent_bound, parent_leaves, cap: float, levels: int = 1,
+           close_at: float = np.inf):
     """Each box halved, bounded and checked (the lower halves, then the upper ones): along its widest free
     parameter (relative to its range) while it is wider than STRONG_WIDTH of it, else along the parameter
     whose halves gain most bound over it, up to `cap` (strong branching: a jump of a feature, whose enclosure
@@ -299,7 +307,8 @@ def _split(search: _Search, lo, hi, parent_bound, parent_leaves, cap: float, lev
     p = len(c_lo)  # both bounded in one call (a call of the enclosures costs more than its rows)
     bound, possible, leaves = search.evaluate(
         np.concatenate([c_lo, s_lo]), np.concatenate([c_hi, s_hi]),
-        [[part[r] for r in half] + [part[r] for r in rows for _ in range(n)] * 2 for part in parent_leaves])
+        [[part[r] for r in half] + [part[r] for r in rows for _ in range(n)] * 2 for part in parent_leaves],
+        close_at)
     if m:
         s_bound, s_possible, s_spread = bound[p:], possible[p:], search.spread[p:]
         s_leaves = [part[p:] for part in leaves]
@@ -333,8 +342,10 @@ def _enclosure(bounds, lo, hi) -> tuple[np.ndarray, np.ndarray]:
 
 
 def tolerance_of(cost: float, tolerance: float = TOLERANCE) -> float:
-    """The gap (s) within which a choice of cost `cost` counts as certified."""
-    return max(ABSOLUTE_TOLERANCE, tolerance * abs(cost))
+    """The gap allowed below a best cost `cost`: cost - lower <= it where cost <= (1 + tolerance) lower (for
+    durations, positive), so that the choice is never more than `tolerance` above the optimum nor any other
+    optimizer's choice; at least ABSOLUTE_TOLERANCE."""
+    return max(ABSOLUTE_TOLERANCE, tolerance * abs(cost) / (1.0 + tolerance))
 
 
 def minimize(objective: Objective, seed: int = 0, budget: int = BUDGET, tolerance: float = TOLERANCE,
@@ -418,12 +429,13 @@ def minimize(objective: Objective, seed: int = 0, budget: int = BUDGET, toleranc
         hopeless = beyond_prospect(best_cost - lowest)
         if hopeless:
             break
-        slots = search.take(BATCH)
+        slots = search.take(BATCH, best_cost - tol() if np.isfinite(best_cost) else np.inf)
         lo, hi, parent_bound = search.lo[slots], search.hi[slots], search.bound[slots]
         parent_leaves = search.leaves_of(slots)
         levels = int(np.log2(BATCH // len(slots)))  # few boxes open (at first): each halved more than once
         c_lo, c_hi, bound, possible, leaves = _split(search, lo, hi, parent_bound, parent_leaves,
-                                                      best_cost if np.isfinite(best_cost) else np.inf, max(1, levels))
+                                                      best_cost if np.isfinite(best_cost) else np.inf, max(1, levels),
+                                                      best_cost - tol() if np.isfinite(best_cost) else np.inf)
         # a half bounded within the tolerance of the best so far holds nothing worth evaluating
         promising = possible & (bound < best_cost - tol()) if np.isfinite(best_cost) else possible
         if search.boxes > WIDE:  # once narrowed, where the bounds are lowest (and every single point: dropped below)

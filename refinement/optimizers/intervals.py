@@ -110,17 +110,18 @@ def minimum(table: LeafTable, pairs: Candidates, low: np.ndarray, high: np.ndarr
         out[np.isnan(low).any(axis=1) | np.isnan(high).any(axis=1)] = -np.inf
     for s in range(0, len(pairs.box), PAIRS_PER_CHUNK):
         b, k = pairs.box[s:s + PAIRS_PER_CHUNK], pairs.leaf[s:s + PAIRS_PER_CHUNK]
+        inside = np.all((low[b] <= table.upper[k]) & (high[b] > table.lower[k]), axis=1)
+        b, k = b[inside], k[inside]  # (the leaves a box's enclosure meets: often few of those it may meet)
         a, z = low[b], high[b]
         lower, upper, coef = table.lower[k], table.upper[k], table.coef[k]
-        inside = np.all((a <= upper) & (z > lower), axis=1)
         # the linear model's minimum over the closure of the intersection: the corner its gradient points from
         with np.errstate(invalid="ignore", over="ignore"):
             corner = np.where(coef > 0, np.maximum(a, lower), np.minimum(z, upper))
             terms = np.where(coef != 0, coef * corner, 0.0)
             value = table.intercept[k] + terms.sum(axis=1)
             value -= ROUNDING * (1.0 + np.abs(table.intercept[k]) + np.abs(terms).sum(axis=1))
-        value = np.where(np.isnan(value), -np.inf, value)[inside]
-        box = b[inside]
+        value = np.where(np.isnan(value), -np.inf, value)
+        box = b
         if len(box):  # pairs come sorted by box: one minimum per run of a box
             first = np.flatnonzero(np.concatenate([[True], box[1:] != box[:-1]]))
             out[box[first]] = np.minimum(out[box[first]], np.minimum.reduceat(value, first))
