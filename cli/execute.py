@@ -31,8 +31,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "re-refinement or replanning (the first failure ends the run)")
     parser.add_argument("--replans", type=whole_number(0), default=2, metavar="N",
                         help="plan again after a failure at most N times (default 2)")
-    parser.add_argument("--learn", action="store_true", help="recalibrate the duration models on the executed "
-                        "actions as they come (with --log: on the executions logged before, too)")
+    parser.add_argument("--learn", action="store_true", help="recalibrate the duration models and success "
+                        "classifiers on the executed actions as they come (with --log: on the executions logged "
+                        "before, too)")
     parser.add_argument("--learn-every", type=whole_number(1), default=5, metavar="K",
                         help="with --learn: recalibrate after every K executed actions (default 5)")
     parser.add_argument("--log", metavar="DIR", help="keep every executed action in DIR/<action>.csv (the "

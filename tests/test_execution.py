@@ -351,3 +351,57 @@ def test_execute_takes_the_objective_and_limits_as_refine_does(capsys):
         assert main(["execute", "soccer", "score", *extra]) == 2
         errors = [line for line in capsys.readouterr().err.splitlines() if "error:" in line]
         assert len(errors) == 1 and message in errors[0]
+
+
+def _collision_model():
+    from tailor.planner_bridge import resolve_domain_dir
+    from tailor.refinement.models.action_models import CollisionModel
+
+    path = resolve_domain_dir("soccer") / "models" / "goToPose.collision.json"
+    return CollisionModel.from_json(json.loads(path.read_text(encoding="utf-8")), str(path))
+
+
+def _in_one_success_leaf(model, count=6, seed=0):
+    """`count` goToPose parameter rows that reach one leaf the classifier predicts success in, and that leaf."""
+    rng = np.random.default_rng(seed)
+    n = 4000
+    params = np.column_stack([rng.uniform(-2, 2, n), rng.uniform(-2, 2, n), rng.uniform(-np.pi, np.pi, n),
+                              np.zeros(n), rng.uniform(-2, 2, n), rng.uniform(-2, 2, n),
+                              rng.uniform(-np.pi, np.pi, n), rng.uniform(0, 0.3, n)])
+    leaves = model.leaf(params)
+    ok = model.predict_success(params)
+    leaf = np.bincount(leaves[ok]).argmax()  # the success leaf most samples reach
+    return params[leaves == leaf][:count], leaf
+
+
+def _collisions(params, outcome="collision"):
+    return [Episode("goToPose", p, np.zeros(1), np.zeros((1, 1)), ("t",), outcome, 3.0, k)
+            for k, p in enumerate(params)]
+
+
+def test_a_success_classifier_learns_in_operation_where_the_robot_now_collides():
+    """Approaches that collide in a leaf predicted to succeed: after recalibration the classifier predicts failure
+    there (and only there); failures it never learned (a disturbance's ball_moved) change nothing; without
+    recalibration (every larger than the executions) nothing changes either."""
+    model = _collision_model()
+    params, leaf = _in_one_success_leaf(model)
+    assert model.predict_success(params).all()
+    for outcome, every, expect in (("collision", 2, False), ("ball_moved", 2, True), ("collision", 1000, True)):
+        learner = OnlineLearner(registry.get("soccer"), every=every)
+        guards = learner.adapted_success({"goToPose.collision": model})
+        for episode in _collisions(params, outcome):
+            learner.record(episode)
+            guards = learner.adapted_success(guards)
+        adapted = guards["goToPose.collision"]
+        assert bool(adapted.predict_success(params).any()) is expect, (outcome, every)
+        elsewhere, _ = _in_one_success_leaf(model, 50, seed=1)
+        elsewhere = elsewhere[model.leaf(elsewhere) != leaf]
+        assert np.array_equal(adapted.predict_success(elsewhere), model.predict_success(elsewhere))
+    assert adapted.tree.samples[leaf] == model.tree.samples[leaf]  # (switched off: nothing counted)
+    learner = OnlineLearner(registry.get("soccer"), every=1)
+    guards = learner.adapted_success({"goToPose.collision": model})
+    for episode in _collisions(params):
+        learner.record(episode)
+    adapted = learner.adapted_success(guards)["goToPose.collision"]
+    assert adapted.tree.failures[leaf] == model.tree.failures[leaf] + len(params)
+    assert adapted.report["recalibrated"]["leaves_changed"] == 1

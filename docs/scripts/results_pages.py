@@ -150,6 +150,15 @@ def _evaluation(domain: str, name: str, e: dict) -> list[str]:
                      f"(greedy / optimum {_num(e['greedy_oracle_ratio'], 3)})"])
     rows.append(["optimizer time per window (median, wall clock on the machine that ran it)",
                  f"{_num(e['window_ms_median'], 0)} ms; all windows {_pct(e['optimizer_share'])} of the execution time"])
+    if e.get("optimizer_wait_share") is not None:
+        rows.append(["execution waits for the optimizer (each window refined while the action before it executes)",
+                     f"{_pct(e['optimizer_wait_share'], 2)} of the execution time"])
+    for method, o in sorted((e.get("optimizers") or {}).items()):
+        versus = o.get("vs_ga")
+        rows.append([f"windows taken by `{method}`",
+                     f"{o['windows']} ({_pct(o['share'])}), median {_num(o['median_ms'], 0)} ms"
+                     + (f"; against the GA on the same windows: at most {_pct(versus['above_ga_max'], 3)} above it, "
+                        f"below it on {versus['below_ga']}" if versus else "")])
     out.append(table(["", "measured"], rows, align="ll"))
     if e.get("per_action"):
         out += ["\nPer action (Table 5.2), mean duration in seconds:\n",

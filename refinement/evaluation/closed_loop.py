@@ -138,6 +138,7 @@ class _Frozen(OnlineLearner):
 def _frozen(learner: OnlineLearner) -> OnlineLearner:
     frozen = _Frozen(learner.entry, learner.every)
     frozen._trained, frozen._adapted = learner._trained, learner._adapted
+    frozen._trained_guards, frozen._adapted_guards = learner._trained_guards, learner._adapted_guards
     return frozen
 
 

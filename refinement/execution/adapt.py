@@ -11,6 +11,13 @@ leaf's own affine map instead of its shift fitted the executions as well but ref
 few executions tilted.) The
 result is again a model tree over the same features, so every optimizer (analytic, certified, genetic) refines
 with it as with the trained one; it predicts the trained model until executions say otherwise.
+
+The success classifiers (Sec. 4.2.2) are recalibrated alike: the tree's splits kept, the executions that reached a
+leaf counted into it (beside its training episodes, weighed as at most TRAINED_WEIGHT executions: the robot may
+have changed), and the leaf's verdict taken again by the classifier's own rule (its failures weighed by its class
+weight against its successes) where at least MIN_LEAF_EXECUTIONS executions reached it. An execution counts as a
+failure only with an outcome the classifier learned (its report's `outcomes`, e.g. "collision"): a disturbance's
+failure says nothing about the region.
 """
 
 from __future__ import annotations
@@ -21,13 +28,15 @@ from dataclasses import replace
 
 import numpy as np
 
-from tailor.refinement.models.action_models import ActionModel
+from tailor.refinement.models.action_models import ActionModel, CollisionModel
 from tailor.sims.episode import Episode
 from tailor.sims.protocol import SimulatorEntry
 
 MIN_EXECUTIONS = 5  # successful executions of an action before its model is recalibrated
 PRIOR = 3.0  # executions' worth of belief in the trained model (a = 1, b = 0)
 LEAF_PRIOR = 2.0  # executions' worth of belief in no per-leaf shift
+MIN_LEAF_EXECUTIONS = 3  # executions reaching a classifier's leaf before they can change its verdict
+TRAINED_WEIGHT = 20.0  # at most this many executions' worth of a classifier leaf's training episodes
 
 
 class OnlineLearner:
@@ -45,6 +54,8 @@ class OnlineLearner:
         self.refits = 0
         self._trained: dict[str, ActionModel] = {}  # the models as trained, per action
         self._adapted: dict[str, ActionModel] = {}
+        self._trained_guards: dict[str, CollisionModel] = {}  # the success classifiers as trained, per name
+        self._adapted_guards: dict[str, CollisionModel] = {}
 
     def record(self, episode: Episode, predicted: float | None = None) -> None:
         """One executed action; every `every` of them the models are recalibrated."""
@@ -75,6 +86,20 @@ class OnlineLearner:
             out[action] = self._adapted.get(action, model)
         return out
 
+    def adapted_success(self, success_models: Mapping[str, object]) -> dict[str, object]:
+        """`success_models` with each success classifier recalibrated on the executions of its action where there
+        are any (the first classifier seen under a name is the trained one; other kinds of guard pass as given)."""
+        out = {}
+        for name, model in success_models.items():
+            if not isinstance(model, CollisionModel):
+                out[name] = model
+                continue
+            if name not in self._trained_guards and model is not self._adapted_guards.get(name):
+                self._trained_guards[name] = model
+                self._refit_guard(name)
+            out[name] = self._adapted_guards.get(name, model)
+        return out
+
     def mean_error(self) -> float | None:
         """Mean absolute error (s) of the predictions made before each executed action ran (prequential)."""
         if not self.errors:
@@ -85,7 +110,16 @@ class OnlineLearner:
         for action in self.episodes:
             if action in self._trained:
                 self._refit_action(action)
+        for name in self._trained_guards:
+            self._refit_guard(name)
         self.refits += 1
+
+    def _refit_guard(self, name: str) -> None:
+        trained = self._trained_guards[name]
+        executed = self.episodes.get(trained.action, [])
+        if not executed:
+            return
+        self._adapted_guards[name] = recalibrated_classifier(trained, executed)
 
     def _refit_action(self, action: str) -> None:
         used = [e for e in self.episodes.get(action, []) if e.succeeded]
@@ -117,3 +151,30 @@ def recalibrated(model: ActionModel, params: np.ndarray, durations: np.ndarray) 
     tree._set_tree(replace(arrays, coef=arrays.coef * a, intercept=arrays.intercept * a + b + shift))
     report = {**model.report, "recalibrated": {"executions": int(n), "scale": float(a), "offset": float(b)}}
     return replace(model, duration=tree, report=report)
+
+
+def recalibrated_classifier(model: CollisionModel, episodes) -> CollisionModel:
+    """`model` with the executions `episodes` (of its action) counted into the leaves they reached and those
+    leaves' verdicts taken again (see the module's docstring); the same splits and features."""
+    learned = (model.report or {}).get("outcomes")
+    failing = None if not isinstance(learned, dict) else {o for o in learned if o != "success"}
+    kept = [e for e in episodes if e.succeeded or failing is None or e.outcome in failing]
+    tree = model.tree
+    if not kept or tree.failures is None:  # (no counts to weigh the executions against: kept as trained)
+        return model
+    failed = np.array([not e.succeeded for e in kept])
+    leaves = model.leaf(np.array([e.params for e in kept], dtype=float))
+    nodes = len(tree.children_left)
+    runs = np.bincount(leaves, minlength=nodes)
+    fails = np.bincount(leaves, weights=failed, minlength=nodes)
+    weight = float((model.report or {}).get("class_weight_fail", 1.0))
+    success = tree.success.copy()
+    for leaf in np.flatnonzero(runs >= MIN_LEAF_EXECUTIONS):
+        share = min(1.0, TRAINED_WEIGHT / tree.samples[leaf]) if tree.samples[leaf] else 0.0
+        n = tree.samples[leaf] * share + runs[leaf]
+        f = tree.failures[leaf] * share + fails[leaf]
+        success[leaf] = weight * f <= n - f  # the classifier's rule: failures weighed against successes
+    counted = tree.counted_more(leaves, failed)
+    report = {**model.report, "recalibrated": {"executions": len(kept), "failed": int(failed.sum()),
+                                               "leaves_changed": int(np.sum(success != tree.success))}}
+    return replace(model, tree=replace(counted, success=success), report=report)

@@ -191,6 +191,7 @@ class ClosedLoop:
                 self.learner.extend(read_executions(self.log, self.entry, tuple(self.entry.actions)))
         if self.learner is not None:
             self.models = self.learner.adapted(self.models)
+            self.success_models = self.learner.adapted_success(self.success_models)
         self.initial_refined = refined
         self._effects: StepEffects | None = None
         self.values = {obj: dict(q) for obj, q in self.inputs.belief.objects.items()}  # the belief, as it goes
@@ -267,6 +268,7 @@ class ClosedLoop:
             if self.learner is not None:
                 self.learner.record(episode, predicted)
                 self.models = self.learner.adapted(self.models)
+                self.success_models = self.learner.adapted_success(self.success_models)
             self._remember(action, choices)
             yield Event("executed", step=action.step, pddl=action.pddl, action=action.action, goal=call.goal,
                         predicted=predicted, measured=executed.duration, outcome=executed.outcome,
@@ -512,6 +514,8 @@ class ClosedLoop:
         models.update({k: v for k, v in self.models.items() if k in models})
         self.models = models
         self.success_models.update(prepared.success_models)
+        if self.learner is not None:
+            self.success_models = self.learner.adapted_success(self.success_models)
         new_sequence = prepared.sequence
         if not new_sequence.actions:
             return new_plan, new_sequence, {}, frozenset(facts)

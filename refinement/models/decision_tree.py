@@ -121,6 +121,19 @@ class DecisionTree(_Routed):
                     counts[node] = counts[self.children_left[node]] + counts[self.children_right[node]]
         return replace(self, samples=samples, failures=failures)
 
+    def counted_more(self, leaves: np.ndarray, failed: np.ndarray) -> DecisionTree:
+        """The same tree with rows that reached `leaves` (n,) counted into `samples` and `failures` too (`failed`
+        (n,) marking those that failed), every node on their way included."""
+        n = len(self.children_left)
+        samples = self.samples + np.bincount(leaves, minlength=n).astype(np.int64)
+        failures = (self.failures if self.failures is not None else np.zeros(n, np.int64)) + np.bincount(
+            leaves, weights=np.asarray(failed, dtype=bool), minlength=n).astype(np.int64)
+        for node in reversed(preorder(self.children_left, self.children_right)):  # inner nodes: sum of children
+            if self.children_left[node] != LEAF:
+                for counts in (samples, failures):
+                    counts[node] = counts[self.children_left[node]] + counts[self.children_right[node]]
+        return replace(self, samples=samples, failures=failures)
+
     def failure_probability(self, nodes: np.ndarray) -> np.ndarray | None:
         """The Laplace estimate (failed + 1) / (samples + 2) of failing at each of `nodes` from the training episodes
         that reached it (None where the failures were not recorded)."""
