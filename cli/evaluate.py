@@ -72,6 +72,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--reference-episodes", type=whole_number(0, MAX_EPISODES), default=0, metavar="N",
                         help="with --learning-curve: also train models from scratch on N episodes of the variant "
                              "per experience scenario and compare their error (default 0: not)")
+    parser.add_argument("--heldout-tasks", type=whole_number(0, MAX_EPISODES), default=50, metavar="N",
+                        help="with --reference-episodes: also compare refined vs greedy on N fresh tasks after the "
+                             "stream, every model frozen (default 50; 0: not)")
     parser.add_argument("--disturb", metavar="NAME", default=None,
                         help="with --closed-loop: a seeded disturbance of the simulated world in every run "
                              "(see `tailor domains`)")
@@ -306,8 +309,8 @@ def _evaluate(args: argparse.Namespace) -> int:
         plan = replace(plan, comparison=args.situations, horizons=args.situations)
     planned: dict = {}  # each problem the situations need, planned once
 
-    def situations(generator: str, count: int) -> list:
-        seeds = [(index, situation_seed(args.seed, index)) for index in range(count)]
+    def situations(generator: str, count: int, start: int = 0) -> list:
+        seeds = [(index, situation_seed(args.seed, index)) for index in range(start, start + count)]
         return draw_situations(domain_dir, binding, generator, seeds, args.seed, planned, source.path)
 
     items = situations(plan.comparison, args.episodes)
@@ -320,8 +323,10 @@ def _evaluate(args: argparse.Namespace) -> int:
 
         if args.closed_loop and args.learning_curve:
             raise UsageError("--closed-loop and --learning-curve are two experiments: give one")
-        run_experiment = run_closed_loop if args.closed_loop else run_learning_curve
-        return run_experiment(args, domain_dir, binding, plan, source.path, items)
+        if args.closed_loop:
+            return run_closed_loop(args, domain_dir, binding, plan, source.path, items)
+        return run_learning_curve(args, domain_dir, binding, plan, source.path, items,
+                                  fresh=lambda count: situations(plan.comparison, count, args.episodes))
     if args.disturb is not None or args.variant is not None:
         raise UsageError("--disturb belongs to --closed-loop, --variant to --learning-curve")
     use_filter = binding.refinement.filter if args.filter is None else args.filter

@@ -67,17 +67,22 @@ def run_closed_loop(args: argparse.Namespace, domain_dir, binding, plan, models_
     return 0
 
 
-def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, models_dir, items) -> int:
+def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, models_dir, items, fresh=None) -> int:
+    """The stream of --episodes tasks learning in operation; with --reference-episodes, models trained from scratch
+    on the variant compared on the stream's last CURVE_WINDOW tasks and, where `fresh(n)` draws n tasks after the
+    stream, on --heldout-tasks of them with every model frozen (the stream's last models, the scratch ones and
+    those as trained): the same tasks and seeds for all, none of them learned from."""
     from tailor.outputs import check_output_file
     from tailor.refinement.evaluation.closed_loop import learning_stream
 
     _check(args, binding)
     if args.plot:
         check_output_file(args.plot, ".png")
-    rows = learning_stream(items, args.variant, horizon=CURVE_HORIZON)
+    rows, learner = learning_stream(items, args.variant, horizon=CURVE_HORIZON)
     reference = None
     if args.reference_episodes:
-        from tailor.refinement.evaluation.closed_loop import (reference_error, reference_improvement,
+        from tailor.refinement.evaluation.closed_loop import (episodes_error, fixed_models, frozen_models,
+                                                              frozen_runs, reference_error, reference_improvement,
                                                               reference_models)
         from tailor.refinement.situations import job_models, situation_sequence
 
@@ -87,6 +92,19 @@ def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, mode
                                    args.jobs)
         reference = {"episodes": args.reference_episodes, "mae_last": reference_error(rows[-CURVE_WINDOW:], trained),
                      "improvement_last": reference_improvement(items[-CURVE_WINDOW:], args.variant, trained)}
+        if fresh is not None and args.heldout_tasks and learner is not None:
+            tasks = fresh(args.heldout_tasks)
+            sets = {"learned": frozen_models(learner, dict(models)), "reference": trained, "trained": dict(models)}
+            runs = {name: frozen_runs(tasks, args.variant, learner if name == "learned" else fixed_models(chosen),
+                                      CURVE_HORIZON) for name, chosen in sets.items()}
+            pooled = [e for _, executed in runs.values() for e in executed]  # every held-out run's actions
+            held = {"tasks": len(tasks), "executions": sum(e.succeeded for e in pooled)}
+            for name, chosen in sets.items():
+                held[f"improvement_{name}"] = runs[name][0]
+                held[f"mae_{name}"] = episodes_error(pooled, chosen)
+            held["mae_ratio"] = (held["mae_learned"] / held["mae_reference"]
+                                 if held["mae_learned"] is not None and held["mae_reference"] else None)
+            reference["heldout"] = held
     errors = [np.mean(r["relative_errors"]) if r["relative_errors"] else np.nan for r in rows]
     first = rows[:CURVE_WINDOW]
     last = rows[-CURVE_WINDOW:]
@@ -127,6 +145,15 @@ def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, mode
             f"{fmt(reference['mae_last'], ' s')} on the last {CURVE_WINDOW} tasks' actions (learning in operation "
             f"{fmt(report['mae_ratio_to_reference'])} x that); refined vs greedy with them on the last "
             f"{CURVE_WINDOW} tasks {pct(reference['improvement_last'])}\n")
+        held = reference.get("heldout")
+        if held:
+            out(f"  on {held['tasks']} held-out tasks after the stream, every model frozen: refined vs greedy "
+                f"{pct(held['improvement_learned'])} with the models learned in operation, "
+                f"{pct(held['improvement_reference'])} with those trained from scratch, "
+                f"{pct(held['improvement_trained'])} with those as trained; duration MAE on their "
+                f"{held['executions']} executed actions {fmt(held['mae_learned'], ' s')} learned in operation "
+                f"({fmt(held['mae_ratio'])} x scratch {fmt(held['mae_reference'], ' s')}; as trained "
+                f"{fmt(held['mae_trained'], ' s')})\n")
     if args.plot:
         out(f"Wrote {args.plot}\n")
     return 0

@@ -405,3 +405,30 @@ def test_a_success_classifier_learns_in_operation_where_the_robot_now_collides()
     adapted = learner.adapted_success(guards)["goToPose.collision"]
     assert adapted.tree.failures[leaf] == model.tree.failures[leaf] + len(params)
     assert adapted.report["recalibrated"]["leaves_changed"] == 1
+
+
+def test_held_out_tasks_run_with_frozen_models_and_pool_their_executions():
+    """The learning curve's held-out comparison: the stream's learner is not taught by the held-out runs, and the
+    error of a model set is taken over the executions of every held-out run (checked by hand here)."""
+    from pathlib import Path
+
+    from tailor.planner_bridge import resolve_domain_dir
+    from tailor.refinement.binding import load_domain_binding
+    from tailor.refinement.evaluation.closed_loop import episodes_error, fixed_models, frozen_runs
+    from tailor.refinement.evaluation.experiments import situation_seed
+    from tailor.refinement.situations import draw_situations, job_models, situation_sequence
+
+    domain_dir = resolve_domain_dir("arm")
+    binding = load_domain_binding(domain_dir)
+    items = draw_situations(Path(domain_dir), binding, "letters", [(i, situation_seed(0, i)) for i in range(2)], 0, {})
+    job, _, objects = items[0]
+    models = dict(job_models(job, situation_sequence(job, objects)))
+    learner = OnlineLearner(registry.get("arm"), every=1)
+    improvement, executed = frozen_runs(items, "payload", learner)
+    assert learner.count == 0 and not learner.episodes  # nothing learned from held-out runs
+    assert executed and all(e.action == "reach" for e in executed) and improvement is not None
+    ok = [e for e in executed if e.succeeded]
+    by_hand = np.mean([abs(models["reach"].predict_duration(e.params[None, :])[0] - e.duration) for e in ok])
+    assert episodes_error(executed, models) == pytest.approx(by_hand)
+    again, executed_again = frozen_runs(items, "payload", fixed_models(models))
+    assert again == pytest.approx(improvement)  # the learner held the trained models: the same runs

@@ -214,8 +214,8 @@ def _learning_curve(domain: str, name: str, e: dict) -> list[str]:
     out = [f"## Learning in operation: `{name}`\n",
            f"From `domains/{domain}/training/{name}`, the report of `{command}`: {e['tasks']} tasks executed closed "
            f"loop in turn{' on the changed robot ' + code(e['variant']) if e.get('variant') else ''}, the duration "
-           "models recalibrated on the executed actions every 5 of them. The error is each action's, predicted "
-           "before it ran.\n"]
+           "models and success classifiers recalibrated on the executed actions every 5 of them. The error is "
+           "each action's, predicted before it ran.\n"]
     rows = [["duration MAE, first 20 tasks / last 20", f"{_num(e['mae_first'], 3)} s / {_num(e['mae_last'], 3)} s"],
             ["refined vs greedy, first 20 tasks / last 20",
              f"{_pct(e['improvement_first'])} / {_pct(e['improvement_last'])}"]]
@@ -226,6 +226,16 @@ def _learning_curve(domain: str, name: str, e: dict) -> list[str]:
                      f"{_num(e.get('mae_ratio_to_reference'))} x that)"])
         rows.append(["refined vs greedy with those models, last 20 tasks",
                      _pct(e["reference"].get("improvement_last"))])
+        held = e["reference"].get("heldout")
+        if held:
+            rows.append([f"{held['tasks']} held-out tasks after the stream, every model frozen: refined vs greedy "
+                         "with the models learned in operation / trained from scratch / as trained",
+                         f"{_pct(held['improvement_learned'])} / {_pct(held['improvement_reference'])} / "
+                         f"{_pct(held['improvement_trained'])}"])
+            rows.append([f"duration MAE over the {held['executions']} actions those runs executed: learned in "
+                         "operation / from scratch / as trained",
+                         f"{_num(held['mae_learned'], 3)} s ({_num(held['mae_ratio'])} x scratch) / "
+                         f"{_num(held['mae_reference'], 3)} s / {_num(held['mae_trained'], 3)} s"])
     out.append(table(["", "measured"], rows, align="ll"))
     return out
 

@@ -20,6 +20,7 @@ from tailor.refinement.pipeline import BELIEF_ARGUMENT, Options, read_task, prep
 from tailor.refinement.refine import refine
 from tailor.refinement.evaluation.experiments import situation_seed
 from tailor.refinement.situations import Job, stream_seed
+from tailor.sims.episode import Episode
 
 _INPUTS: dict = {}  # per worker process: each problem's inputs, read once
 
@@ -90,10 +91,11 @@ def summarize_closed_loop(rows: list[dict]) -> dict:
 
 # --- learning in operation on a stream of tasks ------------------------------------------------------------
 def learning_stream(items: list[tuple[Job, int, dict]], variant: str | None, every: int = 5, horizon: int = 2
-                    ) -> list[dict]:
+                    ) -> tuple[list[dict], OnlineLearner | None]:
     """Execute the tasks in turn, closed loop, the models learning in operation (one OnlineLearner across the
     stream) on the robot `variant`; per task: the models' error on its actions before they ran (prequential),
-    the executed time, and the greedy (h = 1) time with the same models on the same seed."""
+    the executed time, and the greedy (h = 1) time with the same models on the same seed. Also the learner as
+    the stream leaves it (None without tasks)."""
     learner = None
     rows = []
     with stage_bar(len(items), "tasks learning in operation", "task") as bar:
@@ -101,7 +103,7 @@ def learning_stream(items: list[tuple[Job, int, dict]], variant: str | None, eve
             row, learner = _learning_task(job, index, objects, variant, every, horizon, learner)
             rows.append(row)
             bar.update()
-    return rows
+    return rows, learner
 
 
 def _learning_task(job: Job, index: int, objects: dict, variant: str | None, every: int, horizon: int,
@@ -178,23 +180,50 @@ def reference_improvement(items: list[tuple[Job, int, dict]], variant: str | Non
                           horizon: int = 2) -> float | None:
     """Refined vs greedy improvement on `items` executed closed loop on the robot `variant` with `models` (the
     models trained from scratch on it; no learning in operation): what learning in operation is measured against."""
+    return frozen_runs(items, variant, fixed_models(models), horizon)[0]
+
+
+def fixed_models(models: dict) -> OnlineLearner:
+    """A learner that holds `models` and learns nothing (what frozen_runs executes with)."""
     fixed = _Frozen(None, 1)
     fixed._adapted = dict(models)
+    return fixed
+
+
+def frozen_runs(items: list[tuple[Job, int, dict]], variant: str | None, learner: OnlineLearner,
+                horizon: int = 2) -> tuple[float | None, list[Episode]]:
+    """Refined vs greedy improvement on `items` executed closed loop on the robot `variant` with the models (and
+    success classifiers) `learner` holds, frozen: nothing executed here is learned from (held-out tasks); and the
+    actions both runs executed (as episodes)."""
+    fixed = learner if isinstance(learner, _Frozen) else _frozen(learner)
     times = {"refined": [], "greedy": []}
+    executed = []
     for job, index, objects in items:
         seed = situation_seed(job.seed, index)
         base = _inputs(job)
         inputs = replace(base, belief=parse_belief({"objects": objects}, BELIEF_ARGUMENT, None, base.binding.quantities))
         for name, h in (("refined", horizon), ("greedy", 1)):
-            fixed._trained = {}
             settings = ExecuteOptions(closed_loop=True, variant=variant, learn=True)
-            summary = summarize(list(ClosedLoop(inputs, Options(horizon=h, seed=seed, greedy=False), settings,
-                                                learner=fixed).events()))
-            times[name].append(summary.penalized)
+            events = list(ClosedLoop(inputs, Options(horizon=h, seed=seed, greedy=False), settings,
+                                     learner=fixed).events())
+            executed += [e.log for e in events if e.kind == "executed" and e.log is not None]
+            times[name].append(summarize(events).penalized)
     if not items:
-        return None
+        return None, executed
     greedy = float(np.mean(times["greedy"]))
-    return (greedy - float(np.mean(times["refined"]))) / greedy
+    return (greedy - float(np.mean(times["refined"]))) / greedy, executed
+
+
+def frozen_models(learner: OnlineLearner, models: dict) -> dict:
+    """The duration models `learner` holds for `models`' actions (as the stream left them), learning nothing more."""
+    return _frozen(learner).adapted(models)
+
+
+def episodes_error(episodes: list[Episode], models: dict) -> float | None:
+    """Mean absolute error (s) of `models` on the successful `episodes` of their actions."""
+    errors = [abs(float(models[e.action].predict_duration(np.asarray(e.params, dtype=float)[None, :])[0])
+                  - e.duration) for e in episodes if e.succeeded and e.action in models]
+    return float(np.mean(errors)) if errors else None
 
 
 def reference_error(rows: list[dict], models: dict) -> float | None:
@@ -209,4 +238,5 @@ def reference_error(rows: list[dict], models: dict) -> float | None:
     return float(np.mean(errors)) if errors else None
 
 
-__all__ = ["closed_loop_episode", "summarize_closed_loop", "learning_stream", "reference_models", "reference_error"]
+__all__ = ["closed_loop_episode", "summarize_closed_loop", "learning_stream", "reference_models", "reference_error",
+           "reference_improvement", "frozen_runs", "fixed_models", "frozen_models", "episodes_error"]
