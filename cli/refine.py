@@ -232,6 +232,7 @@ def _print_text(result) -> None:
             cells = []
             for key, _ in names:
                 value = next(q.value for a in outcomes[key].refined.sequence.actions for q in a.params if q.id == p.id)
+                value = round(value, 3) + 0.0  # (a value that rounds to zero prints as 0, never as -0)
                 cells.append(f"{value:.3f} ({math.degrees(value):.0f}°)" if angle else f"{value:.3f}")
             out(f"  {p.id:<16}" + "".join(f"{c:>{width}}" for c in cells) + "\n")
     simulate = all(outcomes[k].simulated is not None for k, _ in names)

@@ -38,8 +38,18 @@ def _user_folders(tmp_path_factory, monkeypatch):
 
 @pytest.hookimpl(optionalhook=True)
 def pytest_xdist_auto_num_workers(config):
-    """Benchmarks time one process on a quiet machine: a run that selects them is never spread over cores."""
-    expression = config.option.markexpr or ""
-    if "benchmark" in expression and expression.strip() != "not benchmark":
+    """Benchmarks time one process on a quiet machine: a run that selects them is never spread over cores.
+
+    Whether the -m expression selects a test marked benchmark is evaluated, not guessed from the word: the
+    default "not benchmark and not differential" (pyproject addopts) names it but excludes it, and must run on
+    every core (testing for the word alone ran the default suite in one process)."""
+    expression = (config.option.markexpr or "").strip()
+    if not expression:
+        return None
+    try:
+        from _pytest.mark.expression import Expression
+
+        selects_benchmarks = Expression.compile(expression).evaluate(lambda name, **kwargs: name == "benchmark")
+    except Exception:  # an expression (or a pytest) this cannot evaluate: the cautious answer, one process
         return 0
-    return None
+    return 0 if selects_benchmarks else None

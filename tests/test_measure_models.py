@@ -32,7 +32,7 @@ from tailor.refinement.models.action_models import (
 from tailor.refinement.models.features import compute_features, feature_names
 from tailor.refinement.models.model_tree import ModelTree
 from tailor.refinement.objective_grammar import MeasureBound, parse_objective
-from tailor.refinement.optimizers import FreeParameter, Objective, Term, brute_force, optimize
+from tailor.refinement.optimizers import FreeParameter, Objective, Term, brute_force, certified, optimize
 from tailor.refinement.optimizers.objective import Scaled, scaled
 from tailor.refinement.refine import refine
 
@@ -263,7 +263,7 @@ def test_every_optimizer_minimizes_the_weighted_sum_as_brute_force_finds(method,
     result = optimize(objective, method=method, seed=2)
     grid = brute_force(objective, 2001)
     assert grid.values[0] == pytest.approx(best_x, abs=1e-3) and grid.cost == pytest.approx(best_cost, abs=1e-3)
-    tolerance = {"analytic": 1e-6, "certified": 5e-4 * best_cost}.get(method, 0.05)  # certified: its tolerance
+    tolerance = {"analytic": 1e-6, "certified": certified.tolerance_of(best_cost)}.get(method, 0.05)  # its own
     assert result.method == method
     assert result.values[0] == pytest.approx(best_x, abs=0.02 if tolerance == 0.05 else 1e-3)
     assert result.cost == pytest.approx(best_cost, abs=tolerance)
