@@ -129,9 +129,9 @@ def _training(domain: str, report: dict) -> list[str]:
 
 def _evaluation(domain: str, name: str, e: dict) -> list[str]:
     horizons = (e.get("horizons") or {}).get("horizons") or []
-    command = (f"tailor evaluate {domain} --situations {e['comparison']} --episodes {e['scenarios']} "
-               f"--oracle-episodes {e.get('oracle_episodes', 0)} --horizon-episodes "
-               f"{(e.get('horizons') or {}).get('scenarios', 0)} --seed {e['seed']} --json")
+    command = _command(e, f"tailor evaluate {domain} --situations {e['comparison']} --episodes {e['scenarios']} "
+                          f"--oracle-episodes {e.get('oracle_episodes', 0)} --horizon-episodes "
+                          f"{(e.get('horizons') or {}).get('scenarios', 0)} --seed {e['seed']} --json")
     out = [f"## Refined against greedy: `{name}`\n",
            f"From `domains/{domain}/training/{name}`, the report of `{command}`. {e['scenarios']} random "
            f"{code(e['comparison'])} situations (problems {', '.join(e['problems'])}), each executed greedily (h = 1) "
