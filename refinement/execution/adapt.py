@@ -10,7 +10,12 @@ leaf's own affine map instead of its shift fitted the executions as well but ref
 17.9% faster than greedy on the last 20 of 200 tasks against 22.4%: the optimizer finds the leaves whose slope a
 few executions tilted.) The
 result is again a model tree over the same features, so every optimizer (analytic, certified, genetic) refines
-with it as with the trained one; it predicts the trained model until executions say otherwise.
+with it as with the trained one; it predicts the trained model until executions say otherwise. Where a robot has
+changed in a way no such map follows, the executions say more than the trained tree: from RETRAIN_FROM successful
+executions of an action on (and every RETRAIN_EVERY more), a tree trained on them alone (the trained model's
+features, the training protocol) competes with the trained tree, both fitted on all but the most recent
+RECENT_SHARE of them and recalibrated there; the one predicting those recent executions better is what
+recalibration starts from until the next judgement.
 
 The success classifiers (Sec. 4.2.2) are recalibrated alike: the tree's splits kept, the executions that reached a
 leaf counted into it (beside its training episodes, weighed as at most TRAINED_WEIGHT executions: the robot may
@@ -35,6 +40,9 @@ from tailor.sims.protocol import SimulatorEntry
 MIN_EXECUTIONS = 5  # successful executions of an action before its model is recalibrated
 PRIOR = 3.0  # executions' worth of belief in the trained model (a = 1, b = 0)
 LEAF_PRIOR = 2.0  # executions' worth of belief in no per-leaf shift
+RETRAIN_FROM = 200  # successful executions of an action before a tree trained on them alone may replace the trained
+RETRAIN_EVERY = 100  # ... judged again after this many more
+RECENT_SHARE = 0.2  # ... on the most recent share of them, each candidate fitted on the rest
 MIN_LEAF_EXECUTIONS = 3  # executions reaching a classifier's leaf before they can change its verdict
 TRAINED_WEIGHT = 20.0  # at most this many executions' worth of a classifier leaf's training episodes
 
@@ -54,6 +62,10 @@ class OnlineLearner:
         self.refits = 0
         self._trained: dict[str, ActionModel] = {}  # the models as trained, per action
         self._adapted: dict[str, ActionModel] = {}
+        # per action: what recalibration starts from where it is not the trained model (a tree trained on the
+        # executions alone, where that predicted the recent ones better), and when that was last judged
+        self._base: dict[str, ActionModel] = {}
+        self._judged: dict[str, int] = {}
         self._trained_guards: dict[str, CollisionModel] = {}  # the success classifiers as trained, per name
         self._adapted_guards: dict[str, CollisionModel] = {}
 
@@ -125,8 +137,35 @@ class OnlineLearner:
         used = [e for e in self.episodes.get(action, []) if e.succeeded]
         if len(used) < MIN_EXECUTIONS:
             return
-        self._adapted[action] = recalibrated(self._trained[action], np.array([e.params for e in used], dtype=float),
-                                             np.array([e.duration for e in used], dtype=float))
+        params = np.array([e.params for e in used], dtype=float)
+        durations = np.array([e.duration for e in used], dtype=float)
+        if len(used) >= RETRAIN_FROM and len(used) - self._judged.get(action, 0) >= RETRAIN_EVERY:
+            self._judged[action] = len(used)
+            self._base[action] = self._better_base(action, used)
+        self._adapted[action] = recalibrated(self._base.get(action, self._trained[action]), params, durations)
+
+    def _better_base(self, action: str, used: list[Episode]) -> ActionModel:
+        """The trained model, or a tree trained on the executions alone (the trained model's features, the training
+        protocol) where, both fitted on all but the most recent RECENT_SHARE of them and recalibrated on the same,
+        it predicts those recent ones with a smaller error: the executions then say more than the recalibrated
+        trained tree can (a robot changed in a way no affine map of its leaves follows)."""
+        trained = self._trained[action]
+        cut = round(len(used) * (1.0 - RECENT_SHARE))
+        early, recent = used[:cut], used[cut:]
+        candidate = retrained(trained, early, self.entry)
+        if candidate is None:
+            return trained
+        params = np.array([e.params for e in early], dtype=float)
+        durations = np.array([e.duration for e in early], dtype=float)
+        test = np.array([e.params for e in recent], dtype=float)
+        truth = np.array([e.duration for e in recent], dtype=float)
+
+        def error(model: ActionModel) -> float:
+            return float(np.mean(np.abs(recalibrated(model, params, durations).predict_duration(test) - truth)))
+
+        if error(candidate) >= error(trained):
+            return trained
+        return retrained(trained, used, self.entry) or trained
 
 
 def recalibrated(model: ActionModel, params: np.ndarray, durations: np.ndarray) -> ActionModel:
@@ -178,3 +217,23 @@ def recalibrated_classifier(model: CollisionModel, episodes) -> CollisionModel:
     report = {**model.report, "recalibrated": {"executions": len(kept), "failed": int(failed.sum()),
                                                "leaves_changed": int(np.sum(success != tree.success))}}
     return replace(model, tree=replace(counted, success=success), report=report)
+
+
+def retrained(model: ActionModel, episodes: list[Episode], entry: SimulatorEntry) -> ActionModel | None:
+    """A duration model of `model`'s action trained on the executed `episodes` alone, in `model`'s feature space,
+    by the training protocol (one sample per execution: its start); None where they are too few for it."""
+    from tailor.errors import DataError
+    from tailor.refinement.learning.duration_protocol import train_duration_model
+
+    observed = tuple(entry.action(model.action).observed)
+    starts = [Episode(e.action, np.asarray(e.params, dtype=float), np.zeros(1),
+                      np.asarray(e.params, dtype=float)[None, :len(observed)], observed, e.outcome, e.duration, e.seed)
+              for e in episodes]
+    space = model.expressions if model.expressions is not None else model.feature_space
+    try:
+        fresh = train_duration_model(model.action, starts, 0, space, observed, n_i_candidates=(1,)).model
+    except DataError:
+        return None
+    # the duration tree and its leaves' uncertainty are the new ones; the further measures' models stay the trained
+    report = {**model.report, "retrained": {"executions": len(episodes)}}
+    return replace(model, duration=fresh.duration, n_i=fresh.n_i, uncertainty=fresh.uncertainty, report=report)
