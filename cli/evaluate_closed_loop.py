@@ -81,8 +81,8 @@ def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, mode
     rows, learner = learning_stream(items, args.variant, horizon=CURVE_HORIZON)
     reference = None
     if args.reference_episodes:
-        from tailor.refinement.evaluation.closed_loop import (episodes_error, fixed_models, frozen_models,
-                                                              frozen_runs, reference_error, reference_improvement,
+        from tailor.refinement.evaluation.closed_loop import (episodes_error, fixed_models, frozen, frozen_runs,
+                                                              reference_error, reference_improvement,
                                                               reference_models)
         from tailor.refinement.situations import job_models, situation_sequence
 
@@ -94,8 +94,9 @@ def run_learning_curve(args: argparse.Namespace, domain_dir, binding, plan, mode
                      "improvement_last": reference_improvement(items[-CURVE_WINDOW:], args.variant, trained)}
         if fresh is not None and args.heldout_tasks and learner is not None:
             tasks = fresh(args.heldout_tasks)
-            sets = {"learned": frozen_models(learner, dict(models)), "reference": trained, "trained": dict(models)}
-            runs = {name: frozen_runs(tasks, args.variant, learner if name == "learned" else fixed_models(chosen),
+            learned = frozen(learner)  # (its success classifiers too, as the stream left them)
+            sets = {"learned": learned.adapted(dict(models)), "reference": trained, "trained": dict(models)}
+            runs = {name: frozen_runs(tasks, args.variant, learned if name == "learned" else fixed_models(chosen),
                                       CURVE_HORIZON) for name, chosen in sets.items()}
             pooled = [e for _, executed in runs.values() for e in executed]  # every held-out run's actions
             held = {"tasks": len(tasks), "executions": sum(e.succeeded for e in pooled)}

@@ -119,7 +119,7 @@ def _learning_task(job: Job, index: int, objects: dict, variant: str | None, eve
     for name, h in (("refined", horizon), ("greedy", 1)):
         options = Options(horizon=h, seed=seed, greedy=False)
         settings = ExecuteOptions(closed_loop=True, variant=variant, learn=name == "refined")
-        use = learner if name == "refined" else _frozen(learner)
+        use = learner if name == "refined" else frozen(learner)
         summary = summarize(list(ClosedLoop(inputs, options, settings, learner=use).events()))
         row[name] = summary.penalized
         row[f"{name}_completed"] = summary.completed
@@ -137,11 +137,12 @@ class _Frozen(OnlineLearner):
         return None
 
 
-def _frozen(learner: OnlineLearner) -> OnlineLearner:
-    frozen = _Frozen(learner.entry, learner.every)
-    frozen._trained, frozen._adapted = learner._trained, learner._adapted
-    frozen._trained_guards, frozen._adapted_guards = learner._trained_guards, learner._adapted_guards
-    return frozen
+def frozen(learner: OnlineLearner) -> OnlineLearner:
+    """`learner` as it stands (its models and classifiers), learning nothing more."""
+    still = _Frozen(learner.entry, learner.every)
+    still._trained, still._adapted = learner._trained, learner._adapted
+    still._trained_guards, still._adapted_guards = learner._trained_guards, learner._adapted_guards
+    return still
 
 
 def reference_models(domain_dir, binding, models: dict, variant: str | None, episodes: int, seed: int, jobs: int = 1
@@ -195,7 +196,7 @@ def frozen_runs(items: list[tuple[Job, int, dict]], variant: str | None, learner
     """Refined vs greedy improvement on `items` executed closed loop on the robot `variant` with the models (and
     success classifiers) `learner` holds, frozen: nothing executed here is learned from (held-out tasks); and the
     actions both runs executed (as episodes)."""
-    fixed = learner if isinstance(learner, _Frozen) else _frozen(learner)
+    fixed = learner if isinstance(learner, _Frozen) else frozen(learner)
     times = {"refined": [], "greedy": []}
     executed = []
     for job, index, objects in items:
@@ -212,11 +213,6 @@ def frozen_runs(items: list[tuple[Job, int, dict]], variant: str | None, learner
         return None, executed
     greedy = float(np.mean(times["greedy"]))
     return (greedy - float(np.mean(times["refined"]))) / greedy, executed
-
-
-def frozen_models(learner: OnlineLearner, models: dict) -> dict:
-    """The duration models `learner` holds for `models`' actions (as the stream left them), learning nothing more."""
-    return _frozen(learner).adapted(models)
 
 
 def episodes_error(episodes: list[Episode], models: dict) -> float | None:
@@ -239,4 +235,4 @@ def reference_error(rows: list[dict], models: dict) -> float | None:
 
 
 __all__ = ["closed_loop_episode", "summarize_closed_loop", "learning_stream", "reference_models", "reference_error",
-           "reference_improvement", "frozen_runs", "fixed_models", "frozen_models", "episodes_error"]
+           "reference_improvement", "frozen", "frozen_runs", "fixed_models", "episodes_error"]

@@ -190,13 +190,17 @@ class ClosedLoop:
             if self.learner is not None:
                 self.learner.extend(read_executions(self.log, self.entry, tuple(self.entry.actions)))
         if self.learner is not None:
-            self.models = self.learner.adapted(self.models)
-            self.success_models = self.learner.adapted_success(self.success_models)
+            self._take_learned()
         self.initial_refined = refined
         self._effects: StepEffects | None = None
         self.values = {obj: dict(q) for obj, q in self.inputs.belief.objects.items()}  # the belief, as it goes
         self.replans_left = execute.replans
         self._stop_reason = ""
+
+    def _take_learned(self) -> None:
+        """The duration models and success classifiers as the learner holds them now."""
+        self.models = self.learner.adapted(self.models)
+        self.success_models = self.learner.adapted_success(self.success_models)
 
     def model_files(self) -> list[Path]:
         """The model files the run read (duration models and success classifiers), for provenance."""
@@ -267,8 +271,7 @@ class ClosedLoop:
             self.executed.setdefault(action.action, []).append(episode)
             if self.learner is not None:
                 self.learner.record(episode, predicted)
-                self.models = self.learner.adapted(self.models)
-                self.success_models = self.learner.adapted_success(self.success_models)
+                self._take_learned()
             self._remember(action, choices)
             yield Event("executed", step=action.step, pddl=action.pddl, action=action.action, goal=call.goal,
                         predicted=predicted, measured=executed.duration, outcome=executed.outcome,

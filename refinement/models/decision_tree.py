@@ -111,15 +111,8 @@ class DecisionTree(_Routed):
     def counted(self, X: np.ndarray, failed: np.ndarray) -> DecisionTree:
         """The same tree with `samples` and `failures` counted by routing the rows of X (n, f) through it, `failed`
         (n,) marking the rows that failed: unweighted counts, whatever class weights the learner used."""
-        reached = self.apply(X)
-        n = len(self.children_left)
-        samples = np.bincount(reached, minlength=n).astype(np.int64)
-        failures = np.bincount(reached, weights=np.asarray(failed, dtype=bool), minlength=n).astype(np.int64)
-        for node in reversed(preorder(self.children_left, self.children_right)):  # inner nodes: sum of children
-            if self.children_left[node] != LEAF:
-                for counts in (samples, failures):
-                    counts[node] = counts[self.children_left[node]] + counts[self.children_right[node]]
-        return replace(self, samples=samples, failures=failures)
+        none = np.zeros(len(self.children_left), dtype=np.int64)
+        return replace(self, samples=none, failures=none).counted_more(self.apply(X), failed)
 
     def counted_more(self, leaves: np.ndarray, failed: np.ndarray) -> DecisionTree:
         """The same tree with rows that reached `leaves` (n,) counted into `samples` and `failures` too (`failed`
