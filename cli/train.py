@@ -50,6 +50,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-compare", dest="compare", action="store_false",
                         help="skip Fig. 4.3's comparison of feature spaces (raw, generic row, expert, auto) per "
                              "duration model")
+    parser.add_argument("--black-box", action="store_true",
+                        help="learn every duration model on generated features (Sec. 4.1.1), as for a robot whose "
+                             "controller tailor does not know: the binding's feature spaces and the simulator's "
+                             "own are neither used nor compared (success classifiers keep theirs)")
     parser.add_argument("--experience", type=Path, default=None, metavar="DIR",
                         help="keep the gathered episodes as shards in DIR and reuse the ones already there (`tailor "
                              "gather` writes them too): only missing episodes are simulated (default: OUT/experience)")
@@ -119,6 +123,10 @@ def run(args: argparse.Namespace) -> int:
     recipe = load_recipe(resolve_domain_dir(args.domain))
     if args.only:
         recipe = _only(recipe, args.only)
+    if args.black_box:
+        from tailor.refinement.learning.recipe import black_box
+
+        recipe = black_box(recipe)
     episodes = recipe.episodes if args.episodes is None else args.episodes
     if episodes < MIN_EPISODES:  # the domain's own [training] episodes
         raise BindingError(f"[training] episodes must be at least {MIN_EPISODES} (a quarter of them is the test "

@@ -234,3 +234,19 @@ def test_interrupt_while_writing_leaves_nothing_half_written(tmp_path, monkeypat
     assert capsys.readouterr().err.strip().endswith("tailor train: interrupted")
     assert files_under(tmp_path) == {"models/goToPose.json"}  # staged files removed, the old model untouched
     assert (tmp_path / "models" / "goToPose.json").read_text() == "old"
+
+
+def test_black_box_learns_on_generated_features_with_no_space_of_the_simulator(tmp_path, monkeypatch, capsys):
+    """--black-box: the binding's space ("position") is not used and the simulator's own spaces do not compete."""
+    monkeypatch.setattr("tailor.sims.experience.gather", synthetic_episodes.gather)
+    argv = ["train", "soccer", "--only", "goToPosition", "--episodes", "40", "--n-i", "1", "--no-compare", "--json"]
+    assert main([*argv, "--out", str(tmp_path / "expert")]) == 0
+    expert = json.loads(capsys.readouterr().out)["models"]["goToPosition"]
+    assert "feature_selection" not in expert  # the binding's space, no selection run
+    assert json.loads((tmp_path / "expert/models/goToPosition.json").read_text())["feature_space"] == "position"
+    assert main([*argv, "--black-box", "--out", str(tmp_path / "black")]) == 0
+    black = json.loads(capsys.readouterr().out)["models"]["goToPosition"]
+    assert list(black["feature_selection"]["candidate_sets"]) == ["generated"]
+    assert black["feature_selection"]["chosen"] == "auto"
+    model = json.loads((tmp_path / "black/models/goToPosition.json").read_text())
+    assert model["feature_space"] == "auto" and "phig" in model["expressions"]["parameters"]

@@ -28,7 +28,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -82,6 +82,7 @@ class TrainingRecipe:
     fresh_episodes: int
     subgoal_experience: tuple[SubgoalExperience, ...]
     specs: Mapping[str, ActionSpec]  # the simulator's actions
+    own_spaces: bool = True  # the simulator's own feature spaces compete in feature selection
 
     @property
     def duration_actions(self) -> tuple[str, ...]:
@@ -130,6 +131,13 @@ def recipe_from_binding(binding: Binding, domain_dir: Path) -> TrainingRecipe:
                                         _positive_int(chain.get("rounds", 1), f"{where} rounds", fail)))
     return TrainingRecipe(binding.domain or Path(domain_dir).name, Path(domain_dir), entry.name, models, classifiers,
                           episodes, fresh, tuple(chains), entry.actions)
+
+
+def black_box(recipe: TrainingRecipe) -> TrainingRecipe:
+    """The recipe as for a robot whose controller tailor does not know: every duration model on generated
+    features (Sec. 4.1.1), the simulator's own feature spaces neither chosen nor competing. Success classifiers
+    keep their spaces (a decision tree learns on a named space only)."""
+    return replace(recipe, models=tuple(replace(m, feature_space=AUTO) for m in recipe.models), own_spaces=False)
 
 
 def load_recipe(domain_dir: Path) -> TrainingRecipe:

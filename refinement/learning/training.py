@@ -199,7 +199,8 @@ def train_action(recipe: TrainingRecipe, action: str, feature_space: str, episod
     spec = recipe.specs[action]
     selection = None
     if feature_space == AUTO or compare:
-        selection = select_features(spec, entry, learning_episodes(episodes, seed), seed, jobs=jobs)
+        others = None if recipe.own_spaces else {}  # None: the simulator's own spaces compete
+        selection = select_features(spec, entry, learning_episodes(episodes, seed), seed, others=others, jobs=jobs)
     space = feature_space
     if feature_space == AUTO:
         space = selection.space if selection.space is not None else selection.named
