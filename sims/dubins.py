@@ -297,9 +297,19 @@ def shortest_bounds(start: Pose, goal: Pose, radius: float) -> tuple[I.Pair, I.P
     of the words that may exist and the least upper length of those that surely do; it is never below the ends'
     distance nor above it plus LOOP radii (LSL's bound). The arcs: the hull over the words that may be the
     shortest."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        return shortest_of(WordBounds(start, goal, radius), start, goal, radius)
+
+
+def shortest_of(bounds: WordBounds, start: Pose, goal: Pose, radius: float) -> tuple[I.Pair, I.Pair]:
+    """shortest_bounds from the words' enclosures `bounds` of these boxes (computed once by a caller that needs
+    them for more)."""
     with np.errstate(invalid="ignore", over="ignore"):  # (unbounded boxes: NaN tests decide nothing, as wanted)
-        bounds = WordBounds(start, goal, radius)
-        straight = I.hypot(_sub(goal[0], start[0]), _sub(goal[1], start[1]))
+        return _shortest_of(bounds, start, goal, radius)
+
+
+def _shortest_of(bounds: WordBounds, start: Pose, goal: Pose, radius: float) -> tuple[I.Pair, I.Pair]:
+    straight = I.hypot(_sub(goal[0], start[0]), _sub(goal[1], start[1]))
     upper = np.where(bounds.surely, bounds.hi, np.inf).min(axis=1)  # no longer than a word surely there ...
     # ... or than the longer of LSL and RSR where the ends lie apart: the larger of their circles' centres'
     # distances is then at least half the ends' (normalized) distance, and one of them is there

@@ -219,6 +219,7 @@ def test_a_path_of_bounded_curvature_is_offered_where_start_and_goal_are_poses()
     params, durations = first_examples(_drive_episodes(300, 0))
     offered = names(PLANAR, params, durations)
     assert {"dubins_x_y_phi_phig", "dubins_arcs_x_y_phi_phig", "dubins_transfer_x_y_phi_phig"} <= offered
+    assert not any(n.startswith("dubins_inside") for n in offered)  # no walls: no region
     assert not any(n.startswith("dubins") for n in names(PLANAR))  # its constants need data
     x, y, phi, _, xg, yg, phig, _ = params.T  # a robot that turns on the spot: the turns at the ends, no path
     bearing = np.arctan2(yg - y, xg - x)
@@ -256,3 +257,47 @@ def _first(episodes: list[Episode]) -> tuple[np.ndarray, np.ndarray]:
     from tailor.refinement.models.features import first_examples
 
     return first_examples(episodes)
+
+
+# --- a path inside the region the positions occupy (auto_paths.fit_region, sims.dubins_inside) --------------------
+WALLS = (-3.7, 3.7, -2.7, 2.7)  # m: the toy vehicle's workspace; its starts and goals lie 0.7 m inside
+
+
+def _walled_episodes(n: int, seed: int) -> list[Episode]:
+    """Drives as _drive_episodes' of a vehicle that plans the shortest path staying inside WALLS."""
+    from tailor.sims import dubins_inside
+
+    rng = np.random.default_rng(seed)
+    x, xg = rng.uniform(-3, 3, (2, n))
+    y, yg = rng.uniform(-2, 2, (2, n))
+    phi, phig = rng.uniform(-np.pi, np.pi, (2, n))
+    v, vg = rng.uniform(0, 1, (2, n))
+    start = np.column_stack([x - TRUE_START_BACK * np.cos(phi), y - TRUE_START_BACK * np.sin(phi), phi])
+    goal = np.column_stack([xg - TRUE_GOAL_BACK * np.cos(phig), yg - TRUE_GOAL_BACK * np.sin(phig), phig])
+    length, arcs = dubins_inside.shortest_inside(start, goal, TRUE_RADIUS, WALLS)
+    t = (length - arcs) / 1.0 + arcs / 0.5 + rng.normal(0, 0.02, n)
+    rows = np.column_stack([x, y, phi, v, xg, yg, phig, vg])
+    return [Episode("drive", rows[k], np.array([0.0]), rows[k:k + 1, :4], ("x", "y", "phi", "v"), "success",
+                    float(t[k]), k) for k in range(n)]
+
+
+def test_a_workspace_with_walls_is_found_from_the_region_the_positions_occupy():
+    """Near the walls the vehicle drives a longer word than the free shortest one; the path inside the region the
+    positions occupy, widened by a discovered margin, is offered and chosen, and predicts the durations to their
+    noise, where the free path cannot (it fails with the region switched off)."""
+    episodes = _walled_episodes(600, 4)
+    params, durations = _first(episodes)
+    candidates = {c.name: c for c in generate(PLANAR, quantity, params, durations)}
+    inside = candidates["dubins_inside_x_y_phi_phig"].expression
+    assert inside.op == "dubins_inside"
+    region = [a.value for a in inside.args[7:]]
+    assert region == pytest.approx(list(WALLS), abs=0.05)
+    assert inside.args[6].value == pytest.approx(TRUE_RADIUS, rel=0.05)
+    selection = select_features(PLANAR, entry(PLANAR), episodes, seed=0)
+    assert selection.report["steps"][1]["feature"] == "dubins_inside_x_y_phi_phig"
+    assert selection.report["generated_sets"]["forward"] < 0.04  # seconds (noise 0.02 s), of durations of 3 to 20 s
+    space = selection.space  # stored as data and enclosed over boxes
+    assert ExpressionSpace.from_json(space.to_json(), PLANAR.parameters).formulas == space.formulas
+    low, high = space.bounds(params[:50] - 0.01, params[:50] + 0.01)
+    values = space.compute(params[:50])
+    assert np.all(low <= values) and np.all(values <= high)

@@ -15,8 +15,8 @@ from tailor.errors import ModelFileError
 from tailor.refinement.models.action_models import ActionModel
 from tailor.refinement.models.expression_maths import evaluate, interval, transfer
 from tailor.refinement.models.expression_space import ExpressionSpace
-from tailor.refinement.models.expressions import (ARITY, CONSTANT_ARGUMENTS, MAX_DEPTH, MAX_NODES, Expr,
-                                                  ExpressionError, const, format_unit, from_json, node, param,
+from tailor.refinement.models.expressions import (ARITY, CONSTANT_ARGUMENTS, MAX_DEPTH, MAX_NODES, REGION_ARGUMENTS,
+                                                  Expr, ExpressionError, const, format_unit, from_json, node, param,
                                                   parse_unit, unit_of, units_of)
 from tailor.refinement.models.model_tree import ModelTree
 
@@ -59,12 +59,14 @@ def test_formulas_and_units():
     s = space(["hypot", ["sub", "xg", "x"], ["sub", "vg", "v"]], ["div", ["abs", ["sub", "xg", "x"]], "v"],
               ["abs", ["wrap", ["sub", ["atan2", "xg", "x"], "h"]]], ["sub", "x", ["sub", "xg", "x"]],
               ["transfer", ["sub", "xg", "x"], "v", "vg", 1.0, 0.5], ["mul", -2.0, "x"],
-              ["dubins", ["sub", "xg", "x"], "x", "h", ["neg", "h"], 0.4], ["dubins_arcs", "x", "v", "h", "h", 0.4])
+              ["dubins", ["sub", "xg", "x"], "x", "h", ["neg", "h"], 0.4], ["dubins_arcs", "x", "v", "h", "h", 0.4],
+              ["dubins_inside", "x", "xg", "h", "xg", "x", "h", 0.4, -3.0, 3.0, -2.5, 2.0])
     assert s.formulas == ("hypot(xg - x, vg - v)", "|xg - x| / v", "|wrap(atan2(xg, x) - h)|", "x - (xg - x)",
                           "transfer(xg - x, v, vg; vmax=1, amax=0.5)", "(-2) * x",
-                          "dubins(xg - x, x, h, -h; r=0.4)", "dubins_arcs(x, v, h, h; r=0.4)")
+                          "dubins(xg - x, x, h, -h; r=0.4)", "dubins_arcs(x, v, h, h; r=0.4)",
+                          "dubins_inside(x, xg, h, xg, x, h; r=0.4, region=[-3, 3] x [-2.5, 2])")
     units = s.with_units(UNITS).units
-    assert units == ("?", "s", "rad", "m", "s", "m", "m", "?")
+    assert units == ("?", "s", "rad", "m", "s", "m", "m", "?", "m")
     assert format_unit(parse_unit("m/s^2")) == "m/s^2" and format_unit(parse_unit("")) == ""
     assert format_unit(unit_of(from_json(["sqrt", ["mul", "x", "xg"]], PARAMS), units_of(UNITS))) == "m"
     assert format_unit(parse_unit("1/s")) == "1/s"
@@ -90,6 +92,11 @@ def test_formulas_and_units():
     (["dubins", "x", "xg", "h", 0.4], "takes 5 arguments"),
     (["dubins", "x", "xg", "h", "h", 0.4, 0.1], "takes 5 arguments"),
     (["dubins", "x", "xg", "h", "phig", 0.4], "not a parameter"),
+    (["dubins_inside", "x", "v", "h", "xg", "vg", "h", 0.4, 3.0, -3.0, -2.0, 2.0], "xmin < xmax"),
+    (["dubins_inside_arcs", "x", "v", "h", "xg", "vg", "h", 0.4, -3.0, 3.0, 2.0, 2.0], "ymin < ymax"),
+    (["dubins_inside", "x", "v", "h", "xg", "vg", "h", 0.4, "x", 3.0, -2.0, 2.0], "argument 8 .* must be a constant"),
+    (["dubins_inside", "x", "v", "h", "xg", "vg", "h", -0.4, -3.0, 3.0, -2.0, 2.0], "positive constant"),
+    (["dubins_inside", "x", "v", "h", "xg", "vg", "h", 0.4, -3.0, 3.0, -2.0], "takes 11 arguments"),
 ])
 def test_malformed_expressions_are_refused(data, message):
     with pytest.raises(ExpressionError, match=message):
@@ -172,6 +179,35 @@ def test_a_model_file_keeps_a_path_of_bounded_curvature_and_bounds_it(tmp_path):
     assert np.allclose(point_high[:, :2], loaded.features(X)[:, :2], atol=1e-7)
 
 
+def test_a_model_file_keeps_a_path_inside_a_region_and_bounds_it(tmp_path):
+    """dubins_inside and dubins_inside_arcs (sims.dubins_inside): stored as data with their region, read back
+    exactly, the same predictions, the certified optimizer's enclosure holding every point of a box, and at a point
+    the features themselves."""
+    start = [["sub", "x", ["mul", 0.3, ["cos", "h"]]], ["sub", "v", ["mul", 0.3, ["sin", "h"]]], "h"]
+    length = ["dubins_inside", *start, "xg", "vg", ["neg", "h"], 0.4, -2.5, 2.5, -2.0, 2.0]
+    arcs = ["dubins_inside_arcs", *length[1:]]
+    s = space(length, arcs)
+    model = _model(s)
+    path = tmp_path / "move.json"
+    path.write_text(json.dumps(model.to_json()))
+    data = json.loads(path.read_text())
+    assert data["expressions"]["features"][0]["expression"] == length
+    assert data["expressions"]["features"][0]["formula"].endswith("; r=0.4, region=[-2.5, 2.5] x [-2, 2])")
+    loaded = ActionModel.from_json(data, str(path))
+    rng = np.random.default_rng(6)
+    X = rng.uniform(-2, 2, (200, len(PARAMS)))
+    assert np.array_equal(loaded.predict_duration(X), model.predict_duration(X))
+    free = space(["dubins", ["sub", "xg", start[0]], ["sub", "vg", start[1]], "h", ["neg", "h"], 0.4]).compute(X)
+    values = loaded.features(X)
+    assert np.all(values[:, 0] >= free[:, 0] - 1e-12) and np.any(values[:, 0] > free[:, 0] + 0.1)  # walls: longer
+    low, high = loaded.space.bounds(X - 0.05, X + 0.05)
+    for k in range(0, 200, 20):
+        inside = loaded.features(rng.uniform(X[k] - 0.05, X[k] + 0.05, (300, len(PARAMS))))
+        assert np.all(low[k] <= inside) and np.all(inside <= high[k])
+    point_low, point_high = loaded.space.bounds(X, X)
+    assert np.allclose(point_low, values, atol=1e-7) and np.allclose(point_high, values, atol=1e-7)
+
+
 @pytest.mark.parametrize("change, message", [
     (lambda d: d["expressions"]["features"][0].update(expression=["system", "x"]), "unknown operator"),
     (lambda d: d["expressions"]["features"][0].update(expression="theta"), "not a parameter"),
@@ -179,6 +215,8 @@ def test_a_model_file_keeps_a_path_of_bounded_curvature_and_bounds_it(tmp_path):
      "positive constant"),
     (lambda d: d["expressions"]["features"][0].update(expression=["dubins", "x", "xg", "h", 0.4]),
      "takes 5 arguments"),
+    (lambda d: d["expressions"]["features"][0].update(
+        expression=["dubins_inside", "x", "v", "h", "xg", "vg", "h", 0.4, 1.0, -1.0, -2.0, 2.0]), "xmin < xmax"),
     (lambda d: d["expressions"].update(features=[]), "1 to 32"),
     (lambda d: d["expressions"].update(parameters="x"), "parameter names"),
     (lambda d: d["expressions"]["features"][1].update(name="f0"), "distinct"),
@@ -215,7 +253,10 @@ def _grow(children):
         lambda t: node("transfer", t[0], t[1], t[2], const(t[3]), const(t[4])))
     path = st.tuples(st.sampled_from(["dubins", "dubins_arcs"]), children, children, children, children,
                      st.floats(0.05, 2)).map(lambda t: node(t[0], *t[1:5], const(t[5])))
-    return st.one_of(unary, binary, moving, path)
+    inside = st.tuples(st.sampled_from(["dubins_inside", "dubins_inside_arcs"]), st.tuples(*[children] * 6),
+                       st.floats(0.05, 2), st.floats(0.5, 6), st.floats(0.5, 6)).map(
+        lambda t: node(t[0], *t[1], const(t[2]), const(-t[3]), const(t[3]), const(-t[4]), const(t[4])))
+    return st.one_of(unary, binary, moving, path, inside)
 
 
 EXPRESSIONS = st.recursive(LEAVES, _grow, max_leaves=8)
@@ -257,13 +298,16 @@ def test_each_operator_alone_is_enclosed_densely(op: str):
         width = rng.choice([0.0, 1e-6, 0.3, 2.0, 7.0], n)
         low, high = centre - width / 2, centre + width / 2
         constants = tuple(float(rng.uniform(0.2, 2)) for _ in CONSTANT_ARGUMENTS.get(op, ()))
+        if op in REGION_ARGUMENTS:  # a radius and a region (xmin, xmax, ymin, ymax) about the positions
+            a, b = rng.uniform(1.0, 8.0, 2)
+            constants = (constants[0], -a, a, -b, b)
         lo, hi = interval(op, [(np.array([a]), np.array([b])) for a, b in zip(low, high)], constants)
         points = _samples(low, high, rng, 300)
         values = evaluate(op, [points[:, j] for j in range(n)], constants)
         assert np.all(lo[0] <= values) and np.all(values <= hi[0]), (op, low, high)
 
 
-@pytest.mark.parametrize("op", ["transfer", "dubins", "dubins_arcs"])
+@pytest.mark.parametrize("op", ["transfer", "dubins", "dubins_arcs", "dubins_inside", "dubins_inside_arcs"])
 def test_times_and_paths_are_enclosed_exactly_at_a_point(op: str):
     """The certified optimizer splits boxes down to points and refuses an enclosure wider there than 1e-6
     relative (optimizers.certified._check_tight): a generated space whose transfer or path bound stayed wide at a
@@ -271,7 +315,7 @@ def test_times_and_paths_are_enclosed_exactly_at_a_point(op: str):
     rng = np.random.default_rng(5)
     n = ARITY[op] - len(CONSTANT_ARGUMENTS[op])
     points = rng.uniform(-4, 4, (500, n))
-    constants = (0.8, 1.5) if op == "transfer" else (0.4,)
+    constants = {"transfer": (0.8, 1.5), "dubins": (0.4,), "dubins_arcs": (0.4,)}.get(op, (0.4, -3.0, 3.0, -2.0, 2.0))
     values = evaluate(op, list(points.T), constants)
     lo, hi = interval(op, [(points[:, j], points[:, j]) for j in range(n)], constants)
     assert np.all(lo <= values) and np.all(values <= hi)

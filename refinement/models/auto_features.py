@@ -17,7 +17,11 @@ the kind the dissertation names, we build candidates that exploit the invariance
   of several axes (a move is as slow as its slowest part); maxima of like differences;
 - paths: where the start and the goal are both poses in a plane (a heading each), the shortest path of bounded
   curvature between them (a Dubins path), its arcs and the transfer time along it, its radius and the points it
-  turns about discovered from the data (auto_paths).
+  turns about discovered from the data (auto_paths); where the durations show walls, the shortest such path that
+  stays inside the region the positions occupy, its margin discovered likewise.
+- via points: where the durations depend on where in the plane a move goes (a fixed scene), the points its
+  paths pass through (a door, a corner to go round), discovered from the data: the length through each and
+  the turns toward it and from it.
 Which of them a model uses is chosen by cross-validated model-tree error (learning.feature_selection). The
 rows of Table 4.1 that such a structure matches (the pose row, the reach row in a space of angles, a move along
 one axis) are built the same way: `generic_row`.
@@ -32,7 +36,8 @@ from fractions import Fraction
 import numpy as np
 from scipy.optimize import minimize
 
-from tailor.refinement.models.auto_paths import fit_curvature, line_error, path_expressions
+from tailor.refinement.models.auto_paths import (fit_curvature, fit_region, line_error, path_expressions,
+                                                 region_expressions)
 from tailor.refinement.models.expression_maths import evaluate, transfer
 from tailor.refinement.models.model_tree import ModelTree
 from tailor.refinement.models.expressions import (CONSTANT_ARGUMENTS, MAX_DEPTH, MAX_NODES, Expr, const, node, param,
@@ -225,6 +230,7 @@ def generate(spec: ActionSpec, quantity: Callable[[str], Quantity], params: np.n
         out += _composed(ps, spec, params, durations)
         out += _approaches(planes, ps, spec, params, durations)
         out += _paths(planes, ps, speeds, spec, params, durations)
+        out += _via_points(planes, ps, spec, params, durations, out)
     return _distinct(out, spec, params)
 
 
@@ -234,7 +240,8 @@ def _paths(planes, ps: list[Parameter], speeds, spec: ActionSpec, params: np.nda
     quantity as its heading): the shortest path of bounded curvature between them, its radius and the points it
     turns about discovered (auto_paths), the length of its arcs, and the transfer time along it (with the plane's
     speeds where it has them, its limits discovered as _transfers' are); none where the durations show a robot
-    that turns on the spot (Curvature.pays)."""
+    that turns on the spot (Curvature.pays). Where keeping the path inside the region the positions occupy
+    explains the durations better (auto_paths.Region.pays), that path and its arcs too."""
     start = next((p for p in ps if p.group == "observed" and p.angle), None)
     goal = next((p for p in ps if p.group == "internal" and p.angle and start is not None
                  and p.quantity == start.quantity), None)
@@ -253,10 +260,20 @@ def _paths(planes, ps: list[Parameter], speeds, spec: ActionSpec, params: np.nda
     vmax, amax = _discover([_evaluate(length, columns)], [_evaluate(v0, columns)], [_evaluate(vg, columns)],
                            durations[rows])
     tag = f"{a.label}_{b.label}_{start.name}_{goal.name}"
-    return [Candidate(f"dubins_{tag}", length, "path of bounded curvature"),
-            Candidate(f"dubins_arcs_{tag}", arcs, "path of bounded curvature"),
-            Candidate(f"dubins_transfer_{tag}", node("transfer", length, v0, vg, const(vmax), const(amax)),
-                      "transfer time")]
+    out = [Candidate(f"dubins_{tag}", length, "path of bounded curvature"),
+           Candidate(f"dubins_arcs_{tag}", arcs, "path of bounded curvature"),
+           Candidate(f"dubins_transfer_{tag}", node("transfer", length, v0, vg, const(vmax), const(amax)),
+                     "transfer time")]
+    # the same path kept inside the region the positions occupy, where that explains the durations better
+    everywhere = {name: params[:, k] for k, name in enumerate(spec.parameters)}
+    positions = [everywhere[p.name] for p in (a.start, b.start, start, a.goal, b.goal, goal)]
+    region = fit_region(*positions, durations, fit)
+    if region.pays:
+        inside, inside_arcs = region_expressions(*(param(p.name) for p in (a.start, b.start, start, a.goal, b.goal,
+                                                                          goal)), region)
+        out += [Candidate(f"dubins_inside_{tag}", inside, "path of bounded curvature in a region"),
+                Candidate(f"dubins_inside_arcs_{tag}", inside_arcs, "path of bounded curvature in a region")]
+    return out
 
 
 def _approaches(planes, ps: list[Parameter], spec: ActionSpec, params: np.ndarray, durations: np.ndarray
@@ -430,6 +447,127 @@ def _discover(ds, v0s, vgs, durations) -> tuple[float, float]:
                      options={"xatol": 1e-3, "fatol": 1e-6, "maxfev": 80})
     v, a = (v, a) if not found.fun < best[0] else (v * np.exp(found.x[0]), a * np.exp(found.x[1]))
     return float(f"{v:.4g}"), float(f"{a:.4g}")  # short constants in the model file
+
+
+VIA_POINTS = 3  # at most this many points the paths pass through
+VIA_GAIN = 0.05  # a point is kept where its length and turns lower a small model tree's error by 5%
+VIA_GRID = 1000  # points of the plane tried: a grid over the box of the start and goal points
+VIA_LEAF_SHARE = 100  # the small model tree's leaves hold at least 1/VIA_LEAF_SHARE of the rows (10 at least)
+VIA = "point the paths pass through"
+
+
+def _via_points(planes, ps: list[Parameter], spec: ActionSpec, params: np.ndarray, durations: np.ndarray,
+                found: list[Candidate]) -> list[Candidate]:
+    """Where the durations depend on where in the plane a move goes (a fixed scene: a wall with a door, furniture
+    to go round), the points its paths pass through, discovered from the data, and per point the length of the
+    path through it, the turn toward it at the start and from it at the goal. Points are tried on a grid over the
+    start and goal points; greedily, the one whose detour (beyond the straight move, in seconds by the line of
+    least absolute error on the straight move's length and turns) best explains, row by row, what that line
+    leaves of the durations, kept only where a small model tree on the straight move and the places predicts
+    them better by VIA_GAIN (2-fold) with its length and turns besides; none where the durations do not depend on
+    the place (a robot in an open field). The start and the goal are the offset points where _composed found them
+    in `found`, else the first plane's."""
+    if not planes:
+        return []
+    start, goal, start_heading, goal_heading = _world_poses(planes, ps, found)
+    columns = {name: values[:DISCOVERY_ROWS] for name, values in zip(spec.parameters, params.T)}
+    y = durations[:DISCOVERY_ROWS]
+    s, g = [_evaluate(e, columns) for e in start], [_evaluate(e, columns) for e in goal]
+    hs, hg = (None if h is None else _evaluate(h, columns) for h in (start_heading, goal_heading))
+    straight = _path_columns(None, s, g, hs, hg)
+    line = np.column_stack([np.ones(len(y)), straight])
+    coefficients = _least_absolute(line, y)  # detours only lengthen a move: the line follows the straight ones
+    residual = y - line @ coefficients
+    xs, ys = np.concatenate([s[0], g[0]]), np.concatenate([s[1], g[1]])
+    if not (np.ptp(xs) > 0 and np.ptp(ys) > 0):
+        return []
+    nx = max(2, round(float(np.sqrt(VIA_GRID * np.ptp(xs) / np.ptp(ys)))))
+    grid = [(float(px), float(py)) for px in np.linspace(xs.min(), xs.max(), nx)
+            for py in np.linspace(ys.min(), ys.max(), max(2, VIA_GRID // nx))]
+    detours = np.array([(_path_columns(q, s, g, hs, hg) - straight) @ coefficients[1:] for q in grid])
+    left = np.abs(residual)  # per row, what the points kept so far leave unexplained
+    leaf = max(10, len(y) // VIA_LEAF_SHARE)
+    X = np.column_stack([straight, *s, *g])  # the places too: a tree tells from them which moves pass a point
+    error, kept = _split_error(X, y, leaf), []
+    for _ in range(VIA_POINTS):
+        j = int(np.argmax(np.maximum(0.0, left - np.abs(residual - detours)).mean(axis=1)))
+        point = tuple(float(f"{v:.3g}") for v in grid[j])  # short constants in the model file
+        trial = np.column_stack([X, _path_columns(point, s, g, hs, hg)])
+        trial_error = _split_error(trial, y, leaf)
+        if not trial_error < (1.0 - VIA_GAIN) * error:
+            break
+        X, error = trial, trial_error
+        kept.append(point)
+        left = np.minimum(left, np.abs(residual - detours[j]))
+    out = []
+    for k, (px, py) in enumerate(kept):
+        cx, cy = const(px), const(py)
+        out.append(Candidate(f"via{k}_length", node("add", node("hypot", node("sub", cx, start[0]),
+                                                                  node("sub", cy, start[1])),
+                                                     node("hypot", node("sub", goal[0], cx), node("sub", goal[1], cy))),
+                             VIA))
+        if start_heading is not None:
+            toward = node("atan2", node("sub", cy, start[1]), node("sub", cx, start[0]))
+            out.append(Candidate(f"via{k}_to", node("abs", node("wrap", node("sub", toward, start_heading))), VIA))
+        if goal_heading is not None:
+            onward = node("atan2", node("sub", goal[1], cy), node("sub", goal[0], cx))
+            out.append(Candidate(f"via{k}_at", node("abs", node("wrap", node("sub", goal_heading, onward))), VIA))
+    return out
+
+
+def _world_poses(planes, ps: list[Parameter], found: list[Candidate]) -> tuple:
+    """(start point, goal point, start heading, goal heading) as expressions, a heading None where its group has
+    no angle: the offset points and headings of _composed where it found them, else the first plane's points and
+    the first angle of each group (the goal's of the start's quantity)."""
+    named = {c.name: c.expression for c in found}
+    if "offset_goal_x" in named:
+        headings = []
+        for group in ("observed", "internal"):
+            angles = [param(p.name) for p in ps if p.group == group and p.angle and p.speed_of is None][:2]
+            headings.append(node("add", *angles) if len(angles) > 1 else angles[0])
+        return ((named["offset_start_x"], named["offset_start_y"]),
+                (named["offset_goal_x"], named["offset_goal_y"]), *headings)
+    a, b = planes[0]
+    h = next((p for p in ps if p.group == "observed" and p.angle), None)
+    g = next((p for p in ps if p.group == "internal" and p.angle and h is not None and p.quantity == h.quantity),
+             None)
+    return ((param(a.start.name), param(b.start.name)), (param(a.goal.name), param(b.goal.name)),
+            None if h is None else param(h.name), None if g is None else param(g.name))
+
+
+def _path_columns(point, s, g, hs, hg) -> np.ndarray:
+    """The path from s through `point` (None: straight) to g, as numbers: its length, the turn toward its first leg
+    at the start (where hs, the start heading, is given) and from its last leg to the goal heading hg (where given)."""
+    if point is None:
+        length, toward = np.hypot(g[0] - s[0], g[1] - s[1]), np.arctan2(g[1] - s[1], g[0] - s[0])
+        onward = toward
+    else:
+        px, py = point
+        length = np.hypot(px - s[0], py - s[1]) + np.hypot(g[0] - px, g[1] - py)
+        toward, onward = np.arctan2(py - s[1], px - s[0]), np.arctan2(g[1] - py, g[0] - px)
+    turns = [toward - hs] if hs is not None else []
+    turns += [hg - onward] if hg is not None else []
+    return np.column_stack([length, *(np.abs((t + np.pi) % (2.0 * np.pi) - np.pi) for t in turns)])
+
+
+def _least_absolute(A: np.ndarray, y: np.ndarray, rounds: int = 30) -> np.ndarray:
+    """Coefficients of the line A @ c of least absolute error to y (iteratively reweighted least squares)."""
+    weights = np.ones(len(y))
+    for _ in range(rounds):
+        c = np.linalg.lstsq(A * weights[:, None], y * weights, rcond=None)[0]
+        weights = 1.0 / np.sqrt(np.maximum(np.abs(y - A @ c), 1e-3))
+    return c
+
+
+def _split_error(X: np.ndarray, y: np.ndarray, leaf: int) -> float:
+    """Mean absolute error of a model tree with leaves of `leaf` rows, each half predicted by one fitted on the
+    other; every column in each leaf's plane (a noise column's splits cannot drop the ones that matter)."""
+    half = len(y) // 2
+    error = 0.0
+    for fit, test in ((slice(0, half), slice(half, None)), (slice(half, None), slice(0, half))):
+        tree = ModelTree(min_samples_leaf=leaf, node_features="all").fit(X[fit], y[fit])
+        error += float(np.sum(np.abs(tree.predict(X[test]) - y[test])))
+    return error / len(y)
 
 
 def candidate_columns(candidates: list[Candidate], parameters: tuple[str, ...], params: np.ndarray) -> np.ndarray:

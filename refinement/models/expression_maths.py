@@ -14,6 +14,10 @@ Values (x, y arrays):
   sin, cos
   transfer            the least time of a double integrator from speed v0 to vg over displacement d with
                       |speed| <= vmax and |acceleration| <= amax (v0, vg clipped to +-vmax): bang, coast, bang
+  dubins, dubins_arcs the shortest path of bounded curvature from the origin heading h to (dx, dy) heading hg
+                      (sims.dubins): its length, its arcs' length
+  dubins_inside(_arcs) the same from the pose (x, y, h) to (xg, yg, hg), the shortest that stays inside a
+                      region (xmin, xmax, ymin, ymax) (sims.dubins_inside)
 Bounds are sound for every box, widened outward by a few units in the last place for rounding; where an
 operator's range over a box cannot be told cheaply, the bound is its whole range (wrap: [-pi, pi]).
 """
@@ -22,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tailor.sims import dubins
+from tailor.sims import dubins, dubins_inside
 from tailor.sims.intervals import transfer_time_bounds
 from tailor.sims.kinematics import transfer_time
 
@@ -100,6 +104,11 @@ def evaluate(op: str, args: list[np.ndarray], constants: tuple[float, ...] = ())
             case "dubins" | "dubins_arcs":
                 length, arcs = dubins.shortest(*_poses(*args), constants[0])
                 return length if op == "dubins" else arcs
+            case "dubins_inside" | "dubins_inside_arcs":
+                columns = np.broadcast_arrays(*args)
+                start, goal = np.column_stack(columns[:3]), np.column_stack(columns[3:])
+                length, arcs = dubins_inside.shortest_inside(start, goal, constants[0], constants[1:])
+                return length if op == "dubins_inside" else arcs
     raise ValueError(f"unknown operator {op!r}")
 
 
@@ -218,6 +227,10 @@ def interval(op: str, args: list[tuple[np.ndarray, np.ndarray]], constants: tupl
             case "dubins" | "dubins_arcs":
                 length, arcs = dubins.shortest_bounds(*_poses(*args), constants[0])
                 out = length if op == "dubins" else arcs
+            case "dubins_inside" | "dubins_inside_arcs":
+                length, arcs = dubins_inside.shortest_inside_bounds(tuple(args[:3]), tuple(args[3:]), constants[0],
+                                                                    constants[1:])
+                out = length if op == "dubins_inside" else arcs
             case _:
                 raise ValueError(f"unknown operator {op!r}")
     lo, hi = _widen(np.asarray(out[0], dtype=float), np.asarray(out[1], dtype=float))
@@ -233,6 +246,6 @@ def interval(op: str, args: list[tuple[np.ndarray, np.ndarray]], constants: tupl
         lo, hi = np.maximum(lo, -1.0), np.minimum(hi, 1.0)
     elif op == "sgn":
         lo, hi = np.maximum(lo, -1.0), np.minimum(hi, 1.0)
-    elif op in ("dubins", "dubins_arcs"):
+    elif op in ("dubins", "dubins_arcs", "dubins_inside", "dubins_inside_arcs"):
         lo = np.maximum(lo, 0.0)
     return lo, hi

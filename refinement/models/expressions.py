@@ -27,8 +27,14 @@ ARITY: dict[str, int] = {
     "transfer": 5,  # (displacement, start speed, goal speed, speed limit, acceleration limit): a time
     "dubins": 5,  # (goal x - start x, goal y - start y, start heading, goal heading, turning radius): a length
     "dubins_arcs": 5,  # the same arguments: the length of that shortest path's arcs (sims.dubins)
+    # (start x, y, heading, goal x, y, heading, turning radius, region's xmin, xmax, ymin, ymax): the length of the
+    # shortest such path that stays inside the region, and its arcs' (sims.dubins_inside)
+    "dubins_inside": 11, "dubins_inside_arcs": 11,
 }
-CONSTANT_ARGUMENTS = {"transfer": (3, 4), "dubins": (4,), "dubins_arcs": (4,)}  # must be positive constants
+# arguments that must be constants: positive ones (limits, radii), and a region's bounds (any, low below high)
+CONSTANT_ARGUMENTS = {"transfer": (3, 4), "dubins": (4,), "dubins_arcs": (4,), "dubins_inside": (6, 7, 8, 9, 10),
+                      "dubins_inside_arcs": (6, 7, 8, 9, 10)}
+REGION_ARGUMENTS = {"dubins_inside": 7, "dubins_inside_arcs": 7}  # the first of (xmin, xmax, ymin, ymax)
 INFIX = {"add": ("+", 1), "sub": ("-", 1), "mul": ("*", 2), "div": ("/", 2)}
 
 
@@ -115,9 +121,15 @@ def from_json(data, parameters: Sequence[str], depth: int = 1, budget: list[int]
     if len(raw) != ARITY[op]:
         raise ExpressionError(f"operator {op!r} takes {ARITY[op]} arguments, got {len(raw)}")
     args = tuple(from_json(a, parameters, depth + 1, budget) for a in raw)
+    region = REGION_ARGUMENTS.get(op, -1)
     for k in CONSTANT_ARGUMENTS.get(op, ()):
-        if args[k].op != "const" or not args[k].value > 0:
-            raise ExpressionError(f"argument {k + 1} of {op!r} must be a positive constant")
+        bound = 0 <= region <= k  # a region's bound: any constant
+        if args[k].op != "const" or not (bound or args[k].value > 0):
+            raise ExpressionError(f"argument {k + 1} of {op!r} must be a {'' if bound else 'positive '}constant")
+    if region >= 0:
+        xmin, xmax, ymin, ymax = (args[k].value for k in range(region, region + 4))
+        if not (xmin < xmax and ymin < ymax):
+            raise ExpressionError(f"the region of {op!r} must have xmin < xmax and ymin < ymax")
     return Expr(op, args)
 
 
@@ -152,6 +164,10 @@ def _text(e: Expr, context: int) -> str:
     if e.op in ("dubins", "dubins_arcs"):
         dx, dy, heading, goal_heading, radius = (_text(a, 0) for a in e.args)
         return f"{e.op}({dx}, {dy}, {heading}, {goal_heading}; r={radius})"
+    if e.op in ("dubins_inside", "dubins_inside_arcs"):
+        x, y, heading, xg, yg, goal_heading, radius, *region = (_text(a, 0) for a in e.args)
+        return (f"{e.op}({x}, {y}, {heading}, {xg}, {yg}, {goal_heading}; r={radius}, "
+                f"region=[{region[0]}, {region[1]}] x [{region[2]}, {region[3]}])")
     return f"{e.op}({', '.join(_text(a, 0) for a in e.args)})"
 
 
@@ -236,7 +252,8 @@ def _unit_of(e: Expr, unit: Callable[[str], Unit]) -> tuple[Unit, bool] | None:
     args = [_unit_of(a, unit) for a in e.args]
     if any(a is None for a in args):
         return None
-    if e.op in ("add", "sub", "min", "max", "hypot", "dubins", "dubins_arcs"):  # (dubins: of its dx and dy)
+    if e.op in ("add", "sub", "min", "max", "hypot", "dubins", "dubins_arcs", "dubins_inside", "dubins_inside_arcs"):
+        # (a path: of its first two arguments, the positions' or their differences')
         (a, free_a), (b, free_b) = args[0], args[1]
         if dict(a) == dict(b):
             return a, free_a and free_b
