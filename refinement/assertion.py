@@ -209,8 +209,9 @@ def assert_subgoals(sequence: ActionSequence, binding: Binding, success_models: 
 def failure_probability(classifier, row: np.ndarray) -> tuple[float, str]:
     """The probability that the action fails with parameters `row`, and where it comes from: the classifier's own
     estimate where it makes one (a `failure_probability(params)` method, e.g. its leaf's share of failed training
-    episodes); else the share that failed of the fresh episodes it predicted to fail (its report's confusion,
-    Table 4.4); else 1, a failure taken as certain (every predicted failure then gets its subgoal, as in Alg. 5).
+    episodes tempered by the fresh ones there, CollisionModel); else the share that failed of the fresh episodes it
+    predicted to fail (its report's confusion, Table 4.4); else 1, a failure taken as certain (every predicted
+    failure then gets its subgoal, as in Alg. 5).
     The classifier's method returns the probabilities per row, or (probabilities, sources), or None where it has no
     estimate (a file without its leaves' counts)."""
     own = getattr(classifier, "failure_probability", None)

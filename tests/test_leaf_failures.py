@@ -16,17 +16,21 @@ from tailor.refinement.assertion import Detour, failure_probability
 from tailor.refinement.belief import parse_belief
 from tailor.refinement.instantiate import instantiate
 from tailor.refinement.learning.classifiers import FAIL, labels, train_collision_model
-from tailor.refinement.models.action_models import CollisionModel, load_collision_model, write_json_atomic
+from tailor.refinement.models.action_models import (
+    FRESH_PRIOR,
+    CollisionModel,
+    load_collision_model,
+    write_json_atomic,
+)
 from tailor.refinement.models.decision_tree import DecisionTree
 from tailor.refinement.models.features import compute_features, first_examples
 from tailor.refinement.pipeline import assert_task, prepare, read_task, resolve_task
 from synthetic_episodes import gather
 
-# a ball approach the bundled classifier predicts to fail from (its leaf "angle_at > -0.693: Fail (87)", node 20),
-# the detour through a subgoal predicted seconds longer than the plain approach (tests/test_assertion_detour.py)
+# a ball approach the bundled classifier predicts to fail from (a leaf where a minority of the training episodes
+# failed), the detour through a subgoal predicted seconds longer than the plain approach (test_assertion_detour.py)
 SHORT_APPROACH = {"pos1": {"x": 1.3177, "y": 0.9186, "phi": -2.4115, "v": 0.5363},
                   "pos2": {"x": 0.5689, "y": 0.0689, "phi": -2.8890, "v": 0.1234}}
-SHORT_LEAF = 20
 
 
 def _hand_built() -> DecisionTree:
@@ -77,7 +81,10 @@ def test_a_trained_classifier_keeps_each_leafs_episodes_and_failures(trained):
     params = first_examples(episodes)[0][:50]
     probability, sources = model.failure_probability(params)
     leaf = model.leaf(params)
-    np.testing.assert_allclose(probability, (tree.failures[leaf] + 1) / (tree.samples[leaf] + 2))
+    laplace = (tree.failures[leaf] + 1) / (tree.samples[leaf] + 2)  # tempered by the fresh episodes there
+    fresh = {key: np.array(counts)[leaf] for key, counts in model.report["fresh_leaves"].items()}
+    expected = (fresh["failures"] + FRESH_PRIOR * laplace) / (fresh["samples"] + FRESH_PRIOR)
+    np.testing.assert_allclose(probability, expected)
     assert f"leaf {leaf[0]} " in sources[0] and f"{tree.failures[leaf[0]]} of its {tree.samples[leaf[0]]}" in sources[0]
 
 
@@ -130,31 +137,33 @@ def soccer():
     return prepare(read_task(resolve_task("soccer", "approach")))
 
 
-def _with_failures(classifier: CollisionModel, failed: int) -> CollisionModel:
-    """The soccer classifier with counts where SHORT_LEAF holds `failed` failures (the rest: all failed at a Fail
-    leaf, none at a Success leaf; inner nodes are not read)."""
+def _with_failures(classifier: CollisionModel, leaf: int, failed: int) -> CollisionModel:
+    """The soccer classifier with counts where `leaf` holds `failed` failures (the rest: all failed at a Fail leaf,
+    none at a Success leaf; inner nodes are not read), and no fresh episodes counted (the training counts alone)."""
     tree = classifier.tree
     failures = np.where(tree.success, 0, tree.samples)
-    failures[SHORT_LEAF] = failed
-    return replace(classifier, tree=replace(tree, failures=failures))
+    failures[leaf] = failed
+    report = {k: v for k, v in classifier.report.items() if k != "fresh_leaves"}
+    return replace(classifier, tree=replace(tree, failures=failures), report=report)
 
 
 def test_assertion_weighs_with_the_leafs_probability(soccer):
     real = soccer.success_models["goToPose"]
-    assert not real.tree.success[SHORT_LEAF] and real.tree.samples[SHORT_LEAF] == 87
     plain = instantiate(soccer.plan, soccer.binding, parse_belief({"objects": SHORT_APPROACH}))
     row = plain.actions[0].values()
-    assert int(real.leaf(row[None])[0]) == SHORT_LEAF
+    leaf = int(real.leaf(row[None])[0])
+    n = int(real.tree.samples[leaf])
+    assert not real.tree.success[leaf] and n >= 40
     detour = Detour(soccer.models, "sample", 0)
     decisions = {}
-    for failed in (5, 80):  # a leaf that rarely fails, and one that nearly always does
-        classifier = _with_failures(real, failed)
+    for failed in (n // 16, n * 15 // 16):  # a leaf that rarely fails, and one that nearly always does
+        classifier = _with_failures(real, leaf, failed)
         p, source = failure_probability(classifier, row)
-        assert p == pytest.approx((failed + 1) / 89) and f"leaf {SHORT_LEAF} " in source
+        assert p == pytest.approx((failed + 1) / (n + 2)) and f"leaf {leaf} " in source
         (check,) = assert_task(plain, soccer.binding, {"goToPose": classifier}, soccer.plan, detour).assertions
-        assert check.weighing.failure_probability == pytest.approx((failed + 1) / 89)
-        assert f"{failed} of its 87 training episodes failed" in check.reason()
-        decisions[failed] = check.inserted
+        assert check.weighing.failure_probability == pytest.approx((failed + 1) / (n + 2))
+        assert f"{failed} of its {n} training episodes failed" in check.reason()
+        decisions[failed > n // 2] = check.inserted
     # the detour (> 1 s) pays for a leaf that fails nearly always, not for one that fails 6% of the time: neither a
-    # failure taken as certain nor the global share of the fresh episodes (0.745) could tell the two apart
-    assert decisions == {5: False, 80: True}
+    # failure taken as certain nor the global share of the fresh episodes predicted to fail could tell the two apart
+    assert decisions == {False: False, True: True}

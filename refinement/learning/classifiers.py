@@ -139,7 +139,11 @@ def train_collision_model(
     # each node's training episodes and how many of them failed, counted by routing the rows through the final
     # tree (sklearn's `value` is weighted by the class weights): each leaf's failure probability (assertion)
     tree = tree.counted(X, y == FAIL)
-    evaluation = confusion(tree.predict(compute_features(feature_space, first_examples(fresh)[0])), labels(fresh))
+    X_fresh = compute_features(feature_space, first_examples(fresh)[0])
+    evaluation = confusion(tree.predict(X_fresh), labels(fresh))
+    # the same counts from the fresh episodes, which chose no split: a leaf cut around a chance cluster of failed
+    # training episodes is not believed on its training episodes alone (CollisionModel.failure_probability)
+    held = tree.counted(X_fresh, labels(fresh) == FAIL)
     outcomes, counts = np.unique([e.outcome for e in episodes], return_counts=True)
     report = {
         "action": action,
@@ -154,6 +158,7 @@ def train_collision_model(
         "false_success": evaluation["false_success"],
         "confusion": evaluation,
         "cross_validation": table,
+        "fresh_leaves": {"samples": held.samples.tolist(), "failures": held.failures.tolist()},
         "note": note,
         "seed": seed,
     }
