@@ -301,3 +301,36 @@ def test_a_workspace_with_walls_is_found_from_the_region_the_positions_occupy():
     low, high = space.bounds(params[:50] - 0.01, params[:50] + 0.01)
     values = space.compute(params[:50])
     assert np.all(low <= values) and np.all(values <= high)
+
+
+# --- a pose with offsets against a point (one group's frame composed, the other taken as it is) ------------------
+UNITS.update(ox=Quantity("m"), oy=Quantity("m"), along=Quantity("m"), dist=Quantity("m"),
+             ophi=Quantity("rad", angle=True), heading=Quantity("rad", angle=True))
+SPOT = ("ox", "oy", "ophi", "along", "dist", "heading")
+REACH_FROM_SPOT = ActionSpec("reach", "toy", SPOT, ("px", "py"), SPOT, ("px", "py"))
+
+
+def test_a_pose_with_offsets_is_composed_against_a_point():
+    """The base stands `along` ahead of its frame and `dist` to its right (a convention not declared), turned by
+    ophi + heading; the duration depends on the point as seen from the base. The composition is found from the
+    durations, and the distance and angle to the point from the offset pose are candidates (with the offsets as
+    zeros, or the frame alone, they could not be)."""
+    rng = np.random.default_rng(0)
+    n = 600
+    ox, oy, ophi = rng.uniform(-3, 3, n), rng.uniform(-3, 3, n), rng.uniform(-np.pi, np.pi, n)
+    along, dist, heading = rng.uniform(-0.5, 0.5, n), rng.uniform(0.4, 0.8, n), rng.uniform(-1, 1, n)
+    c, s = np.cos(ophi), np.sin(ophi)
+    bx, by = ox + along * c + dist * s, oy + along * s - dist * c
+    reach = rng.uniform(0.3, 1.2, n)
+    px, py = ox + reach * c + rng.uniform(-0.3, 0.3, n) * s, oy + reach * s
+    distance = np.hypot(px - bx, py - by)
+    to = np.abs((np.arctan2(py - by, px - bx) - ophi - heading + np.pi) % (2 * np.pi) - np.pi)
+    durations = 2.0 * distance + 1.5 * to + rng.normal(0, 0.02, n)
+    params = np.column_stack([ox, oy, ophi, along, dist, heading, px, py])
+    candidates = {c.name: c for c in generate(REACH_FROM_SPOT, quantity, params, durations)}
+    assert {"offset_dist", "offset_to", "offset_along", "offset_across"} <= set(candidates)
+    values = candidate_columns([candidates["offset_dist"], candidates["offset_to"]], REACH_FROM_SPOT.parameters,
+                               params)
+    assert np.allclose(values, np.column_stack([distance, to]), atol=1e-9)
+    # no heading in the point's group: no angle at it
+    assert "offset_abs_at" not in candidates and "offset_turn" not in candidates

@@ -223,6 +223,7 @@ def test_train_keeps_its_experience_and_reuses_it(tmp_path, monkeypatch, capsys)
     names = sorted(p.name for p in (tmp_path / "exp").iterdir())
     assert names == ["approachBall.seed0.0-12.npz", "dribbleBall.seed0.0-12.npz", "goToPose.seed0.0-12.npz",
                      "goToPoseAtBall.seed0.0-12.npz", "goToPoseAtBall.seed7919000.0-10.npz",  # the fresh episodes too
+                     "goToPoseFarSide.seed0.0-12.npz", "goToPoseFarSide.seed7919000.0-10.npz",  # the classifier's 2nd
                      "goToPosition.seed0.0-12.npz"]
     same(load_episodes(tmp_path / "exp" / "goToPose.seed0.0-12.npz"), synthetic_gather(SIM, "goToPose", 12, 0))
     assert not (tmp_path / "out" / "models").exists()

@@ -338,29 +338,30 @@ def _frame_point(group: list[Parameter], u: Expr, w: Expr) -> tuple[Expr, Expr]:
 
 
 def _composed(ps: list[Parameter], spec: ActionSpec, params: np.ndarray, durations: np.ndarray) -> list[Candidate]:
-    """Where each group declares a pose (two lengths of one unit and an angle) and two more lengths of that unit
-    (offsets in the pose's frame) and perhaps another angle (a heading offset): the offset point in the world,
-    its distance and bearing from start to goal, the angle to it and at it. How the offsets sit in the frame
-    (which is ahead, which to the side, their signs) is not declared: of the eight ways, the one whose distance
-    fits the durations best by a line is taken."""
-    groups = []
-    for group in ("observed", "internal"):
-        mine = [p for p in ps if p.group == group and p.speed_of is None]
-        lengths = [p for p in mine if not p.angle]
-        angles = [p for p in mine if p.angle]
-        if len(lengths) != 4 or not angles or len({p.unit for p in lengths}) != 1:
-            return []
-        groups.append((mine, lengths, angles))
+    """Where a group declares a pose (two lengths of one unit and an angle) and two more lengths of that unit
+    (offsets in the pose's frame) and perhaps another angle (a heading offset), and the other group likewise or
+    a point (two lengths of that unit, perhaps an angle: a pose without offsets): the offset point in the world,
+    its distance and bearing from start to goal, the angle to it and at it; where only one group has offsets,
+    also the goal in the start's frame (along, |across|). How the offsets sit in the frame (which is ahead, which
+    to the side, their signs) is not declared: of the eight ways, the one whose distance fits the durations best
+    by a line is taken."""
+    groups = [_pose_group([p for p in ps if p.group == group and p.speed_of is None])
+              for group in ("observed", "internal")]
+    if None in groups or not any(g[0] for g in groups) or groups[0][1][0].unit != groups[1][1][0].unit:
+        return []
     columns = {name: params[:, k] for k, name in enumerate(spec.parameters)}
     best = None
     for first, second in ((2, 3), (3, 2)):
         for su in (1.0, -1.0):
             for sw in (1.0, -1.0):
                 points = []
-                for mine, lengths, _ in groups:
+                for offsets, lengths, angles in groups:
+                    if not offsets:  # a point: where it is
+                        points.append((param(lengths[0].name), param(lengths[1].name)))
+                        continue
                     u, w = param(lengths[first].name), param(lengths[second].name)
                     u, w = (u if su > 0 else node("neg", u)), (w if sw > 0 else node("neg", w))
-                    points.append(_frame_point(mine, u, w))
+                    points.append(_frame_point(lengths + angles, u, w))
                 dist = node("hypot", node("sub", points[1][0], points[0][0]), node("sub", points[1][1], points[0][1]))
                 d = _evaluate(dist, columns)
                 error = line_error([d], durations)
@@ -368,20 +369,51 @@ def _composed(ps: list[Parameter], spec: ActionSpec, params: np.ndarray, duratio
                     best = (error, points)
     (start, goal) = best[1]
     dx, dy = node("sub", goal[0], start[0]), node("sub", goal[1], start[1])
-    headings = [node("add", *(param(p.name) for p in angles[:2])) if len(angles) > 1 else param(angles[0].name)
-                for _, _, angles in groups]
+    headings = [_group_heading(angles) for _, _, angles in groups]
     bearing = node("atan2", dy, dx)
-    signed = node("wrap", node("sub", bearing, headings[0]))
-    at = node("wrap", node("sub", headings[1], bearing))
-    return [Candidate("offset_dist", node("hypot", dx, dy), "offset point"),
-            Candidate("offset_to", node("abs", signed), "offset point"),
-            Candidate("offset_at", node("mul", node("sgn", signed), at), "offset point"),
-            Candidate("offset_abs_at", node("abs", at), "offset point"),
-            Candidate("offset_turn", node("abs", node("wrap", node("sub", headings[1], headings[0]))), "offset point"),
-            Candidate("offset_start_x", start[0], "offset point"),
-            Candidate("offset_start_y", start[1], "offset point"),
-            Candidate("offset_goal_x", goal[0], "offset point"),
-            Candidate("offset_goal_y", goal[1], "offset point")]
+    out = [Candidate("offset_dist", node("hypot", dx, dy), "offset point")]
+    one_sided = not all(offsets for offsets, _, _ in groups)
+    if one_sided:
+        out.append(Candidate("offset_bearing", bearing, "offset point"))
+    if headings[0] is not None:
+        signed = node("wrap", node("sub", bearing, headings[0]))
+        out.append(Candidate("offset_to", node("abs", signed), "offset point"))
+        if one_sided:
+            h = headings[0]
+            out += [Candidate("offset_signed_to", signed, "offset point"),
+                    Candidate("offset_along", node("add", node("mul", dx, node("cos", h)), node("mul", dy, node("sin", h))),
+                              "offset point"),
+                    Candidate("offset_across", node("abs", node("sub", node("mul", dy, node("cos", h)),
+                                                                node("mul", dx, node("sin", h)))), "offset point")]
+    if headings[1] is not None:
+        at = node("wrap", node("sub", headings[1], bearing))
+        if headings[0] is not None:
+            out.append(Candidate("offset_at", node("mul", node("sgn", signed), at), "offset point"))
+        out.append(Candidate("offset_abs_at", node("abs", at), "offset point"))
+        if headings[0] is not None:
+            out.append(Candidate("offset_turn", node("abs", node("wrap", node("sub", headings[1], headings[0]))),
+                                 "offset point"))
+    return out + [Candidate("offset_start_x", start[0], "offset point"),
+                  Candidate("offset_start_y", start[1], "offset point"),
+                  Candidate("offset_goal_x", goal[0], "offset point"),
+                  Candidate("offset_goal_y", goal[1], "offset point")]
+
+
+def _pose_group(mine: list[Parameter]) -> tuple[bool, list[Parameter], list[Parameter]] | None:
+    """(has offsets, lengths, angles) of a group that is a pose with offsets (four lengths of one unit, an angle)
+    or a point (two lengths of one unit, perhaps angles); None for any other group."""
+    lengths = [p for p in mine if not p.angle]
+    angles = [p for p in mine if p.angle]
+    if len({p.unit for p in lengths}) != 1 or len(lengths) not in (2, 4) or (len(lengths) == 4 and not angles):
+        return None
+    return len(lengths) == 4, lengths, angles
+
+
+def _group_heading(angles: list[Parameter]) -> Expr | None:
+    """A group's heading in the world: its first angle plus its second (a heading offset) where it has one."""
+    if not angles:
+        return None
+    return node("add", *(param(p.name) for p in angles[:2])) if len(angles) > 1 else param(angles[0].name)
 
 
 def _speed_or_zero(p: Parameter | None) -> Expr:
@@ -521,10 +553,8 @@ def _world_poses(planes, ps: list[Parameter], found: list[Candidate]) -> tuple:
     the first angle of each group (the goal's of the start's quantity)."""
     named = {c.name: c.expression for c in found}
     if "offset_goal_x" in named:
-        headings = []
-        for group in ("observed", "internal"):
-            angles = [param(p.name) for p in ps if p.group == group and p.angle and p.speed_of is None][:2]
-            headings.append(node("add", *angles) if len(angles) > 1 else angles[0])
+        headings = [_group_heading([p for p in ps if p.group == group and p.angle and p.speed_of is None])
+                    for group in ("observed", "internal")]
         return ((named["offset_start_x"], named["offset_start_y"]),
                 (named["offset_goal_x"], named["offset_goal_y"]), *headings)
     a, b = planes[0]

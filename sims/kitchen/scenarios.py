@@ -10,6 +10,8 @@ Experience scenarios (the instant environment modification of Sec. 4.1):
   (the legs of both scenarios' plans), every free offset uniform in its Fig. 5.12 range;
 - "grip": the base at a random pickup spot, gripping the cup there;
 - "put": the base at a random dropoff spot with a cup in the gripper, putting it at the put location.
+grip's and put's episodes write the base's start (and logged) pose as a plan writes it: the serving frame and
+the offsets from it (in_frame), so that what is learned from their parameters sees the offsets.
 Situations "scenario1" and "scenario2" give the belief values of the problems of the same names.
 Every scenario's run and subgoal_episode take `variant` (None, or one of the kitchen's VARIANTS): the same
 episode on the changed robot, for experience of it.
@@ -18,6 +20,7 @@ episode on the changed robot, for experience of it.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from itertools import pairwise
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -115,9 +118,22 @@ def _at_table(seed: int, noise: Noise | None, action: str, table: str, places: s
     rng = np.random.default_rng((seed, SAMPLING_STREAM))
     layout = random_layout(rng, 1)
     place = layout[places][0]
-    pose = W.spot_pose(*W.serving_frame(layout[table], *place), *_offsets(rng))
+    frame = W.serving_frame(layout[table], *place)
+    pose = W.spot_pose(*frame, *_offsets(rng))
     sim = _sim(seed, layout, pose, holding=holding, noise=noise, variant=variant)
-    return sim.run(ActionCall(action, place))
+    return in_frame(sim.run(ActionCall(action, place)), frame)
+
+
+def in_frame(episode: Episode, frame: tuple[float, float, float]) -> Episode:
+    """The episode with its start and logged base poses written as spots of `frame` (the serving frame), as a
+    plan writes grip's and put's start: the simulator logs a pose as a spot with zero offsets, with which a
+    model on the parameters alone would never see the offsets that refinement chooses. Same poses, same run."""
+    spots = [(*frame, *W.spot_offsets(frame, (x, y, phi))) for x, y, phi in episode.state[:, :3]]
+    state = episode.state.copy()
+    state[:, :6] = np.array(spots, dtype=float).reshape(-1, 6)
+    params = episode.params.copy()
+    params[:6] = (*frame, *W.spot_offsets(frame, tuple(params[:3])))
+    return replace(episode, params=params, state=state)
 
 
 def subgoal_episode(action: str, params: np.ndarray, seed: int, variant: str | None = None) -> Episode:
@@ -132,10 +148,13 @@ def subgoal_episode(action: str, params: np.ndarray, seed: int, variant: str | N
     point = (p[6], p[7])
     table = "table1" if action == "grip" else "table2"
     layout[table] = _table_under(point, layout[table])
+    holding = None
     if action == "grip":
         layout["cups"] = [point]
-        return _sim(seed, layout, pose, variant=variant).run(ActionCall(action, point))
-    return _sim(seed, layout, pose, holding="cup1", variant=variant).run(ActionCall(action, point))
+    else:
+        holding = "cup1"
+    episode = _sim(seed, layout, pose, holding=holding, variant=variant).run(ActionCall(action, point))
+    return in_frame(episode, (p[0], p[1], p[2]))
 
 
 def _table_under(point, table):

@@ -90,6 +90,16 @@ def spot_pose(ox: float, oy: float, ophi: float, along: float, dist: float, head
     return ox - dist * c - along * s, oy - dist * s + along * c, wrap(ophi + heading)
 
 
+def spot_offsets(frame: tuple[float, float, float], pose: tuple[float, float, float]
+                 ) -> tuple[float, float, float]:
+    """The offsets (along, dist, heading) of base pose (x, y, phi) in spot frame (ox, oy, ophi): spot_pose's
+    inverse, so that spot_pose(*frame, *spot_offsets(frame, pose)) == pose."""
+    ox, oy, ophi = frame
+    c, s = math.cos(ophi), math.sin(ophi)
+    dx, dy = pose[0] - ox, pose[1] - oy
+    return -s * dx + c * dy, -(c * dx + s * dy), wrap(pose[2] - ophi)
+
+
 @dataclass(frozen=True)
 class Box:
     """A static rectangle: centre, half sizes along its own axes, rotation (rad)."""
