@@ -40,6 +40,7 @@ from tailor.sims import dubins
 from tailor.sims import intervals as I
 from tailor.sims.dubins import ARC, SIGN
 from tailor.sims.dubins import totals as _lengths
+from tailor.sims.dubins_inside import extents
 from tailor.sims.protocol import FeatureSpace
 from tailor.sims.soccer import feature_bounds as B
 from tailor.sims.soccer.approach import PRE_DISTANCE, R_APPROACH
@@ -58,8 +59,6 @@ APPROACH_FEATURES = POSE + ("path", "arcs", "exact_path")
 # goToPose's: its planned word (inside the walls), that word's detour over the straight line (the switch to the
 # lure at MAX_DETOUR), the lure's length through the IP, the turn toward the IP and the turn at it
 GOTO_FEATURES = APPROACH_FEATURES + ("detour", "lure_path", "lure_bearing", "lure_turn")
-_COMPASS = np.array([0.0, 0.5 * np.pi, np.pi, 1.5 * np.pi])  # east, north, west, south on an arc's circle
-_EAST_X, _NORTH_Y = np.array([1.0, 0.0, -1.0, 0.0]), np.array([0.0, 1.0, 0.0, -1.0])
 
 
 def dubins_words(start: np.ndarray, goal: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
@@ -84,29 +83,10 @@ def shortest_word(start: np.ndarray, pre: np.ndarray, radius: float, final: floa
 
 def path_bounds(start: np.ndarray, lengths: np.ndarray, signs: np.ndarray, radius: float) -> np.ndarray:
     """(N, 4) the bounding box (xmin, xmax, ymin, ymax) of N paths driven from `start` (N, 3), segment lengths
-    `lengths` (N, 3; NaN read as 0) and kinds `signs` (N, 3: 1 left arc, -1 right arc, 0 straight): the segment
-    ends and the arcs' extreme points, as sims.soccer.dubins.word_bounds (tests). All paths at once, whatever
+    `lengths` (N, 3; NaN read as 0) and kinds `signs` (N, 3: 1 left arc, -1 right arc, 0 straight), as
+    sims.soccer.dubins.word_bounds (tests): the generic sims.dubins_inside.extents. All paths at once, whatever
     their words: the genetic algorithm asks for a few hundred at a time, where numpy's per-call cost dominates."""
-    x, y, h = start[:, 0], start[:, 1], start[:, 2]
-    xmin, xmax, ymin, ymax = x, x, y, y
-    for s in range(3):
-        length, sign = np.nan_to_num(lengths[:, s]), signs[:, s]
-        arc = sign != 0.0
-        k = np.where(arc, sign, 1.0) / radius
-        sin_h, cos_h = np.sin(h), np.cos(h)
-        eh = np.where(arc, h + k * length, h)
-        ex = np.where(arc, x + (np.sin(eh) - sin_h) / k, x + length * cos_h)
-        ey = np.where(arc, y - (np.cos(eh) - cos_h) / k, y + length * sin_h)
-        cx, cy = x - sin_h / k, y + cos_h / k  # the arc's centre; its points furthest east, north, west, south
-        theta0 = np.arctan2(y - cy, x - cx)
-        passed = (arc & (length > 0.0))[:, None] & (
-            np.mod(np.sign(k)[:, None] * (_COMPASS - theta0[:, None]), TWO_PI) <= (np.abs(k) * length)[:, None])
-        px = np.where(passed, cx[:, None] + radius * _EAST_X, ex[:, None])  # (the end point where not passed)
-        py = np.where(passed, cy[:, None] + radius * _NORTH_Y, ey[:, None])
-        xmin, xmax = np.minimum(xmin, px.min(axis=1)), np.maximum(xmax, px.max(axis=1))
-        ymin, ymax = np.minimum(ymin, py.min(axis=1)), np.maximum(ymax, py.max(axis=1))
-        x, y, h = ex, ey, eh
-    return np.column_stack([xmin, xmax, ymin, ymax])
+    return extents(start, lengths, signs, radius)
 
 
 def word_bounds(start: np.ndarray, words: np.ndarray, radius: float) -> np.ndarray:
