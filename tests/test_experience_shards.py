@@ -246,7 +246,8 @@ def test_train_extends_the_experience_it_has(tmp_path, monkeypatch):
 def test_gather_command_errors_are_one_line(tmp_path, capsys):
     assert main(["gather", "soccer", "--seeds", "0:4", "--scenario", "kick", "--out", str(tmp_path)]) == 14
     assert capsys.readouterr().err.strip() == ("tailor gather: error: 'soccer' trains on no experience scenario "
-                                               "'kick' (known: goToPose, approachBall, dribbleBall, goToPosition, goToPoseAtBall)")
+                                               "'kick' (known: goToPose, approachBall, dribbleBall, goToPosition, "
+                                               "goToPoseAtBall, goToPoseFarSide)")
     with pytest.raises(SystemExit) as exit:
         main(["gather", "soccer", "--seeds", "5:5"])
     assert exit.value.code == 2
