@@ -107,18 +107,20 @@ def _surely_within(pose: Pose, region: Region, margin: float) -> np.ndarray:
             & (region[2] + margin <= y_lo) & (y_hi <= region[3] - margin))
 
 
-def extent_bounds(start: Pose, seg_lo: np.ndarray, seg_hi: np.ndarray, which: np.ndarray, radius: float
-                  ) -> tuple[I.Pair, I.Pair, np.ndarray]:
+def extent_bounds(start: Pose, seg_lo: np.ndarray, seg_hi: np.ndarray, which: np.ndarray, radius: float,
+                  slack: float = EXTENT_SLACK, inner: bool = True) -> tuple[I.Pair, I.Pair, np.ndarray | None]:
     """Per (start box, word) pair, an outer box (x, y intervals) holding every point of the word's path from every
     start pose of the box (`start` intervals, (P,)), for every segment length its enclosure allows ((P, 3) lower
     and upper, m; `which` (P,) the words' indices in WORDS): per arc, its circle's centre box grown by the radius
     times the range of cos and sin over the angles it may sweep; per straight, its ends. And (P, 4) an inner one
     (the least east, greatest west, least north, greatest south the path surely reaches, in the order xmax, xmin,
-    ymax, ymin): its segments' ends and the extreme points of its circles that each arc surely passes."""
+    ymax, ymin): its segments' ends and the extreme points of its circles that each arc surely passes (None
+    without `inner`). The outer box is widened by `slack`."""
     sign = SIGN[which]
     x, y, h = start
     x_ext, y_ext = x, y
-    reached = np.stack([x[0], x[1], y[0], y[1]], axis=1)  # east, west, north, south surely reached (the start)
+    reached = np.stack([x[0], x[1], y[0], y[1]], axis=1) if inner else None  # east, west, north, south surely
+    # reached (the start)
     s, c = I.sin_cos(*h)
     for j in range(3):
         sg = sign[:, j]
@@ -143,6 +145,10 @@ def extent_bounds(start: Pose, seg_lo: np.ndarray, seg_hi: np.ndarray, which: np
         y = (np.where(arc, ay[0], sy[0]), np.where(arc, ay[1], sy[1]))
         # the segment's end, and the compass points an arc surely passes: an angle phase + 2 pi n strictly
         # between every start angle and every end angle of its sweep (left: first < end; right: end < first)
+        if not inner:
+            if j < 2:
+                s, c = _rows(sines, 2), _rows(cosines, 2)
+            continue
         reached[:, 0], reached[:, 1] = np.maximum(reached[:, 0], x[0]), np.minimum(reached[:, 1], x[1])
         reached[:, 2], reached[:, 3] = np.maximum(reached[:, 2], y[0]), np.minimum(reached[:, 3], y[1])
         a, b = np.where(sg > 0, first[1], end[1]), np.where(sg > 0, end[0], first[0])
@@ -155,7 +161,7 @@ def extent_bounds(start: Pose, seg_lo: np.ndarray, seg_hi: np.ndarray, which: np
             reached[:, q] = np.where(passed, better(reached[:, q], point), reached[:, q])
         if j < 2:
             s, c = _rows(sines, 2), _rows(cosines, 2)
-    return _slack(x_ext, EXTENT_SLACK), _slack(y_ext, EXTENT_SLACK), reached
+    return _slack(x_ext, slack), _slack(y_ext, slack), (reached if inner else None)
 
 
 def shortest_inside_bounds(start: Pose, goal: Pose, radius: float, region: Region) -> tuple[I.Pair, I.Pair]:

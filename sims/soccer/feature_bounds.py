@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 from tailor.sims import intervals as I
-from tailor.sims.dubins import SIGN, WordBounds, _add, _rows, _scale, _scale_by, _slack, _stack, _sub, modulo
+from tailor.sims.dubins import WordBounds, _add, _rows, _scale, _slack, _stack, _sub, modulo
+from tailor.sims.dubins_inside import extent_bounds
 from tailor.sims.soccer.dubins import TANGENT_SLACK
 from tailor.sims.soccer.pose import pose_parts
 from tailor.sims.soccer.world import BALL_POINT_OFFSET
@@ -163,39 +164,10 @@ def word_extent(start: Pose, seg_lo: np.ndarray, seg_hi: np.ndarray, words: np.n
                  ) -> tuple[I.Pair, I.Pair]:
     """Per (start box, word) pair, an outer box (x, y intervals) holding every point of the word's path from every
     start pose of the box (`start` intervals, (P,)), for every segment length its enclosure allows ((P, 3) lower
-    and upper, m; `words` (P,) the words' indices in WORDS): per arc, its circle's centre box grown by the
-    radius times the range of cos and sin over the angles it may sweep; per straight, its ends. Every pair at
-    once, the words' turn senses per pair (a straight's arc formulas run too and are not taken)."""
-    sign = SIGN[words]  # (P, 3): the words' turn senses
-    x, y, h = start
-    x_ext, y_ext = x, y
-    s, c = I.sin_cos(*h)
-    for j in range(3):
-        sg = sign[:, j]
-        arc = sg != 0.0
-        length = (seg_lo[:, j], seg_hi[:, j])
-        # a straight's points lie between its ends
-        sx, sy = _slack(_add(x, I.product(length, c))), _slack(_add(y, I.product(length, s)))
-        # an arc: its centre to the left (sign 1) or right of the heading, a radius away
-        cx, cy = _slack(_sub(x, _scale_by(s, sg * radius))), _slack(_add(y, _scale_by(c, sg * radius)))
-        first = (h[0] - sg * 0.5 * PI, h[1] - sg * 0.5 * PI)  # the angle of the start seen from the centre
-        turn = _scale_by(length, sg / radius)
-        end = _add(first, turn)
-        swept = (np.minimum(first[0], end[0]), np.maximum(first[1], end[1]))
-        h = (np.where(arc, h[0] + turn[0], h[0]), np.where(arc, h[1] + turn[1], h[1]))
-        angles = _stack(swept, end, h) if j < 2 else _stack(swept, end)
-        sines, cosines = I.sin_cos(*angles)
-        (sweep_s, end_s), (sweep_c, end_c) = ([_rows(q, 0), _rows(q, 1)] for q in (sines, cosines))
-        x_ext = (np.minimum(x_ext[0], np.where(arc, cx[0] + radius * sweep_c[0], sx[0])),
-                 np.maximum(x_ext[1], np.where(arc, cx[1] + radius * sweep_c[1], sx[1])))
-        y_ext = (np.minimum(y_ext[0], np.where(arc, cy[0] + radius * sweep_s[0], sy[0])),
-                 np.maximum(y_ext[1], np.where(arc, cy[1] + radius * sweep_s[1], sy[1])))
-        ax, ay = _slack(_add(cx, _scale(end_c, radius))), _slack(_add(cy, _scale(end_s, radius)))
-        x = (np.where(arc, ax[0], sx[0]), np.where(arc, ax[1], sx[1]))
-        y = (np.where(arc, ay[0], sy[0]), np.where(arc, ay[1], sy[1]))
-        if j < 2:
-            s, c = _rows(sines, 2), _rows(cosines, 2)
-    return _slack(x_ext, 1e-9), _slack(y_ext, 1e-9)
+    and upper, m; `words` (P,) the words' indices in WORDS): the generic sims.dubins_inside.extent_bounds, its
+    outer box alone, widened by 1e-9."""
+    x, y, _ = extent_bounds(start, seg_lo, seg_hi, words, radius, slack=1e-9, inner=False)
+    return x, y
 
 
 def shortest_inside_bounds(start: Pose, goal: Pose, radius: float, final: float,
