@@ -106,7 +106,8 @@ def shortest(start: np.ndarray, goal: np.ndarray, radius: float) -> tuple[np.nda
 Pose = tuple[I.Pair, I.Pair, I.Pair]  # x, y, heading (unwrapped) intervals
 
 
-CHUNK = 2048  # rows: WordBounds encloses more boxes in chunks of this many (5% less CPU than 512 on the bundled evaluation windows)
+CHUNK = 2048  # rows: WordBounds encloses more boxes in chunks of this many (5% less CPU than 512 on the bundled
+# evaluation windows)
 
 
 def _add(a: I.Pair, b: I.Pair) -> I.Pair:
@@ -298,36 +299,36 @@ def shortest_bounds(start: Pose, goal: Pose, radius: float) -> tuple[I.Pair, I.P
     distance nor above it plus LOOP radii (LSL's bound). The arcs: the hull over the words that may be the
     shortest."""
     with np.errstate(invalid="ignore", over="ignore"):
-        return shortest_of(WordBounds(start, goal, radius), start, goal, radius)
+        bounds = WordBounds(start, goal, radius)
+    return shortest_of(bounds, start, goal, radius)
 
 
 def shortest_of(bounds: WordBounds, start: Pose, goal: Pose, radius: float) -> tuple[I.Pair, I.Pair]:
     """shortest_bounds from the words' enclosures `bounds` of these boxes (computed once by a caller that needs
     them for more)."""
     with np.errstate(invalid="ignore", over="ignore"):  # (unbounded boxes: NaN tests decide nothing, as wanted)
-        return _shortest_of(bounds, start, goal, radius)
+        straight = I.hypot(_sub(goal[0], start[0]), _sub(goal[1], start[1]))
+        upper = np.where(bounds.surely, bounds.hi, np.inf).min(axis=1)  # no longer than a word surely there ...
+        # ... or than the longer of LSL and RSR where the ends lie apart: the larger of their circles' centres'
+        # distances is then at least half the ends' (normalized) distance, and one of them is there
+        apart = bounds.d[0] ** 2 / 4.0 > 1e-6
+        upper = np.where(apart, np.minimum(upper, bounds.hi[:, :2].max(axis=1)), upper)
+        upper = np.minimum(upper, straight[1] + LOOP * radius * (1.0 + 1e-12))
+        least = bounds.lo.min(axis=1)  # (the ends' distance widened for the rounding of a straight word's length)
+        lower = np.maximum(np.where(np.isfinite(least), least, 0.0), straight[0] * (1.0 - 1e-12) - 1e-9)
+        lower = np.maximum(lower, 0.0)
+        may_be = bounds.maybe & (bounds.lo <= upper[:, None])
+        arcs = (np.where(may_be, bounds.arcs_lo, np.inf).min(axis=1),
+                np.where(may_be, bounds.arcs_hi, -np.inf).max(axis=1))
+        # where no word may be the shortest (only rounding could say so), any arcs a path of that length may have
+        none = ~may_be.any(axis=1)
+        arcs = (np.where(none, 0.0, arcs[0]), np.minimum(np.where(none, upper, arcs[1]), upper))  # (part of it)
+        # a box of positions not bounded in every direction: no test through its NaNs (inf - inf) is to be trusted;
+        # the ends' distance, and three arcs of less than a turn each (an unbounded heading is any heading: sound)
+        unbounded = ~np.all([np.isfinite(end) for pose in (start, goal) for pair in pose[:2] for end in pair], axis=0)
+        lower = np.where(unbounded, np.maximum(straight[0] * (1.0 - 1e-12) - 1e-9, 0.0), lower)
+        upper = np.where(unbounded, np.inf, upper)
+        arcs = (np.where(unbounded, 0.0, arcs[0]), np.where(unbounded, 3.0 * FULL * radius, arcs[1]))
+        return (lower, upper), _slack(arcs, 1e-9)
 
 
-def _shortest_of(bounds: WordBounds, start: Pose, goal: Pose, radius: float) -> tuple[I.Pair, I.Pair]:
-    straight = I.hypot(_sub(goal[0], start[0]), _sub(goal[1], start[1]))
-    upper = np.where(bounds.surely, bounds.hi, np.inf).min(axis=1)  # no longer than a word surely there ...
-    # ... or than the longer of LSL and RSR where the ends lie apart: the larger of their circles' centres'
-    # distances is then at least half the ends' (normalized) distance, and one of them is there
-    apart = bounds.d[0] ** 2 / 4.0 > 1e-6
-    upper = np.where(apart, np.minimum(upper, bounds.hi[:, :2].max(axis=1)), upper)
-    upper = np.minimum(upper, straight[1] + LOOP * radius * (1.0 + 1e-12))
-    least = bounds.lo.min(axis=1)  # (the ends' distance widened for the rounding of a straight word's length)
-    lower = np.maximum(np.where(np.isfinite(least), least, 0.0), straight[0] * (1.0 - 1e-12) - 1e-9)
-    lower = np.maximum(lower, 0.0)
-    may_be = bounds.maybe & (bounds.lo <= upper[:, None])
-    arcs = (np.where(may_be, bounds.arcs_lo, np.inf).min(axis=1), np.where(may_be, bounds.arcs_hi, -np.inf).max(axis=1))
-    # where no word may be the shortest (only rounding could say so), any arcs a path of that length may have
-    none = ~may_be.any(axis=1)
-    arcs = (np.where(none, 0.0, arcs[0]), np.minimum(np.where(none, upper, arcs[1]), upper))  # (part of it)
-    # a box of positions not bounded in every direction: no test through its NaNs (inf - inf) is to be trusted;
-    # the ends' distance, and three arcs of less than a turn each (an unbounded heading is any heading: sound)
-    unbounded = ~np.all([np.isfinite(end) for pose in (start, goal) for pair in pose[:2] for end in pair], axis=0)
-    lower = np.where(unbounded, np.maximum(straight[0] * (1.0 - 1e-12) - 1e-9, 0.0), lower)
-    upper = np.where(unbounded, np.inf, upper)
-    arcs = (np.where(unbounded, 0.0, arcs[0]), np.where(unbounded, 3.0 * FULL * radius, arcs[1]))
-    return (lower, upper), _slack(arcs, 1e-9)

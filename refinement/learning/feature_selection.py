@@ -71,17 +71,10 @@ def _leaf(rows: int) -> int:
 
 
 def cv_mae(X: np.ndarray, y: np.ndarray, folds: list[np.ndarray], leaf: int) -> tuple[float, np.ndarray]:
-    """K-fold MAE of a model tree on X, and the out-of-fold predictions."""
+    """K-fold MAE of a model tree on X (the median where X has no columns), and the out-of-fold predictions."""
     predicted = np.empty_like(y)
-    if X.shape[1] == 0:
-        for fold in folds:
-            rest = np.setdiff1d(np.arange(len(y)), fold)
-            predicted[fold] = np.median(y[rest])
-    else:
-        with one_thread():
-            for fold in folds:
-                rest = np.setdiff1d(np.arange(len(y)), fold)
-                predicted[fold] = ModelTree(min_samples_leaf=leaf).fit(X[rest], y[rest]).predict(X[fold])
+    for fold in folds:
+        predicted[fold] = _fold_fit(X, y, fold, leaf)
     return float(np.mean(np.abs(predicted - y))), predicted
 
 
@@ -100,8 +93,11 @@ def screen(columns: np.ndarray, residual: np.ndarray) -> np.ndarray:
 
 
 def _fold_fit(X: np.ndarray, y: np.ndarray, fold: np.ndarray, leaf: int) -> np.ndarray:
-    """The predictions on `fold` of a model tree fitted on the other rows (one fold of cv_mae)."""
+    """The predictions on `fold` of a model tree fitted on the other rows (one fold of cv_mae; the other rows'
+    median where X has no columns)."""
     rest = np.setdiff1d(np.arange(len(y)), fold)
+    if X.shape[1] == 0:
+        return np.full(len(fold), np.median(y[rest]))
     with one_thread():
         return ModelTree(min_samples_leaf=leaf).fit(X[rest], y[rest]).predict(X[fold])
 
@@ -209,7 +205,6 @@ def select_features(spec: ActionSpec, entry: SimulatorEntry, episodes: list[Epis
     # Table 4.1's generic row, where the structure has one, is a candidate set too, alone and joined to the
     # forward selection's (a step that gains little on the sample may still gain on all the data)
     row = generic_row(spec, entry.quantity) or []
-    names = {c.name: k for k, c in enumerate(candidates)}
     row_columns = candidate_columns(row, tuple(spec.parameters), params)
     joined = chosen + [len(candidates) + k for k, c in enumerate(row)
                        if not _same_as_any(row_columns[:, k], columns[:, chosen])]
@@ -233,7 +228,6 @@ def select_features(spec: ActionSpec, entry: SimulatorEntry, episodes: list[Epis
     label = min(scored, key=scored.get)
     pool = candidates + row
     picked = [pool[k] for k in tries[label]]
-    del names
     generated = space_of(picked).with_units(_units(spec, entry))
     sets = {"generated": scored[label], **theirs}
     best_other = min((name for name in sets if name != "generated"), key=sets.get, default=None)

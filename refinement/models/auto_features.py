@@ -141,6 +141,13 @@ def planes_of(axes: list[Axis]) -> list[tuple[Axis, Axis]]:
     return [(a, b) for a, b in zip(lengths, lengths[1:]) if a.start.unit == b.start.unit]
 
 
+def _in_frame(dx: Expr, dy: Expr, heading: Expr) -> tuple[Expr, Expr]:
+    """The move (dx, dy) in the frame of `heading`: along it, and |across| it (mirror invariance)."""
+    along = node("add", node("mul", dx, node("cos", heading)), node("mul", dy, node("sin", heading)))
+    across = node("abs", node("sub", node("mul", dy, node("cos", heading)), node("mul", dx, node("sin", heading))))
+    return along, across
+
+
 def _toward(speed: Expr, direction: Expr) -> Expr:
     """A speed signed toward the goal along `direction` (mirror invariance)."""
     return node("mul", speed, node("sgn", direction))
@@ -190,11 +197,9 @@ def generate(spec: ActionSpec, quantity: Callable[[str], Quantity], params: np.n
             signed = node("wrap", node("sub", bearing, hx))
             add(f"to_{tag}_{h.name}", node("abs", signed), "angle to the goal")
             add(f"signed_to_{tag}_{h.name}", signed, "angle to the goal")
-            along = node("add", node("mul", dx, node("cos", hx)), node("mul", dy, node("sin", hx)))
+            along, across = _in_frame(dx, dy, hx)
             add(f"along_{tag}_{h.name}", along, "goal in the start's frame")
-            add(f"across_{tag}_{h.name}",
-                node("abs", node("sub", node("mul", dy, node("cos", hx)), node("mul", dx, node("sin", hx)))),
-                "goal in the start's frame")
+            add(f"across_{tag}_{h.name}", across, "goal in the start's frame")
             for g in (p for p in ps if p.group == "internal" and p.angle and p.quantity == h.quantity):
                 at = node("wrap", node("sub", param(g.name), bearing))
                 add(f"at_{tag}_{g.name}", node("mul", node("sgn", signed), at), "angle at the goal")
@@ -379,12 +384,10 @@ def _composed(ps: list[Parameter], spec: ActionSpec, params: np.ndarray, duratio
         signed = node("wrap", node("sub", bearing, headings[0]))
         out.append(Candidate("offset_to", node("abs", signed), "offset point"))
         if one_sided:
-            h = headings[0]
+            along, across = _in_frame(dx, dy, headings[0])
             out += [Candidate("offset_signed_to", signed, "offset point"),
-                    Candidate("offset_along", node("add", node("mul", dx, node("cos", h)), node("mul", dy, node("sin", h))),
-                              "offset point"),
-                    Candidate("offset_across", node("abs", node("sub", node("mul", dy, node("cos", h)),
-                                                                node("mul", dx, node("sin", h)))), "offset point")]
+                    Candidate("offset_along", along, "offset point"),
+                    Candidate("offset_across", across, "offset point")]
     if headings[1] is not None:
         at = node("wrap", node("sub", headings[1], bearing))
         if headings[0] is not None:

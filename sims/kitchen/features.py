@@ -135,9 +135,7 @@ def _reframe(spots: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     n = len(spots)
     ox, oy = pose[:, 0] + rng.uniform(-1.0, 1.0, n), pose[:, 1] + rng.uniform(-1.0, 1.0, n)
     ophi = rng.uniform(-np.pi, np.pi, n)
-    c, s = np.cos(ophi), np.sin(ophi)
-    dx, dy = pose[:, 0] - ox, pose[:, 1] - oy
-    return np.column_stack([ox, oy, ophi, -s * dx + c * dy, -(c * dx + s * dy), _wrap(pose[:, 2] - ophi)])
+    return np.column_stack([ox, oy, ophi, *W.spot_offsets((ox, oy, ophi), pose.T)])
 
 
 def _route_reframe(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:

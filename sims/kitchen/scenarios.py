@@ -128,9 +128,9 @@ def in_frame(episode: Episode, frame: tuple[float, float, float]) -> Episode:
     """The episode with its start and logged base poses written as spots of `frame` (the serving frame), as a
     plan writes grip's and put's start: the simulator logs a pose as a spot with zero offsets, with which a
     model on the parameters alone would never see the offsets that refinement chooses. Same poses, same run."""
-    spots = [(*frame, *W.spot_offsets(frame, (x, y, phi))) for x, y, phi in episode.state[:, :3]]
     state = episode.state.copy()
-    state[:, :6] = np.array(spots, dtype=float).reshape(-1, 6)
+    state[:, :3] = frame
+    state[:, 3:6] = np.column_stack(W.spot_offsets(frame, episode.state[:, :3].T))
     params = episode.params.copy()
     params[:6] = (*frame, *W.spot_offsets(frame, tuple(params[:3])))
     return replace(episode, params=params, state=state)

@@ -27,6 +27,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 # --- rooms (m) -------------------------------------------------------------------------------------------
 ROOM_LENGTH = 10.0  # m, x in [0, 10]
 ROOM_WIDTH = 6.0  # m, y in [0, 6]
@@ -90,12 +92,11 @@ def spot_pose(ox: float, oy: float, ophi: float, along: float, dist: float, head
     return ox - dist * c - along * s, oy - dist * s + along * c, wrap(ophi + heading)
 
 
-def spot_offsets(frame: tuple[float, float, float], pose: tuple[float, float, float]
-                 ) -> tuple[float, float, float]:
+def spot_offsets(frame: tuple, pose: tuple) -> tuple:
     """The offsets (along, dist, heading) of base pose (x, y, phi) in spot frame (ox, oy, ophi): spot_pose's
-    inverse, so that spot_pose(*frame, *spot_offsets(frame, pose)) == pose."""
+    inverse, so that spot_pose(*frame, *spot_offsets(frame, pose)) == pose. Numbers or arrays (numpy)."""
     ox, oy, ophi = frame
-    c, s = math.cos(ophi), math.sin(ophi)
+    c, s = np.cos(ophi), np.sin(ophi)
     dx, dy = pose[0] - ox, pose[1] - oy
     return -s * dx + c * dy, -(c * dx + s * dy), wrap(pose[2] - ophi)
 
