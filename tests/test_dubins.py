@@ -75,24 +75,31 @@ def _boxes(rng: np.random.Generator, k: int, width: float) -> tuple[np.ndarray, 
     return centre - widths / 2, centre + widths / 2
 
 
-def _pose_boxes(low: np.ndarray, high: np.ndarray, first: int) -> D.Pose:
+def pose_boxes(low: np.ndarray, high: np.ndarray, first: int) -> D.Pose:
+    """The pose intervals of boxes (k, 6) of start and goal poses, from column `first` (0: start, 3: goal)."""
     return tuple((low[:, first + j], high[:, first + j]) for j in range(3))
 
 
-def _sampled(low: np.ndarray, high: np.ndarray, rng: np.random.Generator, m: int) -> tuple[np.ndarray, np.ndarray]:
-    """(k, m) lengths and arcs at m points of each box, 64 of its corners among them."""
+def sampled(low: np.ndarray, high: np.ndarray, rng: np.random.Generator, m: int, shortest
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """(k, m) lengths and arcs `shortest(starts, goals)` gives at m points of each box, 64 of its corners among
+    them."""
     u = rng.uniform(size=(len(low), m, 6))
     u[:, :64] = [[(c >> j) & 1 for j in range(6)] for c in range(64)]
     points = (low[:, None] + u * (high - low)[:, None]).reshape(-1, 6)
-    length, arcs = D.shortest(points[:, :3], points[:, 3:], RADIUS)
+    length, arcs = shortest(points[:, :3], points[:, 3:])
     return length.reshape(len(low), m), arcs.reshape(len(low), m)
+
+
+def _sampled(low: np.ndarray, high: np.ndarray, rng: np.random.Generator, m: int) -> tuple[np.ndarray, np.ndarray]:
+    return sampled(low, high, rng, m, lambda start, goal: D.shortest(start, goal, RADIUS))
 
 
 @pytest.mark.parametrize("width", [0.0, 1e-6, 0.02, 0.3, 2.0, 8.0])
 def test_the_enclosure_holds_every_sampled_value(width):
     rng = np.random.default_rng(int(width * 1000) + 7)
     low, high = _boxes(rng, 150, width)
-    (l_lo, l_hi), (a_lo, a_hi) = D.shortest_bounds(_pose_boxes(low, high, 0), _pose_boxes(low, high, 3), RADIUS)
+    (l_lo, l_hi), (a_lo, a_hi) = D.shortest_bounds(pose_boxes(low, high, 0), pose_boxes(low, high, 3), RADIUS)
     length, arcs = _sampled(low, high, rng, 300)
     assert np.all(l_lo[:, None] <= length) and np.all(length <= l_hi[:, None])
     assert np.all(a_lo[:, None] <= arcs) and np.all(arcs <= a_hi[:, None])
@@ -102,13 +109,13 @@ def test_the_enclosure_holds_every_sampled_value(width):
 def test_the_enclosure_shrinks_to_the_value_and_is_close_on_small_boxes():
     rng = np.random.default_rng(2)
     low, _ = _boxes(rng, 200, 0.0)
-    (l_lo, l_hi), (a_lo, a_hi) = D.shortest_bounds(_pose_boxes(low, low, 0), _pose_boxes(low, low, 3), RADIUS)
+    (l_lo, l_hi), (a_lo, a_hi) = D.shortest_bounds(pose_boxes(low, low, 0), pose_boxes(low, low, 3), RADIUS)
     length, arcs = D.shortest(low[:, :3], low[:, 3:], RADIUS)
     assert np.all(l_hi - l_lo < 1e-7) and np.allclose(l_lo, length, atol=1e-7)
     assert np.all(a_hi - a_lo < 1e-7) and np.allclose(a_lo, arcs, atol=1e-7)
     for width, typical in ((0.02, 2.0), (0.3, 2.5)):  # bound width over sampled range: median, not worst
         low, high = _boxes(rng, 300, width)
-        (l_lo, l_hi), _ = D.shortest_bounds(_pose_boxes(low, high, 0), _pose_boxes(low, high, 3), RADIUS)
+        (l_lo, l_hi), _ = D.shortest_bounds(pose_boxes(low, high, 0), pose_boxes(low, high, 3), RADIUS)
         length, _ = _sampled(low, high, rng, 200)
         spread = length.max(axis=1) - length.min(axis=1)
         assert np.median((l_hi - l_lo) / np.maximum(spread, 1e-12)) < typical
@@ -127,9 +134,9 @@ def test_many_boxes_are_enclosed_in_chunks_exactly_as_each_alone():
     """WordBounds encloses more than CHUNK boxes a chunk at a time: every row as it is when enclosed alone."""
     rng = np.random.default_rng(3)
     low, high = _boxes(rng, D.CHUNK + 150, 0.1)
-    many = D.WordBounds(_pose_boxes(low, high, 0), _pose_boxes(low, high, 3), RADIUS, 1e-3)
+    many = D.WordBounds(pose_boxes(low, high, 0), pose_boxes(low, high, 3), RADIUS, 1e-3)
     rows = [0, D.CHUNK - 1, D.CHUNK, D.CHUNK + 149]
-    few = D.WordBounds(_pose_boxes(low[rows], high[rows], 0), _pose_boxes(low[rows], high[rows], 3), RADIUS, 1e-3)
+    few = D.WordBounds(pose_boxes(low[rows], high[rows], 0), pose_boxes(low[rows], high[rows], 3), RADIUS, 1e-3)
     for name in ("lo", "hi", "arcs_lo", "arcs_hi", "surely", "maybe", "exact_surely", "exact_maybe", "seg_lo",
                  "seg_hi"):
         assert np.array_equal(getattr(many, name)[rows], getattr(few, name)), name

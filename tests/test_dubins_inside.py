@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from tailor.sims import dubins as D
 from tailor.sims import dubins_inside as DI
+from test_dubins import pose_boxes, sampled
 
 RADIUS = 0.4
 REGION = (-3.0, 3.0, -2.0, 2.0)
@@ -86,24 +87,15 @@ def _boxes(rng: np.random.Generator, k: int, width: float) -> tuple[np.ndarray, 
     return centre - widths / 2, centre + widths / 2
 
 
-def _pose_boxes(low: np.ndarray, high: np.ndarray, first: int) -> D.Pose:
-    return tuple((low[:, first + j], high[:, first + j]) for j in range(3))
-
-
 def _sampled(low: np.ndarray, high: np.ndarray, rng: np.random.Generator, m: int) -> tuple[np.ndarray, np.ndarray]:
-    """(k, m) lengths and arcs at m points of each box, 64 of its corners among them."""
-    u = rng.uniform(size=(len(low), m, 6))
-    u[:, :64] = [[(c >> j) & 1 for j in range(6)] for c in range(64)]
-    points = (low[:, None] + u * (high - low)[:, None]).reshape(-1, 6)
-    length, arcs = DI.shortest_inside(points[:, :3], points[:, 3:], RADIUS, REGION)
-    return length.reshape(len(low), m), arcs.reshape(len(low), m)
+    return sampled(low, high, rng, m, lambda start, goal: DI.shortest_inside(start, goal, RADIUS, REGION))
 
 
 @pytest.mark.parametrize("width", [0.0, 1e-6, 0.02, 0.3, 2.0, 6.0])
 def test_the_enclosure_holds_every_sampled_value(width):
     rng = np.random.default_rng(int(width * 1000) + 11)
     low, high = _boxes(rng, 150, width)
-    (l_lo, l_hi), (a_lo, a_hi) = DI.shortest_inside_bounds(_pose_boxes(low, high, 0), _pose_boxes(low, high, 3),
+    (l_lo, l_hi), (a_lo, a_hi) = DI.shortest_inside_bounds(pose_boxes(low, high, 0), pose_boxes(low, high, 3),
                                                            RADIUS, REGION)
     length, arcs = _sampled(low, high, rng, 300)
     assert np.all(l_lo[:, None] <= length) and np.all(length <= l_hi[:, None])
@@ -114,16 +106,16 @@ def test_the_enclosure_holds_every_sampled_value(width):
 def test_the_enclosure_shrinks_to_the_value_and_is_the_free_one_far_inside():
     rng = np.random.default_rng(2)
     low, _ = _boxes(rng, 300, 0.0)
-    (l_lo, l_hi), (a_lo, a_hi) = DI.shortest_inside_bounds(_pose_boxes(low, low, 0), _pose_boxes(low, low, 3),
+    (l_lo, l_hi), (a_lo, a_hi) = DI.shortest_inside_bounds(pose_boxes(low, low, 0), pose_boxes(low, low, 3),
                                                            RADIUS, REGION)
     length, arcs = DI.shortest_inside(low[:, :3], low[:, 3:], RADIUS, REGION)
     assert np.all(l_hi - l_lo < 1e-7) and np.allclose(l_lo, length, atol=1e-7)
     assert np.all(a_hi - a_lo < 1e-7) and np.allclose(a_lo, arcs, atol=1e-7)
     wide = (-30.0, 30.0, -20.0, 20.0)  # every box far inside: the free path's enclosure
     low, high = _boxes(rng, 100, 0.3)
-    assert np.array_equal(np.array(DI.shortest_inside_bounds(_pose_boxes(low, high, 0), _pose_boxes(low, high, 3),
+    assert np.array_equal(np.array(DI.shortest_inside_bounds(pose_boxes(low, high, 0), pose_boxes(low, high, 3),
                                                              RADIUS, wide)),
-                          np.array(D.shortest_bounds(_pose_boxes(low, high, 0), _pose_boxes(low, high, 3), RADIUS)))
+                          np.array(D.shortest_bounds(pose_boxes(low, high, 0), pose_boxes(low, high, 3), RADIUS)))
 
 
 def test_small_boxes_near_the_edges_are_mostly_enclosed_closely():
@@ -131,7 +123,7 @@ def test_small_boxes_near_the_edges_are_mostly_enclosed_closely():
     and are no longer: small boxes get close bounds though the free shortest word leaves the region."""
     rng = np.random.default_rng(4)
     low, high = _boxes(rng, 400, 1e-6)
-    (l_lo, l_hi), _ = DI.shortest_inside_bounds(_pose_boxes(low, high, 0), _pose_boxes(low, high, 3), RADIUS,
+    (l_lo, l_hi), _ = DI.shortest_inside_bounds(pose_boxes(low, high, 0), pose_boxes(low, high, 3), RADIUS,
                                                 REGION)
     centre = (low + high) / 2
     longer = DI.shortest_inside(centre[:, :3], centre[:, 3:], RADIUS, REGION)[0] > \

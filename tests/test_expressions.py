@@ -133,16 +133,21 @@ def _model(expressions: ExpressionSpace) -> ActionModel:
                        expressions=expressions)
 
 
+def _written(model: ActionModel, tmp_path) -> dict:
+    """The model's file written as `tailor train` writes it (tmp_path/move.json), read back as JSON."""
+    path = tmp_path / "move.json"
+    path.write_text(json.dumps(model.to_json()))
+    return json.loads(path.read_text())
+
+
 def test_a_model_file_keeps_its_features_as_expressions(tmp_path):
     s = space(["abs", ["sub", "xg", "x"]], ["mul", "v", ["sgn", ["sub", "xg", "x"]]]).with_units(UNITS)
     model = _model(s)
-    path = tmp_path / "move.json"
-    path.write_text(json.dumps(model.to_json()))
-    data = json.loads(path.read_text())
+    data = _written(model, tmp_path)
     assert data["feature_space"] == "auto"
     assert data["expressions"]["features"][0] == {"name": "f0", "expression": ["abs", ["sub", "xg", "x"]],
                                                   "formula": "|xg - x|", "unit": "m"}
-    loaded = ActionModel.from_json(data, str(path))
+    loaded = ActionModel.from_json(data, str(tmp_path / "move.json"))
     X = np.random.default_rng(1).uniform(-2, 2, (20, len(PARAMS)))
     assert np.array_equal(loaded.predict_duration(X), model.predict_duration(X))
     assert loaded.space.bounds is not None and loaded.space.parameters == PARAMS
@@ -159,12 +164,10 @@ def test_a_model_file_keeps_a_path_of_bounded_curvature_and_bounds_it(tmp_path):
     s = space(length, arcs, ["transfer", length, "v", "vg", 1.0, 0.5]).with_units(UNITS)
     assert s.units == ("m", "m", "s")  # (a fitted number takes its place's unit: xg - x - 0.3 cos(h) is metres)
     model = _model(s)
-    path = tmp_path / "move.json"
-    path.write_text(json.dumps(model.to_json()))
-    data = json.loads(path.read_text())
+    data = _written(model, tmp_path)
     assert data["expressions"]["features"][0]["expression"] == length
     assert data["expressions"]["features"][1]["formula"].startswith("dubins_arcs(xg - x - 0.3 * cos(h), ")
-    loaded = ActionModel.from_json(data, str(path))
+    loaded = ActionModel.from_json(data, str(tmp_path / "move.json"))
     assert loaded.space.parameters == PARAMS
     rng = np.random.default_rng(4)
     X = rng.uniform(-2, 2, (200, len(PARAMS)))
@@ -188,12 +191,10 @@ def test_a_model_file_keeps_a_path_inside_a_region_and_bounds_it(tmp_path):
     arcs = ["dubins_inside_arcs", *length[1:]]
     s = space(length, arcs)
     model = _model(s)
-    path = tmp_path / "move.json"
-    path.write_text(json.dumps(model.to_json()))
-    data = json.loads(path.read_text())
+    data = _written(model, tmp_path)
     assert data["expressions"]["features"][0]["expression"] == length
     assert data["expressions"]["features"][0]["formula"].endswith("; r=0.4, region=[-2.5, 2.5] x [-2, 2])")
-    loaded = ActionModel.from_json(data, str(path))
+    loaded = ActionModel.from_json(data, str(tmp_path / "move.json"))
     rng = np.random.default_rng(6)
     X = rng.uniform(-2, 2, (200, len(PARAMS)))
     assert np.array_equal(loaded.predict_duration(X), model.predict_duration(X))

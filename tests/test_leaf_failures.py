@@ -125,6 +125,11 @@ def test_malformed_counts_are_one_line_naming_the_file(trained, tmp_path, failur
     _, model = trained
     data = model.to_json()
     data["tree"]["failures"] = failures(data["tree"]["failures"], data["tree"]["samples"])
+    assert_one_line_tree_error(tmp_path, data, message)
+
+
+def assert_one_line_tree_error(tmp_path, data: dict, message: str) -> None:
+    """Loading the classifier file `data` fails with one line naming the file and `message` (a regex)."""
     path = tmp_path / "goToPose.collision.json"
     path.write_text(json.dumps(data), encoding="utf-8")
     with pytest.raises(ModelFileError, match="goToPose.collision.json: invalid decision tree: " + message) as error:

@@ -7,13 +7,11 @@ detour that the episodes after training do not justify."""
 from __future__ import annotations
 
 import copy
-import json
 from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from tailor.errors import ModelFileError
 from tailor.refinement.assertion import Detour, failure_probability
 from tailor.refinement.belief import parse_belief
 from tailor.refinement.instantiate import instantiate
@@ -22,6 +20,7 @@ from tailor.refinement.models.action_models import FRESH_PRIOR, load_collision_m
 from tailor.refinement.models.features import compute_features, first_examples
 from tailor.refinement.pipeline import assert_task, prepare, read_task, resolve_task
 from synthetic_episodes import gather
+from test_leaf_failures import assert_one_line_tree_error
 
 # a ball approach the classifier predicts to fail from, the detour through a subgoal predicted seconds longer than
 # the plain approach (tests/test_assertion_detour.py)
@@ -97,11 +96,7 @@ def test_malformed_fresh_counts_are_one_line_naming_the_file(trained, tmp_path, 
     data = copy.deepcopy(model.to_json())  # (the module's model shares its report)
     counts = data["report"]["fresh_leaves"]
     data["report"]["fresh_leaves"] = fresh(counts["samples"], counts["failures"])
-    path = tmp_path / "goToPose.collision.json"
-    path.write_text(json.dumps(data), encoding="utf-8")
-    with pytest.raises(ModelFileError, match="goToPose.collision.json: invalid decision tree: " + message) as error:
-        load_collision_model(path)
-    assert "\n" not in str(error.value)
+    assert_one_line_tree_error(tmp_path, data, message)
 
 
 @pytest.fixture(scope="module")
