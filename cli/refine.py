@@ -64,7 +64,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--plot", metavar="FILE.png",
                         help="draw greedy and refined trajectories side by side (simulates them); also "
                              "FILE_polar.png (the first free parameter a full-circle angle) or FILE_costs.png: "
-                             "the predicted time over that parameter; every file written is named")
+                             "the predicted time over that parameter; and FILE_waypoint.png where two actions share a "
+                             "way-point with a free angle and speed (Fig. 5.9: each action's predicted time and their "
+                             "sum over both); every file written is named")
     add_filter_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
     add_risk_argument(parser)

@@ -1,7 +1,9 @@
 """Pictures of subgoal refinement: the executions side by side in each view the simulator declares (Fig. 5.1:
-one view from above; Fig. 5.14: two views, one in the plane, one of two configuration quantities), and the
+one view from above; Fig. 5.14: two views, one in the plane, one of two configuration quantities), the
 predicted time over the first free parameter (Fig. 5.8: a polar plot where the simulator declares that
-parameter's quantity an angle and its range spans the full circle)."""
+parameter's quantity an angle and its range spans the full circle), and, at the first way-point whose angle of
+approach and speed are both free, the predicted time of the action arriving there, of the one leaving it and
+their sum over both (Fig. 5.9)."""
 
 from __future__ import annotations
 
@@ -229,10 +231,69 @@ def costs_figure(parameter, values: np.ndarray, curves: list[tuple[str, np.ndarr
     return fig
 
 
-def cost_plot_names(path) -> tuple[Path, Path]:
-    """The names draw_refinement gives the predicted-time plot beside FILE: FILE_polar.png, FILE_costs.png."""
+def cost_plot_names(path) -> tuple[Path, Path, Path]:
+    """The names draw_refinement gives the predicted-time plots beside FILE: FILE_polar.png, FILE_costs.png
+    (over one free parameter) and FILE_waypoint.png (Fig. 5.9)."""
     path = Path(path)
-    return tuple(path.with_name(path.stem + kind + (path.suffix or ".png")) for kind in ("_polar", "_costs"))
+    return tuple(path.with_name(path.stem + kind + (path.suffix or ".png"))
+                 for kind in ("_polar", "_costs", "_waypoint"))
+
+
+def is_speed(quantity: Quantity) -> bool:
+    """A quantity declared in a unit per second that is not an angle's rate: a speed."""
+    return quantity.unit.endswith("/s") and not quantity.angle and not quantity.unit.startswith("rad")
+
+
+def waypoint_pair(sequence, entry: SimulatorEntry | None):
+    """The first way-point of Fig. 5.9 in `sequence`: (index of the action arriving there, the free angle, the
+    free speed), where two consecutive actions share a free parameter declared an angle and one declared a speed
+    (the angle of approach and the speed at the way-point); None where there is none."""
+    actions = sequence.actions
+    for k in range(len(actions) - 1):
+        shared = ({p.id: p for p in actions[k].free_parameters()}.keys()
+                  & {p.id for p in actions[k + 1].free_parameters()})
+        free = [p for p in actions[k].free_parameters() if p.id in shared]
+        angle = next((p for p in free if _quantity(entry, p.id).angle), None)
+        speed = next((p for p in free if is_speed(_quantity(entry, p.id))), None)
+        if angle is not None and speed is not None:
+            return k, angle, speed
+    return None
+
+
+def _degrees(angle: float) -> str:
+    return f"{round(float(np.degrees(angle))) + 0}°"  # (an int: never "-0")
+
+
+def waypoint_figure(angle, speed, grid: tuple[np.ndarray, np.ndarray], panels: list[tuple[str, np.ndarray]],
+                    marks: list[tuple[str, float, float]], entry: SimulatorEntry | None = None):
+    """Fig. 5.9: one panel per (title, predicted durations over the grid of angle x speed), filled contours with
+    a shared colour scale, the greedy and refined choices marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    angles, speeds = grid
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.8 * len(panels), 4.6), layout="constrained")
+    for ax, (title, predicted) in zip(np.atleast_1d(axes), panels):
+        finite = predicted[np.isfinite(predicted)]
+        levels = np.linspace(finite.min(), finite.max(), 15) if finite.size and np.ptp(finite) > 0 else 15
+        filled = ax.contourf(np.degrees(angles), speeds, predicted.T, levels=levels, cmap="viridis")
+        fig.colorbar(filled, ax=ax, label="predicted duration (s)", shrink=0.85)
+        best = np.unravel_index(np.nanargmin(predicted), predicted.shape)
+        ax.plot(np.degrees(angles[best[0]]), speeds[best[1]], "o", color="white", mec="black", ms=7, clip_on=False,
+                zorder=4, label=f"fastest on the grid: {_degrees(angles[best[0]])}, {speeds[best[1]]:.2f}, "
+                                f"{predicted[best]:.2f} s")
+        for label, a, v in marks:
+            marker, color = MARK_STYLES.get(label, ("o", "tab:red"))
+            i, j = int(np.argmin(np.abs(angles - a))), int(np.argmin(np.abs(speeds - v)))
+            ax.plot(np.degrees(a), v, marker, color=color, ms=11 if marker == "*" else 8, mec="black", mew=0.6,
+                    linestyle="none", clip_on=False, zorder=5,
+                    label=f"{label}: {_degrees(a)}, {v:.2f}, {predicted[i, j]:.2f} s")
+        ax.set(xlabel=f"{angle.id} (°)", ylabel=axis_label(speed.id, _quantity(entry, speed.id)))
+        ax.set_title(title, fontsize=10)
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), fontsize=8, frameon=False)
+    return fig
 
 
 NO_FREE_PARAMETERS = "no free parameters"  # the one panel of a plan that leaves nothing to choose
@@ -296,4 +357,38 @@ def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
             "predicted total" if others else "")
     plot_costs(costs, parameter, values, curves, [("greedy", greedy[parameter.id]), ("refined", chosen[parameter.id])],
                note, quantity)
-    return written + [costs]
+    written.append(costs)
+    pair = waypoint_pair(prepared.sequence, entry)
+    if pair is not None:
+        written.append(draw_waypoint(cost_plot_names(path)[2], prepared, pair, chosen, greedy, entry))
+    return written
+
+
+def draw_waypoint(path: Path, prepared, pair, chosen: dict, greedy: dict, entry: SimulatorEntry | None) -> Path:
+    """Fig. 5.9 at the way-point `pair` (waypoint_pair): the predicted durations of the action arriving there, of
+    the one leaving it and their sum over its free angle and speed, the other free parameters at their refined
+    values; written to `path`."""
+    import matplotlib.pyplot as plt
+
+    k, angle, speed = pair
+    angles = np.linspace(angle.low, angle.high, 61)
+    speeds = np.linspace(speed.low, speed.high, 41)
+    both = prepared.sequence.actions[k:k + 2]
+    panels, total = [], np.zeros((len(angles), len(speeds)))
+    for action in both:
+        rows = np.array([action.values({**chosen, angle.id: float(a), speed.id: float(v)})
+                         for a in angles for v in speeds])
+        predicted = prepared.models[action.action].predict_duration(rows).reshape(len(angles), len(speeds))
+        total += predicted
+        panels.append((f"{action.step} {action.action}: to the way-point" if action is both[0]
+                       else f"{action.step} {action.action}: from the way-point", predicted))
+    panels.append(("total of both", total))
+    marks = [(label, values[angle.id], values[speed.id]) for label, values in (("greedy", greedy), ("refined", chosen))]
+    fig = waypoint_figure(angle, speed, (angles, speeds), panels, marks, entry)
+    others = len({p.id for a in both for p in a.free_parameters()} - {angle.id, speed.id})
+    if others:
+        fig.supxlabel(f"{angle.id} and {speed.id} varied, the {others} other free parameter{'s' if others != 1 else ''} "
+                      "of these actions at their refined values", fontsize=8)
+    _save(fig, path)
+    plt.close(fig)
+    return path

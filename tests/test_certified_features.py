@@ -11,6 +11,7 @@ from tailor.sims import intervals as I
 from tailor.sims.arm import world as AW
 from tailor.sims.arm.features import RAMPS
 from tailor.sims.kinematics import transfer_time
+from tailor.sims.kitchen import world as KW
 from tailor.sims.kitchen.features import GRASP, ROUTE
 from tailor.sims.soccer import dubins
 from tailor.sims.soccer import feature_bounds as B
@@ -132,6 +133,7 @@ def test_the_angle_enclosures_hold():
 # --- the robots' spaces ----------------------------------------------------------------------------------------
 ARM_RANGES = np.array([[*AW.THETA_A_LIMITS], [-1.2, 1.2], [*AW.THETA_B_LIMITS], [-1.2, 1.2]] * 2)
 KITCHEN_SPOT = np.array([[-1.0, 11.0], [-1.0, 7.0], [-np.pi, np.pi], [-0.5, 0.5], [0.0, 0.8], [-np.pi, np.pi]])
+KITCHEN_PASSING = np.vstack([KITCHEN_SPOT, [[0.0, KW.V_MAX]]])  # navigate's start and goal: a spot and a speed
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -155,13 +157,14 @@ def test_the_kitchen_grasp_bounds_with_the_frame_and_the_point_fixed():
 
 @pytest.mark.parametrize("seed", range(3))
 def test_the_kitchen_route_bounds_are_sound_and_tight(seed):
-    check_space(ROUTE, np.vstack([KITCHEN_SPOT, KITCHEN_SPOT]), seed, n=80)
+    check_space(ROUTE, np.vstack([KITCHEN_PASSING, KITCHEN_PASSING]), seed, n=80)
 
 
 def test_the_kitchen_route_bounds_with_the_frames_fixed_as_refinement_passes_them():
-    """Start and goal spots at the tables' frames, their offsets free (and a start pose fixed whole)."""
-    check_space(ROUTE, np.vstack([KITCHEN_SPOT, KITCHEN_SPOT]), 13, fixed=(0, 1, 2, 6, 7, 8), n=80)
-    check_space(ROUTE, np.vstack([KITCHEN_SPOT, KITCHEN_SPOT]), 14, fixed=(0, 1, 2, 3, 4, 5, 6, 7, 8), n=80)
+    """Start and goal spots at the tables' frames, their offsets and speeds free (and a start pose fixed
+    whole)."""
+    check_space(ROUTE, np.vstack([KITCHEN_PASSING, KITCHEN_PASSING]), 13, fixed=(0, 1, 2, 7, 8, 9), n=80)
+    check_space(ROUTE, np.vstack([KITCHEN_PASSING, KITCHEN_PASSING]), 14, fixed=(0, 1, 2, 3, 4, 5, 7, 8, 9), n=80)
 
 
 # the field with its run-off, any heading, the speeds

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from tailor.planner_bridge import plan_files, resolve_problem
 from tailor.refinement.binding import load_domain_binding
 from tailor.refinement.instantiate import instantiate
@@ -18,21 +20,29 @@ def _sequence(problem: str):
     return instantiate(plan_files(domain, path), load_domain_binding(domain.parent), load_belief(path.with_suffix(".toml")))
 
 
-def test_free_parameters_are_the_spots_at_the_tables_in_fig_5_12_ranges():
+def test_free_parameters_are_the_spots_at_the_tables_in_fig_5_12_ranges_and_the_door_way_point():
     sequence = _sequence("scenario1")
-    assert [a.action for a in sequence.actions] == ["navigate", "grip", "navigate", "put"]
+    assert [a.action for a in sequence.actions] == ["navigate", "grip", "navigate", "navigate", "put"]
     free = {p.id: (p.low, p.high) for p in sequence.free_parameters()}
-    assert free == {f"{s}.{q}": r for s in ("p1", "d1")
-                    for q, r in (("along", (-0.5, 0.5)), ("dist", (0.4, 0.8)), ("heading", (-1.0, 1.0)))}
-    # grip's observed group is the spot it stands at, shared with the navigate that reaches it
-    goto, grip = sequence.actions[0], sequence.actions[1]
-    assert [p.id for p in goto.params[6:]] == [p.id for p in grip.params[:6]]
+    tables = {f"{s}.{q}": r for s in ("p1", "d1")
+              for q, r in (("along", (-0.5, 0.5)), ("dist", (0.4, 0.8)), ("heading", (-1.0, 1.0)))}
+    door = {"w1.along": (-0.2, 0.2), "w1.heading": (-0.6, 0.6), "w1.v": (0.0, 0.6)}
+    assert free == {**tables, **door}
+    # the base stops at the tables (v bound to 0) and passes the door on the divider's line (dist bound to 0)
+    bound = {p.id: p.value for a in sequence.actions for p in a.params if not p.free}
+    assert bound["p1.v"] == bound["d1.v"] == bound["start.v"] == bound["w1.dist"] == 0.0
+    # grip's observed group is the spot it stands at, shared with the navigate that reaches it (navigate also
+    # reads the spot's speed); the navigate leaving the door starts from the door spot the crossing passes
+    goto, grip, cross, leave = sequence.actions[:4]
+    assert [p.id for p in goto.params[7:13]] == [p.id for p in grip.params[:6]]
+    assert [p.id for p in cross.params[7:]] == [p.id for p in leave.params[:7]] == [
+        f"w1.{q}" for q in ("ox", "oy", "ophi", "along", "dist", "heading", "v")]
 
 
 def test_every_table_and_cup_is_its_own_scene_object():
     sequence = _sequence("scenario2")
     assert set(sequence.scene) == {"robot", "table table1", "table table2", "cup cup1", "cup cup2"}
-    assert len(sequence.actions) == 8
+    assert len(sequence.actions) == 11
     sim = registry.get("kitchen").create(0)
     sim.reset(dict(sequence.scene))
     assert set(sim.tables) == {"table1", "table2"} and set(sim.cups) == {"cup1", "cup2"}
@@ -66,7 +76,10 @@ def test_draw_scene_draws_furniture_and_the_ranges_of_each_spot():
     registry.get("kitchen").draw_scene(ax, sequence, values)
     green = [p for p in ax.patches if isinstance(p, Polygon) and p.get_alpha() == 0.25]
     assert len(green) == 2  # the square areas of p1 and d1 (the start has no free parameters)
-    assert len([p for p in ax.patches if isinstance(p, Wedge)]) == 2  # their heading sectors
+    door = [line for line in ax.lines if line.get_label() == "spot's along range"]
+    assert len(door) == 1 and door[0].get_xdata() == pytest.approx([5.0, 5.0])  # w1's segment across the door
+    assert sorted(door[0].get_ydata()) == pytest.approx([2.8, 3.2])
+    assert len([p for p in ax.patches if isinstance(p, Wedge)]) == 3  # their and the door's heading sectors
     plt.close(fig)
 
 
@@ -77,7 +90,9 @@ def test_evaluate_situations_option(capsys):
                  "--horizon-episodes", "0", "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["comparison"] == "scenario2" and report["problems"] == ["scenario2"]
-    assert [row["action"] for row in report["per_action"]] == ["navigate", "grip", "navigate", "put"] * 2
+    assert [row["action"] for row in report["per_action"]] == (["navigate", "grip", "navigate", "navigate", "put"]
+                                                                + ["navigate"] + ["navigate", "grip", "navigate",
+                                                                                   "navigate", "put"])
     assert report["episodes"] == 1 and report["refined_mean"] < report["greedy_mean"]
 
 
@@ -97,3 +112,38 @@ def test_refine_plot_draws_the_scene_under_both_executions(tmp_path, monkeypatch
     assert main(["refine", "kitchen", "scenario1", "--plot", str(picture)]) == 0
     assert picture.stat().st_size > 0
     assert calls == [["p1.along", "p1.dist", "p1.heading"]] * 2  # greedy and refined panels
+
+
+def test_the_door_is_passed_at_speed_and_that_is_faster_than_stopping_there(tmp_path):
+    """Sec. 5.5's free way-point speed: refinement passes the door without stopping, and in the simulator the
+    same plan refined with the door's speed held at 0 (the binding's v range [0, 0]) is slower."""
+    import shutil
+
+    from tailor.refinement.api import dispatch, refine
+
+    stopping = tmp_path / "kitchen"
+    shutil.copytree(resolve_problem("kitchen", "scenario1")[0].parent, stopping)
+    binding = stopping / "actions.toml"
+    text = binding.read_text()
+    assert text.count("v = [0.0, 0.6]") == 1  # the door's
+    binding.write_text(text.replace("v = [0.0, 0.6]", "v = [0.0, 0.0]"))
+    free = refine("kitchen", "scenario1", seed=3)
+    held = refine(stopping, "scenario1", seed=3, models=stopping / "models")
+    assert free.chosen["w1.v"] > 0.3 and "w1.v" not in held.chosen
+    assert free.predicted_total < held.predicted_total - 0.5
+    runs = [dispatch(r, seed=3) for r in (free, held)]
+    assert all(run.succeeded for run in runs)
+    assert runs[0].duration < runs[1].duration - 0.5
+
+
+def test_refine_plot_draws_fig_5_9_at_the_door(tmp_path):
+    """`tailor refine kitchen scenario1 --plot F.png` also writes F_waypoint.png: the cross and the navigate
+    after it over the door's heading and speed (Fig. 5.9)."""
+    from tailor.refinement import refine_plots
+
+    sequence = _sequence("scenario1")
+    step, angle, speed = refine_plots.waypoint_pair(sequence, registry.get("kitchen"))
+    assert (step, angle.id, speed.id) == (2, "w1.heading", "w1.v")
+    picture = tmp_path / "F.png"
+    assert main(["refine", "kitchen", "scenario1", "--plot", str(picture)]) == 0
+    assert (tmp_path / "F_waypoint.png").stat().st_size > 0

@@ -30,7 +30,7 @@ def _sim(pose, tables=None, cups=None, holding=None, noise=QUIET, seed=0):
 
 def _drive(distance: float) -> float:
     sim = _sim((1.0, 1.0, 0.0))
-    episode = sim.run(ActionCall("navigate", (1.0 + distance, 1.0, 0.0, 0.0, 0.0, 0.0)))
+    episode = sim.run(ActionCall("navigate", (1.0 + distance, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0)))
     assert episode.outcome == "success"
     assert sim.true_state()[0] == pytest.approx(1.0 + distance, abs=0.08)
     return episode.duration
@@ -82,7 +82,7 @@ def test_put_carries_the_cup_to_the_put_location():
 
 def test_collision_with_a_table_is_an_outcome():
     sim = _sim((2.5, 4.0, math.pi / 2), {"table1": T1})
-    episode = sim.run(ActionCall("navigate", (2.5, 5.1, math.pi / 2, 0.0, 0.0, 0.0)))  # a goal inside the table
+    episode = sim.run(ActionCall("navigate", (2.5, 5.1, math.pi / 2, 0.0, 0.0, 0.0, 0.0)))  # a goal inside the table
     assert episode.outcome == "collision"
     edge = T1[1] - W.TABLE_DEPTH / 2
     assert sim.true_state()[1] == pytest.approx(edge - W.BASE_RADIUS, abs=0.04)  # stopped at first touch
@@ -109,7 +109,7 @@ def test_route_goes_through_the_door_round_the_jamb():
     corner = (W.DIVIDER_X - W.WALL_THICKNESS / 2 - grow, W.DOOR_Y - W.DOOR_WIDTH / 2 + grow)
     assert len(path) == 3
     assert path[1] == pytest.approx(corner)
-    features = ROUTE(np.array([[2.0, 1.0, 0.0, 0, 0, 0, 8.5, 3.0, 0.0, 0, 0, 0]]))[0]
+    features = ROUTE(np.array([[2.0, 1.0, 0.0, 0, 0, 0, 0, 8.5, 3.0, 0.0, 0, 0, 0, 0]]))[0]
     expected = math.dist((2.0, 1.0), corner) + math.dist(corner, (8.5, 3.0))
     assert features[0] == pytest.approx(expected)
     assert features[1] == pytest.approx(math.atan2(corner[1] - 1.0, corner[0] - 2.0))  # turn to the first leg
@@ -117,7 +117,7 @@ def test_route_goes_through_the_door_round_the_jamb():
 
 def test_go_to_pose_reaches_the_other_room_without_touching_anything():
     sim = _sim((2.0, 1.0, math.pi), {"table1": T1, "table2": T2}, noise=Noise())
-    result = sim.run_sequence([ActionCall("navigate", (*W.serving_frame(T2, 9.5, 2.5), 0.2, 0.6, 0.3))])
+    result = sim.run_sequence([ActionCall("navigate", (*W.serving_frame(T2, 9.5, 2.5), 0.2, 0.6, 0.3, 0.0))])
     assert result.succeeded
     x, y = result.column("x"), result.column("y")
     gap = min(min(b.distance(px, py) for b in [*W.walls(), W.island()]) for px, py in zip(x, y))
@@ -142,5 +142,5 @@ def test_reset_takes_the_binding_scene_and_rejects_bad_input():
     assert set(sim.tables) == {"table1"} and set(sim.cups) == {"cup1"}
     with pytest.raises(SimError, match="unknown kitchen scene object"):
         sim.reset({"robot": (1.0, 1.0, 0.0, 0.0, 0.0, 0.0), "ball": (1.0, 2.0)})
-    with pytest.raises(SimError, match="goal must be 6"):
+    with pytest.raises(SimError, match="goal must be 7"):
         sim.run(ActionCall("navigate", (1.0, 2.0)))

@@ -82,7 +82,7 @@ def test_kitchen_energy_of_a_straight_drive_is_twice_the_kinetic_energy_at_top_s
     # (V_MAX^2 - v_end^2) braking (the speed profile rises, then falls: the sum telescopes, rounding only)
     sim = KitchenSim(0, Noise.off())
     sim.place((1.0, 1.0, 0.0), {}, {})
-    episode = sim.run(ActionCall("navigate", (3.0, 1.0, 0.0, 0.0, 0.0, 0.0)))
+    episode = sim.run(ActionCall("navigate", (3.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0)))
     assert episode.succeeded and sim.w == 0.0 and 0.0 <= sim.v <= 0.05
     hand = 0.5 * BASE_MASS * (2 * W.V_MAX ** 2 - sim.v ** 2)  # about 43.1 J of a 120 kg base
     assert episode.measures[ENERGY] == pytest.approx(hand, rel=1e-9)
@@ -172,9 +172,9 @@ def test_kitchen_navigate_error_is_the_base_to_the_goal_spot_as_logged():
         layout, start, goal = sample_goto(np.random.default_rng(seed))
         sim = KitchenSim(seed, Noise.off())
         tables = {"table1": layout["table1"], "table2": layout["table2"]}
-        sim.place(start, tables, {"cup1": layout["cups"][0]})
+        sim.place(W.spot_pose(*start[:6]), tables, {"cup1": layout["cups"][0]}, speed=start[6])
         episode = sim.run(ActionCall("navigate", goal))
-        gx, gy, gphi = W.spot_pose(*goal)
+        gx, gy, gphi = W.spot_pose(*goal[:6])
         x, y, phi = sim.true_state()[:3]
         # the log holds the base pose as a spot with zero offsets: ox, oy, ophi are x, y, phi
         logged += _check_end_error(episode, (x, y), (gx, gy), tuple(episode.state[-1, :2]))

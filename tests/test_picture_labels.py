@@ -341,7 +341,7 @@ CHOICES = {
     "low": lambda p: p.low,
     "high": lambda p: p.high,
     "near the table, at one side": lambda p: {"dist": p.low, "along": p.high}.get(p.id.partition(".")[2], 0.0),
-    "far, at the other side": lambda p: {"dist": p.high, "along": p.low}.get(p.id.partition(".")[2], 1.0),
+    "far, at the other side": lambda p: {"dist": p.high, "along": p.low}.get(p.id.partition(".")[2], min(1.0, p.high)),
 }
 
 

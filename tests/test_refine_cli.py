@@ -58,13 +58,13 @@ def test_refine_plot_writes_trajectories_and_polar_plot(tmp_path, capsys):
         assert main(["refine", "soccer", "score", "--plot", str(out)]) == 0
     finally:
         os.umask(previous)
-    assert out.stat().st_size > 10_000 and (tmp_path / "score_polar.png").stat().st_size > 10_000
+    polar, waypoint = tmp_path / "score_polar.png", tmp_path / "score_waypoint.png"  # Fig. 5.8; Fig. 5.9 at the ball
+    assert all(png.stat().st_size > 10_000 for png in (out, polar, waypoint))
     printed = capsys.readouterr().out
-    polar = tmp_path / "score_polar.png"
-    assert f"Wrote {out}\n" in printed and f"Wrote {polar}\n" in printed  # every file written is named
-    for png in (out, polar):  # a new file's permissions under umask 022, not mkstemp's 0600
+    assert all(f"Wrote {png}\n" in printed for png in (out, polar, waypoint))  # every file written is named
+    for png in (out, polar, waypoint):  # a new file's permissions under umask 022, not mkstemp's 0600
         assert stat.S_IMODE(png.stat().st_mode) == 0o644
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["score.png", "score_polar.png"]  # nothing staged left
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["score.png", "score_polar.png", "score_waypoint.png"]
 
 
 def _tailor(*args: str) -> subprocess.CompletedProcess:

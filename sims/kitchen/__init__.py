@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 from tailor.sims.kitchen.disturbances import DISTURBANCES, VARIANTS
 from tailor.sims.kitchen.drawing import draw_scene
-from tailor.sims.kitchen.features import GRASP, ROUTE, SPOT
+from tailor.sims.kitchen.features import GRASP, PASSING, ROUTE, SPOT
 from tailor.sims.kitchen.scenarios import SITUATIONS, run_goto, run_grip, run_put, subgoal_episode
 from tailor.sims.registry import deferred_names
 from tailor.sims.protocol import ActionSpec, Quantity, Scenario, SimulatorEntry
@@ -44,8 +44,8 @@ def _create(seed: int, noise: Noise | None = None, disturbance: str | None = Non
 SIMULATOR = SimulatorEntry(
     name="kitchen",
     actions={
-        "navigate": ActionSpec("navigate", "kitchen", observed=SPOT, internal=tuple(f"{q}g" for q in SPOT),
-                               observed_quantities=SPOT, internal_quantities=SPOT),
+        "navigate": ActionSpec("navigate", "kitchen", observed=PASSING, internal=tuple(f"{q}g" for q in PASSING),
+                               observed_quantities=PASSING, internal_quantities=PASSING),
         "grip": ActionSpec("grip", "kitchen", observed=SPOT, internal=("cx", "cy"),
                            observed_quantities=SPOT, internal_quantities=("x", "y")),
         "put": ActionSpec("put", "kitchen", observed=SPOT, internal=("tx", "ty"),

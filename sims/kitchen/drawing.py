@@ -1,6 +1,7 @@
 """The kitchen under the trajectories of `tailor refine --plot`: walls, island, tables and cups of the scene, and
 at each spot with free parameters the ranges of Fig. 5.12 (green: the square area of positions along and
-away from the table's edge, the circular sector of headings at the chosen position) with the chosen pose.
+away from the table's edge, or at a door spot the segment across the door, the circular sector of headings at
+the chosen position) with the chosen pose, and at a way-point the speed chosen to pass it.
 Names stand where no marker is: a table's behind it (beyond the wall it stands against; cups and put locations
 lie on it, the robot works before it), a spot's diagonally beyond the far corner of its square (the heading
 sector and arrow point toward the table, the chosen position lies inside the square), on the side away from the
@@ -82,24 +83,34 @@ def draw_scene(ax, sequence, values) -> None:
         if not all(k in q for k in ("ox", "oy", "ophi", "along", "dist", "heading")):
             continue
         along, dist, heading = q["along"], q["dist"], q["heading"]
-        if along.value is not None or dist.value is not None:
-            continue  # a spot without free parameters (the start)
+        if along.value is not None and dist.value is not None:
+            continue  # a spot without a free position (the start)
         frame = (q["ox"].value, q["oy"].value, q["ophi"].value)
         corners = [W.spot_pose(*frame, a, d, 0.0)[:2]
                    for a, d in ((along.low, dist.low), (along.high, dist.low), (along.high, dist.high), (along.low, dist.high))]
-        ax.add_patch(Polygon(corners, closed=True, color=RANGE_COLOR, alpha=0.25, zorder=1,
-                             label=f"spot's {along.id.partition('.')[2]}, {dist.id.partition('.')[2]} range"))
-        if along.id not in values or dist.id not in values:
+        if along.value is None and dist.value is None:
+            ax.add_patch(Polygon(corners, closed=True, color=RANGE_COLOR, alpha=0.25, zorder=1,
+                                 label=f"spot's {along.id.partition('.')[2]}, {dist.id.partition('.')[2]} range"))
+        else:  # one free offset (a door spot: across the door): its range is a segment
+            free = along if along.value is None else dist
+            ax.plot(*zip(corners[0], corners[2]), color=RANGE_COLOR, alpha=0.5, lw=5, solid_capstyle="butt", zorder=1,
+                    label=f"spot's {free.id.partition('.')[2]} range")
+        at = {p.id: values.get(p.id, p.value) for p in (along, dist, heading)}
+        if at[along.id] is None or at[dist.id] is None:
             continue
         side = _side(frame, frames)
         corner = W.spot_pose(*frame, along.high if side > 0 else along.low, dist.high, 0.0)[:2]
         outward = frame[2] + math.pi - side * math.pi / 4  # away from the table and beyond the square's side
-        _name(ax, obj, *corner, outward, gap=SPOT_LABEL_GAP, color="darkgreen")
-        x, y, _ = W.spot_pose(*frame, values[along.id], values[dist.id], 0.0)
+        x, y, _ = W.spot_pose(*frame, at[along.id], at[dist.id], 0.0)
+        speed = q.get("v")
+        label = obj
+        if speed is not None and speed.value is None and speed.id in values:  # a way-point passed at a free speed
+            label = f"{obj}: {values[speed.id]:.2f} m/s"
+        _name(ax, label, *corner, outward, gap=SPOT_LABEL_GAP, color="darkgreen")
         ax.add_patch(Wedge((x, y), SECTOR_RADIUS, math.degrees(frame[2] + heading.low),
                            math.degrees(frame[2] + heading.high), color=RANGE_COLOR, alpha=0.25, zorder=1,
                            label=f"spot's {heading.id.partition('.')[2]} range"))
-        phi = frame[2] + values.get(heading.id, 0.0)
+        phi = frame[2] + (at[heading.id] or 0.0)
         ax.annotate("", xy=(x + SECTOR_RADIUS * math.cos(phi), y + SECTOR_RADIUS * math.sin(phi)), xytext=(x, y),
                     arrowprops={"arrowstyle": "->", "color": "darkgreen"}, zorder=3)
         ax.plot([], [], linestyle="none", marker=r"$\rightarrow$", ms=10, color="darkgreen",

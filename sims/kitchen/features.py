@@ -1,9 +1,12 @@
 """The kitchen's own feature spaces (Table 4.1 rows for its actions).
 
 "route" (navigate): the shortest route from the start pose to the goal pose round the divider and the island
-(navigation.nominal_map, world.nominal_obstacles: the furniture that can lengthen a route), described by its length, the turn needed at the start to face the route's first leg, the turn
-at the goal from the last leg to the goal heading, and the turning at the route's corners. Invariant to
-the frame a pose is written in (a spot with zero offsets is the pose itself).
+(navigation.nominal_map, world.nominal_obstacles: the furniture that can lengthen a route), described by its
+length, the turn needed at the start to face the route's first leg, the turn at the goal from the last leg to
+the goal heading, and the turning at the route's corners; and the speeds the base starts with and passes the goal
+at (0: at rest), the time-optimal transfer over the route's length between them (kinematics.transfer_time at
+V_MAX, A_MAX), and the start speed times the start turn (the overshoot of a base that must turn while it still
+moves). Invariant to the frame a pose is written in (a spot with zero offsets is the pose itself).
 
 "grasp" (grip, put): where the point to reach lies relative to the arm's shoulder: the pan angle |psi| and the
 extension r beyond the tucked EXT_REST, and the longer of the two joints' time-optimal ramps (the arm moves
@@ -21,9 +24,11 @@ from tailor.sims import intervals as I
 from tailor.sims.kitchen import world as W
 from tailor.sims.kitchen.navigation import nominal_map
 from tailor.sims.kitchen.route_bounds import route_bounds
+from tailor.sims.kinematics import transfer_time
 from tailor.sims.protocol import FeatureSpace
 
 SPOT = ("ox", "oy", "ophi", "along", "dist", "heading")
+PASSING = SPOT + ("v",)  # navigate's start and goal: a spot and the speed the base has there
 
 
 def _wrap(a: np.ndarray) -> np.ndarray:
@@ -38,7 +43,8 @@ def spot_poses(p: np.ndarray) -> np.ndarray:
 
 
 def _route(params: np.ndarray) -> np.ndarray:
-    start, goal = spot_poses(params[:, :6]), spot_poses(params[:, 6:12])
+    start, goal = spot_poses(params[:, :6]), spot_poses(params[:, 7:13])
+    v_start, v_goal = params[:, 6], params[:, 13]
     routes = nominal_map()
     length, first, last, turning = routes.routes(start[:, :2], goal[:, :2])
     nodes = routes.nodes
@@ -49,7 +55,8 @@ def _route(params: np.ndarray) -> np.ndarray:
     short = length < 1e-3  # no leg to face: only the heading changes
     turn_start = np.where(short, 0.0, np.abs(_wrap(first_dir - start[:, 2])))
     turn_goal = np.where(short, np.abs(_wrap(goal[:, 2] - start[:, 2])), np.abs(_wrap(goal[:, 2] - last_dir)))
-    return np.column_stack([length, turn_start, turn_goal, turning])
+    transfer = transfer_time(length, v_start, v_goal, W.V_MAX, W.A_MAX)
+    return np.column_stack([length, turn_start, turn_goal, turning, v_start, v_goal, transfer, v_start * turn_start])
 
 
 def ramp_time(distance: np.ndarray, v_max: float, a_max: float) -> np.ndarray:
@@ -97,8 +104,14 @@ def _route_bounds(low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.nda
     """A guaranteed enclosure of `_route` over boxes of parameters (FeatureSpace.bounds): route_bounds over the
     boxes of both poses."""
     columns = _columns(low, high)
-    (sx, sy, s_phi), (gx, gy, g_phi) = spot_pose_bounds(columns[:6]), spot_pose_bounds(columns[6:12])
-    return route_bounds(nominal_map(), (sx, sy), s_phi, (gx, gy), g_phi)
+    (sx, sy, s_phi), (gx, gy, g_phi) = spot_pose_bounds(columns[:6]), spot_pose_bounds(columns[7:13])
+    lo, hi = route_bounds(nominal_map(), (sx, sy), s_phi, (gx, gy), g_phi)
+    v_start, v_goal = columns[6], columns[13]
+    with np.errstate(invalid="ignore"):  # (a box with no route: length [inf, inf], its transfer time too)
+        transfer = I.transfer_time_bounds((lo[:, 0], hi[:, 0]), v_start, v_goal, W.V_MAX, W.A_MAX)
+    carry = I.product(v_start, (lo[:, 1], hi[:, 1]))
+    extra = (v_start, v_goal, transfer, carry)
+    return (np.column_stack([lo, *(e[0] for e in extra)]), np.column_stack([hi, *(e[1] for e in extra)]))
 
 
 def _ramp_time_bounds(distance: I.Pair, v_max: float, a_max: float) -> I.Pair:
@@ -139,7 +152,7 @@ def _reframe(spots: np.ndarray, rng: np.random.Generator) -> np.ndarray:
 
 
 def _route_reframe(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    return np.column_stack([_reframe(params[:, :6], rng), _reframe(params[:, 6:12], rng)])
+    return np.column_stack([_reframe(params[:, :6], rng), params[:, 6], _reframe(params[:, 7:13], rng), params[:, 13]])
 
 
 def _rigid_motion(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -155,7 +168,8 @@ def _rigid_motion(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return out
 
 
-ROUTE = FeatureSpace("route", SPOT + tuple(f"{q}g" for q in SPOT), ("length", "turn_start", "turn_goal", "turning"),
+ROUTE = FeatureSpace("route", PASSING + tuple(f"{q}g" for q in PASSING),
+                     ("length", "turn_start", "turn_goal", "turning", "v_start", "v_goal", "transfer", "carry"),
                      _route, "the frame each pose is written in", _route_reframe, _route_bounds)
 GRASP = FeatureSpace("grasp", SPOT + ("px", "py"), ("pan", "extension", "ramp"), _grasp,
                      "rigid motions of base and point together", _rigid_motion, _grasp_bounds)

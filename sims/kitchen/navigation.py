@@ -159,6 +159,10 @@ class RouteMap:
         pts.append((float(goal[0]), float(goal[1])))
         return pts
 
+    def inside(self, point: tuple[float, float]) -> bool:
+        """The point lies in an obstacle grown by the base radius and the clearance (the base cannot stand there)."""
+        return bool(_inside(np.array([point], dtype=float), self.boxes).any())
+
     def path(self, start: tuple[float, float], goal: tuple[float, float]) -> list[tuple[float, float]]:
         """The shortest route from start to goal as way-points (start and goal included); a straight line
         where no route exists (the robot will then collide or time out: an outcome, not an error)."""

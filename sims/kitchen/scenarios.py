@@ -6,8 +6,12 @@ it (CUP_INSET), each put location likewise on table2, and the robot's start with
 heading. Two cups (or put locations) lie CUP_SEPARATION apart along their table.
 
 Experience scenarios (the instant environment modification of Sec. 4.1):
-- "navigate": from the start, a pickup spot or a dropoff spot of a random layout, to a pickup or dropoff spot
-  (the legs of both scenarios' plans), every free offset uniform in its Fig. 5.12 range;
+- "navigate": the legs of both scenarios' plans in a random layout: from the start to a pickup spot, from a
+  pickup spot through the door (east), from the door to a dropoff spot, from a dropoff spot through the door
+  (west) and from the door to a pickup spot, every free offset uniform in its Fig. 5.12 range and the door's
+  in DOOR_ALONG, DOOR_HEADING, the speed of passing it uniform in PASS_SPEED (a fifth of the passes: 0, a
+  stop); a leg from the door starts there driving at that speed. Its start is written as the plan writes it,
+  the spot's frame and offsets (in_frame);
 - "grip": the base at a random pickup spot, gripping the cup there;
 - "put": the base at a random dropoff spot with a cup in the gripper, putting it at the put location.
 grip's and put's episodes write the base's start (and logged) pose as a plan writes it: the serving frame and
@@ -34,6 +38,7 @@ if TYPE_CHECKING:
     from tailor.sims.kitchen.simulator import KitchenSim, Noise
 
 SAMPLING_STREAM = 1  # second seed word: a scenario's draws are independent of the simulator's noise
+STOP_SHARE = 0.2  # of the door spots in experience, the share passed at speed 0 (a stop)
 PROBLEMS_DIR = Path(__file__).resolve().parents[2] / "domains" / "kitchen" / "problems"
 
 
@@ -56,11 +61,12 @@ def random_layout(rng: np.random.Generator, cups: int) -> dict:
 
 
 def belief_objects(layout: dict) -> dict[str, dict[str, float]]:
-    """The belief values of a layout: start (a spot with zero offsets), tables, cups, pickup spots p<i> and
-    dropoff spots d<i> (their frames, and the put location)."""
+    """The belief values of a layout: start (a spot with zero offsets, at rest), tables, cups, pickup spots p<i>
+    and dropoff spots d<i> (their frames, and the put location), and the door spots w<j> of the crossings
+    (their frames: east from room A for odd j, west for even j)."""
     x, y, phi = layout["start"]
     objects: dict[str, dict[str, float]] = {
-        "start": {"ox": x, "oy": y, "ophi": phi, "along": 0.0, "dist": 0.0, "heading": 0.0}}
+        "start": {"ox": x, "oy": y, "ophi": phi, "along": 0.0, "dist": 0.0, "heading": 0.0, "v": 0.0}}
     for name in ("table1", "table2"):
         objects[name] = dict(zip(("ox", "oy", "ophi"), layout[name]))  # centre, direction facing it
     for i, (cup, put) in enumerate(zip(layout["cups"], layout["puts"]), start=1):
@@ -68,6 +74,8 @@ def belief_objects(layout: dict) -> dict[str, dict[str, float]]:
         objects[f"p{i}"] = dict(zip(("ox", "oy", "ophi"), W.serving_frame(layout["table1"], *cup)))
         objects[f"d{i}"] = {**dict(zip(("ox", "oy", "ophi"), W.serving_frame(layout["table2"], *put))),
                             "tx": put[0], "ty": put[1]}
+    for j in range(1, 2 * len(layout["cups"])):
+        objects[f"w{j}"] = dict(zip(("ox", "oy", "ophi"), W.door_frame(eastward=j % 2 == 1)))
     return objects
 
 
@@ -75,31 +83,40 @@ def _offsets(rng: np.random.Generator) -> tuple[float, float, float]:
     return (float(rng.uniform(*W.SPOT_ALONG)), float(rng.uniform(*W.SPOT_DIST)), float(rng.uniform(*W.SPOT_HEADING)))
 
 
+def _door_spot(rng: np.random.Generator, eastward: bool) -> tuple[float, ...]:
+    """A door spot (frame, offsets and passing speed) with its free values drawn (see the module doc)."""
+    speed = 0.0 if rng.uniform() < STOP_SHARE else float(rng.uniform(*W.PASS_SPEED))
+    return (*W.door_frame(eastward), float(rng.uniform(*W.DOOR_ALONG)), 0.0, float(rng.uniform(*W.DOOR_HEADING)),
+            speed)
+
+
 def _sim(seed: int, layout: dict, pose, holding: str | None = None, noise: Noise | None = None,
-         variant: str | None = None) -> KitchenSim:
+         variant: str | None = None, speed: float = 0.0) -> KitchenSim:
     from tailor.sims.kitchen.simulator import KitchenSim, Noise  # deferred: pymunk loads when an episode runs
 
     sim = KitchenSim(seed, Noise() if noise is None else noise, variant=variant)
     cups = {f"cup{i}": c for i, c in enumerate(layout["cups"], start=1)}
-    sim.place(pose, {"table1": layout["table1"], "table2": layout["table2"]}, cups, holding)
+    sim.place(pose, {"table1": layout["table1"], "table2": layout["table2"]}, cups, holding, speed)
     return sim
 
 
-def sample_goto(rng: np.random.Generator) -> tuple[dict, tuple[float, float, float], tuple[float, ...]]:
-    """A layout, a start pose (start, pickup or dropoff spot) and a goal spot (pickup or dropoff)."""
+def sample_goto(rng: np.random.Generator) -> tuple[dict, tuple[float, ...], tuple[float, ...]]:
+    """A layout, a start spot and a goal spot (each ox, oy, ophi, along, dist, heading, v) of one leg."""
     layout = random_layout(rng, 1)
-    pickup = (*W.serving_frame(layout["table1"], *layout["cups"][0]), *_offsets(rng))
-    dropoff = (*W.serving_frame(layout["table2"], *layout["puts"][0]), *_offsets(rng))
-    kind = int(rng.integers(3))  # start -> pickup, pickup -> dropoff, dropoff -> pickup
-    start, goal = ((layout["start"], pickup), (W.spot_pose(*pickup), dropoff),
-                   (W.spot_pose(*dropoff), pickup))[kind]
-    return layout, start, goal
+    pickup = (*W.serving_frame(layout["table1"], *layout["cups"][0]), *_offsets(rng), 0.0)
+    dropoff = (*W.serving_frame(layout["table2"], *layout["puts"][0]), *_offsets(rng), 0.0)
+    east, west = _door_spot(rng, True), _door_spot(rng, False)
+    start = (*layout["start"], 0.0, 0.0, 0.0, 0.0)
+    kind = int(rng.integers(5))  # start -> pickup, pickup -> door, door -> dropoff, dropoff -> door, door -> pickup
+    legs = ((start, pickup), (pickup, east), (east, dropoff), (dropoff, west), (west, pickup))
+    return layout, *legs[kind]
 
 
 def run_goto(seed: int, noise: Noise | None = None, *, variant: str | None = None) -> Episode:
     """One random navigate leg (see the module doc)."""
     layout, start, goal = sample_goto(np.random.default_rng((seed, SAMPLING_STREAM)))
-    return _sim(seed, layout, start, noise=noise, variant=variant).run(ActionCall("navigate", goal))
+    sim = _sim(seed, layout, W.spot_pose(*start[:6]), noise=noise, variant=variant, speed=start[6])
+    return in_frame(sim.run(ActionCall("navigate", goal)), start[:3])
 
 
 def run_grip(seed: int, noise: Noise | None = None, *, variant: str | None = None) -> Episode:
@@ -137,14 +154,15 @@ def in_frame(episode: Episode, frame: tuple[float, float, float]) -> Episode:
 
 
 def subgoal_episode(action: str, params: np.ndarray, seed: int, variant: str | None = None) -> Episode:
-    """An episode of `action` from a refined subgoal: params = start spot (6), then the action's goal.
-    The layout around it is drawn from the seed (only the furniture near the path matters)."""
+    """An episode of `action` from a refined subgoal: params = start spot (6; navigate: and its speed), then the
+    action's goal. The layout around it is drawn from the seed (only the furniture near the path matters)."""
     p = [float(v) for v in params]
     rng = np.random.default_rng((seed, SAMPLING_STREAM))
     layout = random_layout(rng, 1)
     pose = W.spot_pose(*p[:6])
     if action == "navigate":
-        return _sim(seed, layout, pose, variant=variant).run(ActionCall(action, tuple(p[6:12])))
+        sim = _sim(seed, layout, pose, variant=variant, speed=p[6])
+        return in_frame(sim.run(ActionCall(action, tuple(p[7:14]))), (p[0], p[1], p[2]))
     point = (p[6], p[7])
     table = "table1" if action == "grip" else "table2"
     layout[table] = _table_under(point, layout[table])
@@ -188,14 +206,21 @@ def belief_text(name: str) -> str:
     lines = [f"# Belief state of problem `{name}`: one random layout of the kitchen (tailor.sims.kitchen.scenarios,",
              f"# situation generator {name!r}, seed {seed}); `tailor evaluate kitchen` draws many. Spots: ox, oy, ophi",
              "# (frame: the foot of the cup or put location on the table's serving edge, facing the table; the start:",
-             "# the robot's pose) and, for the start, its zero offsets; tables ox, oy, ophi (centre, facing direction);",
-             "# cups x, y; put locations tx, ty.",
+             "# the robot's pose) and, for the start, its zero offsets and speed; tables ox, oy, ophi (centre, facing",
+             "# direction); cups x, y; put locations tx, ty; door spots w<j>: the door's frame, facing through it.",
              "# Regenerate: python -c \"from tailor.sims.kitchen.scenarios import write_belief_files; write_belief_files()\""]
     for obj, values in objects.items():
         lines.append(f"[objects.{obj}]")
-        lines += [f"{key} = {round(value, 4)!r}" for key, value in values.items()]
+        lines += [f"{key} = {_rounded(value)!r}" for key, value in values.items()]
         lines.append("")
     return "\n".join(lines)
+
+
+def _rounded(value: float) -> float:
+    """The value to 4 decimals, toward zero where rounding would carry an angle in [-pi, pi] out of it (a door
+    facing west, ophi = pi)."""
+    rounded = round(value, 4)
+    return math.trunc(value * 1e4) / 1e4 if abs(rounded) > math.pi >= abs(value) else rounded
 
 
 def write_belief_files(folder: str | Path = PROBLEMS_DIR) -> list[Path]:

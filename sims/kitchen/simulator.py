@@ -5,16 +5,21 @@ A_MAX / ALPHA_MAX per second within V_MAX / W_MAX (unicycle model). Walls, the i
 boxes; cups are small dynamic bodies standing on the tables (they do not collide with the table tops) that a
 closed gripper carries. The arm's two joints (pan, extension) are integrated at the control rate.
 
-Actions (Table 2.1): `navigate` (goal: a spot, ox, oy, ophi, along, dist, heading; world.spot_pose) plans the
-shortest route round the furniture (navigation.RouteMap on the scene's furniture), follows it by pure pursuit
-(turning in place where the route bends sharply), brakes to stop at the goal position and turns in place to
-the goal heading. `grip` (goal: the cup's x, y) and `put` (goal: the put location's x, y) pan and extend the
+Actions (Table 2.1): `navigate` (goal: a spot, ox, oy, ophi, along, dist, heading, and the speed v to pass it
+at; world.spot_pose) plans the shortest route round the furniture (navigation.RouteMap on the scene's
+furniture), follows it by pure pursuit (turning in place where the route bends sharply, slowing as it goes
+whatever speed it starts with), and either (v = 0) brakes to stop at the goal position and turns in place to
+the goal heading, or (v > 0, a way-point: Sec. 5.5, Fig. 5.9) routes to a point LEAD_IN behind the goal on the
+goal heading's line, drives down that line braking to v and ends where it crosses the goal (the next action
+starts at that speed: it overshoots where it has to turn sharply). `grip` (goal: the cup's x, y) and `put` (goal: the put location's x, y) pan and extend the
 arm to the point (for grip, the cup the arm's camera finds within CUP_SEARCH of it, seen relative to the base
 with the position noise; for put, the point relative to the believed base pose) (each joint a velocity ramp within its speed and acceleration limits), close (grip) or open
 (put) the gripper in GRIPPER_TIME, and tuck the arm back (pan 0, extension EXT_REST).
 
 Outcomes (Episode.outcome), judged on the true state:
-- "success": navigate within POS_TOL, HEADING_TOL of the goal pose at rest; grip/put with the arm tucked;
+- "success": navigate within POS_TOL, HEADING_TOL of the goal pose at rest (v = 0), or crossing the goal within
+  PASS_TOL, PASS_HEADING_TOL of it (v > 0); grip/put with the arm tucked;
+- "off_course": navigate crossed its way-point (v > 0) farther than PASS_TOL or PASS_HEADING_TOL from it;
 - "collision": the base touches a wall, the island or a table;
 - "out_of_reach": the arm cannot reach the point (bearing beyond PAN_LIMIT, extension beyond EXT_MAX) or
   the base is not 40-80 cm (SPOT_DIST, +-REACH_TOLERANCE) from the serving edge of the table at the point;
@@ -88,6 +93,9 @@ GRIP_TOLERANCE = 0.06  # m, gripper to cup centre for a successful grip (the ope
 CUP_SEARCH = 0.1  # m, grip finds a cup this close to its goal point with the arm's camera
 REACH_TOLERANCE = 0.05  # m, slack of the 40-80 cm precondition
 TIMEOUT = 60.0  # s
+LEAD_IN = 0.6  # m, navigate to a way-point (v > 0) comes down the goal heading's line from this far behind it
+PASS_TOL = 0.15  # m, ... and succeeds crossing it this close
+PASS_HEADING_TOL = 0.3  # rad
 
 # what the motors move, for the energy measure only (the physics never reads them: the base is kinematic, the
 # arm's joints are integrated directly)
@@ -96,7 +104,7 @@ BASE_MOMENT = 0.5 * BASE_MASS * W.BASE_RADIUS ** 2  # kg m^2, a uniform disc of 
 GRIPPER_MASS = 1.0  # kg, the gripper with the extension's moving tube, a point mass at the arm's end
 
 ACTIONS = ("navigate", "grip", "put")
-GOAL_SIZES = {"navigate": 6, "grip": 2, "put": 2}
+GOAL_SIZES = {"navigate": 7, "grip": 2, "put": 2}
 STATE_COLUMNS = ("ox", "oy", "ophi", "along", "dist", "heading", "v", "pan", "ext")  # believed; pose as a spot
 TRAJECTORY_COLUMNS = ("t", "x", "y", "phi", "v", "pan", "ext", "gripper_x", "gripper_y")  # true state
 
@@ -191,9 +199,10 @@ class KitchenSim:
 
     # --- state ------------------------------------------------------------------------------------------
     def reset(self, scene: Mapping[str, Sequence[float]]) -> None:
-        """The protocol's reset: {"robot": (ox, oy, ophi, along, dist, heading) (a spot), "table NAME": (x, y,
-        phi), "cup NAME": (x, y)}, and optionally "held NAME": () (no values: cup NAME in the gripper, as
-        scene() reports it); the robot at rest, the arm tucked, the gripper empty unless a cup is held."""
+        """The protocol's reset: {"robot": (ox, oy, ophi, along, dist, heading) (a spot, and optionally its speed v
+        straight ahead), "table NAME": (x, y, phi), "cup NAME": (x, y)}, and optionally "held NAME": () (no values:
+        cup NAME in the gripper, as scene() reports it); the robot at rest unless v is given, the arm tucked, the
+        gripper empty unless a cup is held."""
         if not isinstance(scene, Mapping) or "robot" not in scene:
             raise SimError("the kitchen scene needs a robot (ox, oy, ophi, along, dist, heading)")
         tables, cups, held = {}, {}, None
@@ -201,8 +210,9 @@ class KitchenSim:
             values = tuple(float(v) for v in values)
             kind, _, name = key.partition(" ")
             if key == "robot":
-                if len(values) != 6:
-                    raise SimError(f"the kitchen scene's robot is a spot (ox, oy, ophi, along, dist, heading), got {values}")
+                if len(values) not in (6, 7):
+                    raise SimError("the kitchen scene's robot is a spot (ox, oy, ophi, along, dist, heading) and "
+                                   f"optionally its speed v, got {values}")
             elif kind == "table" and name and len(values) == 3:
                 tables[name] = values
             elif kind == "cup" and name and len(values) == 2:
@@ -212,14 +222,16 @@ class KitchenSim:
             else:
                 raise SimError(f"unknown kitchen scene object {key!r} with {len(values)} values (expected robot, "
                                "'table NAME' (x, y, phi), 'cup NAME' (x, y), one 'held NAME' ())")
-        self.place(W.spot_pose(*scene["robot"]), tables, cups, held)
+        robot = tuple(float(v) for v in scene["robot"])
+        self.place(W.spot_pose(*robot[:6]), tables, cups, held, robot[6] if len(robot) == 7 else 0.0)
 
     def place(self, pose: tuple[float, float, float], tables: Mapping[str, Sequence[float]],
-              cups: Mapping[str, Sequence[float]], holding: str | None = None) -> None:
-        """Base at pose (x, y, phi) at rest, tables (x, y, phi), cups (x, y) at rest; `holding` a cup's name
-        puts that cup in the (tucked) gripper."""
+              cups: Mapping[str, Sequence[float]], holding: str | None = None, speed: float = 0.0) -> None:
+        """Base at pose (x, y, phi), driving straight ahead at `speed` (m/s, 0: at rest), tables (x, y, phi),
+        cups (x, y) at rest; `holding` a cup's name puts that cup in the (tucked) gripper."""
         x, y, phi = (float(q) for q in pose)
-        values = [x, y, phi, *(float(v) for t in tables.values() for v in t), *(float(v) for c in cups.values() for v in c)]
+        values = [x, y, phi, float(speed), *(float(v) for t in tables.values() for v in t),
+                  *(float(v) for c in cups.values() for v in c)]
         if not all(math.isfinite(v) for v in values):
             raise SimError(f"kitchen scene values must be finite, got {values}")
         if holding is not None and holding not in cups:
@@ -243,7 +255,8 @@ class KitchenSim:
         self._xy = (x, y)
         self.base.velocity, self.base.angular_velocity = (0.0, 0.0), 0.0
         self.space.reindex_shapes_for_body(self.base)
-        self.phi, self.v, self.w, self.v_cmd, self.w_cmd = phi, 0.0, 0.0, 0.0, 0.0
+        speed = max(-W.V_MAX, min(W.V_MAX, float(speed)))
+        self.phi, self.v, self.w, self.v_cmd, self.w_cmd = phi, speed, 0.0, speed, 0.0
         self.pan, self.ext, self.held = 0.0, W.EXT_REST, holding
         self._carry()
         self.time = 0.0
@@ -262,12 +275,14 @@ class KitchenSim:
 
     def observe(self, action: str) -> tuple[float, ...]:
         """The observed parameters of `action` (the base pose as a spot with zero offsets: ox, oy, ophi,
-        along, dist, heading) measured now: exactly what `run` of it logs first in Episode.params. It draws the
+        along, dist, heading; for navigate also the speed v) measured now: exactly what `run` of it logs first
+        in Episode.params. It draws the
         noise row that run will measure its start with and keeps it for run (consuming nothing: a closed loop
         that observes stays on the open loop's noise stream); the simulation does not advance."""
         if action not in ACTIONS:
             raise SimError(f"unknown kitchen action {action!r}; known: {', '.join(ACTIONS)}")
-        return (*self._believe(self.true_state(), self._noise.peek()), 0.0, 0.0, 0.0)
+        spot = (*self._believe(self.true_state(), self._noise.peek()), 0.0, 0.0, 0.0)
+        return (*spot, self.v) if action == "navigate" else spot
 
     def scene(self) -> dict[str, tuple[float, ...]]:
         """Every scene object measured now, in reset's form: the robot as observe() measures it, each table
@@ -276,7 +291,7 @@ class KitchenSim:
         generator (seed, SENSING_STREAM), two draws per cup and call, never from the motor and sensor noise; the
         simulation does not advance. Not in the scene: the arm's pose (reset tucks it) and the base's residual
         speed (reset places it at rest)."""
-        out: dict[str, tuple[float, ...]] = {"robot": self.observe("navigate")}
+        out: dict[str, tuple[float, ...]] = {"robot": self.observe("grip")}
         out.update({f"table {name}": (box.cx, box.cy, box.angle) for name, box in self.tables.items()})
         for name, body in self.cups.items():
             e = self._sensing.standard_normal(2)
@@ -389,7 +404,8 @@ class KitchenSim:
         self._released_at = None
         true = self.true_state()
         believed = self._believe(true, self._noise.next())
-        params = np.array([*believed, 0.0, 0.0, 0.0, *goal], dtype=float)
+        start = (*believed, 0.0, 0.0, 0.0, self.v) if call.action == "navigate" else (*believed, 0.0, 0.0, 0.0)
+        params = np.array([*start, *goal], dtype=float)
         if call.action == "navigate":
             outcome = self._go_to_pose(goal)
         else:
@@ -402,7 +418,7 @@ class KitchenSim:
         """The measures of the action that ends now, toward `goal` (see the module doc)."""
         energy = 0.5 * (BASE_MASS * self._speed_work + BASE_MOMENT * self._turn_work) + self._arm_work
         if action == "navigate":
-            gx, gy, gphi = W.spot_pose(*goal)
+            gx, gy, gphi = W.spot_pose(*goal[:6])
             x, y = self._xy
             return {ENERGY: energy, ERROR: math.hypot(x - gx, y - gy),
                     HEADING_ERROR: abs(W.wrap(self.phi - gphi))}
@@ -423,11 +439,14 @@ class KitchenSim:
         return true, e, believed
 
     def _go_to_pose(self, goal: Sequence[float]) -> str:
-        gx, gy, gphi = W.spot_pose(*goal)
+        gx, gy, gphi = W.spot_pose(*goal[:6])
+        passing = goal[6] > 0.0
+        v_goal = goal[6] if passing else 0.0
         x0, y0 = self._xy
-        path = self.routes.path((x0, y0), (gx, gy))
+        path = self._route((x0, y0), (gx, gy, gphi), passing)
         lengths = [math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in pairwise(path)]
-        k, arrived = 0, False
+        cg, sg = math.cos(gphi), math.sin(gphi)
+        k, arrived, behind = 0, False, False
         max_ticks = round(TIMEOUT * CONTROL_HZ)
         cup_moves = None  # (moment, window) of the "cup" disturbance, if it strikes during this navigate
         if self._cup_pending and standing_cups(self._cup_positions(), self.tables, self.held):
@@ -440,12 +459,21 @@ class KitchenSim:
                 cup_moves = None
             if self.collides():
                 return "collision"
-            if (math.hypot(true[0] - gx, true[1] - gy) <= POS_TOL and abs(W.wrap(true[2] - gphi)) <= HEADING_TOL
-                    and abs(self.v) <= SPEED_TOL and abs(self.w) <= TURN_RATE_TOL and arrived):
+            ahead = (x - gx) * cg + (y - gy) * sg  # believed, along the goal heading's line, and across it
+            behind = behind or (ahead < 0.0 and abs((y - gy) * cg - (x - gx) * sg) <= LEAD_IN)
+            if passing and behind and ahead >= 0.0:
+                # crossed the way-point's line near it, coming from behind; judged on the true state
+                if (math.hypot(true[0] - gx, true[1] - gy) <= PASS_TOL
+                        and abs(W.wrap(true[2] - gphi)) <= PASS_HEADING_TOL):
+                    return "success"
+                return "off_course"
+            if (not passing and arrived and math.hypot(true[0] - gx, true[1] - gy) <= POS_TOL
+                    and abs(W.wrap(true[2] - gphi)) <= HEADING_TOL
+                    and abs(self.v) <= SPEED_TOL and abs(self.w) <= TURN_RATE_TOL):
                 return "success"
             if self._ticks >= max_ticks:
                 return "timeout"
-            if not arrived and math.hypot(gx - x, gy - y) <= ARRIVE_TOL:
+            if not passing and not arrived and math.hypot(gx - x, gy - y) <= ARRIVE_TOL:
                 arrived = True
             v_max, w_max, a_max, alpha_max = self.limits()
             if arrived:
@@ -453,12 +481,14 @@ class KitchenSim:
                 rate = min(w_max, K_TURN * abs(err), math.sqrt(2.0 * BRAKE * alpha_max * abs(err)))
                 self.command(0.0, math.copysign(rate, err), e[3:5])
             else:
-                # project onto the current leg, move on to the next leg once past this one's end
+                # project onto the current leg, move on to the next leg once past this one's end or nearer the next
+                # leg than this one (a corner cut short: its projection can fall back along this leg)
                 while True:
                     (ax, ay), (bx, by) = path[k], path[k + 1]
                     length = lengths[k]
                     s = ((x - ax) * (bx - ax) + (y - ay) * (by - ay)) / length if length > 0 else length
-                    if s >= length and k < len(lengths) - 1:
+                    if k < len(lengths) - 1 and (s >= length or _leg_distance(path, k + 1, x, y)
+                                                 <= _leg_distance(path, k, x, y)):
                         k += 1
                         continue
                     break
@@ -473,10 +503,31 @@ class KitchenSim:
                 err = W.wrap(math.atan2(cy - y, cx - x) - phi)
                 rate = max(-w_max, min(w_max, K_TURN * err))
                 speed = v_max * max(0.0, 1.0 - abs(err) / TURN_IN_PLACE)
-                speed = min(speed, max(V_CREEP, math.sqrt(2.0 * BRAKE * a_max * math.hypot(gx - x, gy - y))))
+                brake = math.sqrt(v_goal * v_goal + 2.0 * BRAKE * a_max * math.hypot(gx - x, gy - y))
+                speed = min(speed, max(V_CREEP, brake))
                 self.command(speed, rate, e[3:5])
             self._advance()
             self._ticks += 1
+
+    def _route(self, start: tuple[float, float], goal: tuple[float, float, float], passing: bool
+               ) -> list[tuple[float, float]]:
+        """The way-points navigate follows: the shortest route to the goal position, or to pass it (`passing`),
+        the shortest route to the point LEAD_IN behind it on the goal heading's line, the goal, and a point
+        LOOKAHEAD beyond it on that line (pure pursuit aims down the line as the base crosses). Where the lead-in
+        point lies in the grown furniture or the start is already on the lead-in (within LEAD_IN behind the goal and
+        PASS_TOL of the line), the route goes to the goal."""
+        gx, gy, gphi = goal
+        if not passing:
+            return self.routes.path(start, (gx, gy))
+        c, s = math.cos(gphi), math.sin(gphi)
+        lead = (gx - LEAD_IN * c, gy - LEAD_IN * s)
+        dx, dy = start[0] - gx, start[1] - gy
+        on_lead_in = -LEAD_IN <= dx * c + dy * s <= 0.0 and abs(-dx * s + dy * c) <= PASS_TOL
+        if on_lead_in or self.routes.inside(lead):
+            head = self.routes.path(start, (gx, gy))
+        else:
+            head = [*self.routes.path(start, lead), (gx, gy)]
+        return [*head, (gx + LOOKAHEAD * c, gy + LOOKAHEAD * s)]
 
     def _cup_positions(self) -> dict[str, tuple[float, float]]:
         return {name: tuple(body.position) for name, body in self.cups.items()}
@@ -579,6 +630,15 @@ class KitchenSim:
     def _arm_mass(self) -> float:
         """kg the arm's joints move: the gripper, and the cup it holds."""
         return GRIPPER_MASS + (W.CUP_MASS if self.held is not None else 0.0)
+
+
+def _leg_distance(path: Sequence[tuple[float, float]], k: int, x: float, y: float) -> float:
+    """Distance from (x, y) to the route's leg k (the segment from path[k] to path[k + 1])."""
+    (ax, ay), (bx, by) = path[k], path[k + 1]
+    dx, dy = bx - ax, by - ay
+    square = dx * dx + dy * dy
+    t = 0.0 if square == 0.0 else max(0.0, min(1.0, ((x - ax) * dx + (y - ay) * dy) / square))
+    return math.hypot(x - ax - t * dx, y - ay - t * dy)
 
 
 def _ramp_work(before: float, after: float) -> float:

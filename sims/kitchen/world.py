@@ -78,6 +78,20 @@ SPOT_ALONG = (-0.5, 0.5)  # m
 SPOT_DIST = (0.4, 0.8)  # m, base centre to the serving edge (the grip precondition)
 SPOT_HEADING = (-1.0, 1.0)  # rad
 
+# --- the door as a way-point (Sec. 5.5: "the velocity and orientation at way-points are also not fixed") -----
+# A door spot is a frame at the door's centre facing through it (east from room A, west from room B) with the
+# offsets along (across the door), dist = 0 (on the divider's line) and heading, and the speed v at which the
+# base passes it: free in these ranges, so that refinement decides where, in which direction and how fast the
+# base crosses. A spot at a table has v = 0 (the base stops to grip or put).
+DOOR_ALONG = (-0.2, 0.2)  # m, the door's half width less the base's radius and a margin
+DOOR_HEADING = (-0.6, 0.6)  # rad, with DOOR_ALONG: the straight line through the door clears its posts
+PASS_SPEED = (0.0, V_MAX)  # m/s
+
+
+def door_frame(eastward: bool) -> tuple[float, float, float]:
+    """The frame (ox, oy, ophi) of a door spot: the door's centre, facing east (from room A) or west."""
+    return DIVIDER_X, DOOR_Y, 0.0 if eastward else math.pi
+
 
 def wrap(angle: float) -> float:
     """The angle normalized to [-pi, pi)."""
