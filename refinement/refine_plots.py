@@ -244,14 +244,13 @@ def is_speed(quantity: Quantity) -> bool:
     return quantity.unit.endswith("/s") and not quantity.angle and not quantity.unit.startswith("rad")
 
 
-def waypoint_pair(sequence, entry: SimulatorEntry | None):
+def waypoint_pair(sequence, entry: SimulatorEntry | None) -> tuple[int, object, object] | None:
     """The first way-point of Fig. 5.9 in `sequence`: (index of the action arriving there, the free angle, the
     free speed), where two consecutive actions share a free parameter declared an angle and one declared a speed
     (the angle of approach and the speed at the way-point); None where there is none."""
     actions = sequence.actions
     for k in range(len(actions) - 1):
-        shared = ({p.id: p for p in actions[k].free_parameters()}.keys()
-                  & {p.id for p in actions[k + 1].free_parameters()})
+        shared = {p.id for p in actions[k].free_parameters()} & {p.id for p in actions[k + 1].free_parameters()}
         free = [p for p in actions[k].free_parameters() if p.id in shared]
         angle = next((p for p in free if _quantity(entry, p.id).angle), None)
         speed = next((p for p in free if is_speed(_quantity(entry, p.id))), None)
@@ -261,7 +260,7 @@ def waypoint_pair(sequence, entry: SimulatorEntry | None):
 
 
 def _degrees(angle: float) -> str:
-    return f"{round(float(np.degrees(angle))) + 0}°"  # (an int: never "-0")
+    return f"{round(float(np.degrees(angle)))}°"  # (an int: never "-0")
 
 
 def waypoint_figure(angle, speed, grid: tuple[np.ndarray, np.ndarray], panels: list[tuple[str, np.ndarray]],
@@ -315,10 +314,11 @@ def _quantity(entry: SimulatorEntry | None, name: str) -> Quantity:
 
 
 def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
-    """The executions in `outcomes` (greedy, refined, and any other) in each view of the simulator as FILE, and
-    the predicted time of the first actions over the first free parameter that is a full-circle angle (else
-    the first one) as FILE_polar.png (or FILE_costs.png where it is not a full-circle angle), angles as the
-    simulator declares them. Returns the files written."""
+    """The executions in `outcomes` (greedy, refined, and any other) in each view of the simulator as FILE, the
+    predicted time of the first actions over the first free parameter that is a full-circle angle (else the
+    first one) as FILE_polar.png (or FILE_costs.png where it is not a full-circle angle), angles as the simulator
+    declares them, and Fig. 5.9 at the first way-point with a free angle and speed as FILE_waypoint.png
+    (waypoint_pair, draw_waypoint). Returns the files written."""
     path = Path(path)
     if not prepared.sequence.free_parameters():  # nothing to choose: greedy, refined (and zero) are one plan
         outcomes = {NO_FREE_PARAMETERS: outcomes["refined"]}
@@ -330,15 +330,25 @@ def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
                   else (lambda ax, col: draw_scene(ax, prepared.sequence, chosen_values[col])))
     plot_executions(path, views, panels, background, entry)
     written = [path]
-
-    free = prepared.sequence.actions[0].free_parameters()
-    if not free:
+    if "greedy" not in outcomes:  # nothing to choose: no predicted time over a choice
         return written
-    refined = outcomes["refined"].refined
-    parameter = next((p for p in free if on_the_circle(p, _quantity(entry, p.id))), free[0])
-    window = prepared.sequence.actions[:max(2, refined.horizon)]
-    chosen = {p.id: p.value for a in refined.sequence.actions for p in a.params}
+    chosen = {p.id: p.value for a in outcomes["refined"].refined.sequence.actions for p in a.params}
     greedy = {p.id: p.value for a in outcomes["greedy"].refined.sequence.actions for p in a.params}
+    if prepared.sequence.actions[0].free_parameters():
+        written.append(draw_costs(path, prepared, outcomes["refined"].refined.horizon, chosen, greedy, entry))
+    pair = waypoint_pair(prepared.sequence, entry)
+    if pair is not None:
+        written.append(draw_waypoint(cost_plot_names(path)[2], prepared, pair, chosen, greedy, entry))
+    return written
+
+
+def draw_costs(path: Path, prepared, horizon: int, chosen: dict, greedy: dict, entry: SimulatorEntry | None) -> Path:
+    """The predicted time of the first max(2, horizon) actions and their sum over the first action's first free
+    parameter that is a full-circle angle (else its first), the others at their refined values, as
+    FILE_polar.png or FILE_costs.png beside `path`; returns the file written."""
+    free = prepared.sequence.actions[0].free_parameters()
+    parameter = next((p for p in free if on_the_circle(p, _quantity(entry, p.id))), free[0])
+    window = prepared.sequence.actions[:max(2, horizon)]
     values = np.linspace(parameter.low, parameter.high, 361)
     curves = []
     total = np.zeros_like(values)
@@ -357,14 +367,11 @@ def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
             "predicted total" if others else "")
     plot_costs(costs, parameter, values, curves, [("greedy", greedy[parameter.id]), ("refined", chosen[parameter.id])],
                note, quantity)
-    written.append(costs)
-    pair = waypoint_pair(prepared.sequence, entry)
-    if pair is not None:
-        written.append(draw_waypoint(cost_plot_names(path)[2], prepared, pair, chosen, greedy, entry))
-    return written
+    return costs
 
 
-def draw_waypoint(path: Path, prepared, pair, chosen: dict, greedy: dict, entry: SimulatorEntry | None) -> Path:
+def draw_waypoint(path: Path, prepared, pair: tuple[int, object, object], chosen: dict, greedy: dict,
+                  entry: SimulatorEntry | None) -> Path:
     """Fig. 5.9 at the way-point `pair` (waypoint_pair): the predicted durations of the action arriving there, of
     the one leaving it and their sum over its free angle and speed, the other free parameters at their refined
     values; written to `path`."""
@@ -388,7 +395,8 @@ def draw_waypoint(path: Path, prepared, pair, chosen: dict, greedy: dict, entry:
     others = len({p.id for a in both for p in a.free_parameters()} - {angle.id, speed.id})
     if others:
         fig.supxlabel(f"{angle.id} and {speed.id} varied, the {others} other free parameter{'s' if others != 1 else ''} "
-                      "of these actions at their refined values", fontsize=8)
+                      "of these actions at their refined values: a mark is where a choice of both lies on this slice, "
+                      "not that choice's own predicted total", fontsize=8)
     _save(fig, path)
     plt.close(fig)
     return path

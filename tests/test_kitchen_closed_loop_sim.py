@@ -90,14 +90,14 @@ def test_scene_noise_off_is_the_true_world_and_reset_reproduces_it():
         assert sim.run(call).outcome == "success"
     measured = sim.scene()
     x, y, phi = sim.true_state()[:3]
-    assert measured["robot"] == (x, y, phi, 0.0, 0.0, 0.0)
+    assert measured["robot"] == (x, y, phi, 0.0, 0.0, 0.0, sim.v)  # a spot and the speed it has (a residual one)
     assert measured["table table1"] == pytest.approx(layout["table1"], abs=0.0)
     assert measured["table table2"] == pytest.approx(layout["table2"], abs=0.0)
     assert measured["cup cup1"] == pytest.approx(sim.gripper(), abs=1e-12) and measured["held cup1"] == ()
     assert measured["cup cup2"] == pytest.approx(layout["cups"][1], abs=1e-12)
     again = SIMULATOR.create(8, QUIET)
     again.reset(measured)
-    assert again.true_state()[:3] == pytest.approx((x, y, phi), abs=1e-12)
+    assert again.true_state()[:3] == pytest.approx((x, y, phi), abs=1e-12) and again.v == sim.v
     assert again.held == "cup1" and again.cups["cup1"].position == pytest.approx(again.gripper(), abs=1e-12)
     # reset tucks the arm exactly: the gripper moves by what the tuck left within its tolerances
     assert again.gripper() == pytest.approx(sim.gripper(), abs=0.01)

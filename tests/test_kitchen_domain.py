@@ -4,10 +4,13 @@ per table and cup, its pictures draw the ranges, and `tailor evaluate --situatio
 from __future__ import annotations
 
 import json
+import shutil
 
 import pytest
 
 from tailor.planner_bridge import plan_files, resolve_problem
+from tailor.refinement import refine_plots
+from tailor.refinement.api import dispatch, refine
 from tailor.refinement.binding import load_domain_binding
 from tailor.refinement.instantiate import instantiate
 from tailor.refinement.belief import load_belief
@@ -117,10 +120,6 @@ def test_refine_plot_draws_the_scene_under_both_executions(tmp_path, monkeypatch
 def test_the_door_is_passed_at_speed_and_that_is_faster_than_stopping_there(tmp_path):
     """Sec. 5.5's free way-point speed: refinement passes the door without stopping, and in the simulator the
     same plan refined with the door's speed held at 0 (the binding's v range [0, 0]) is slower."""
-    import shutil
-
-    from tailor.refinement.api import dispatch, refine
-
     stopping = tmp_path / "kitchen"
     shutil.copytree(resolve_problem("kitchen", "scenario1")[0].parent, stopping)
     binding = stopping / "actions.toml"
@@ -139,8 +138,6 @@ def test_the_door_is_passed_at_speed_and_that_is_faster_than_stopping_there(tmp_
 def test_refine_plot_draws_fig_5_9_at_the_door(tmp_path):
     """`tailor refine kitchen scenario1 --plot F.png` also writes F_waypoint.png: the cross and the navigate
     after it over the door's heading and speed (Fig. 5.9)."""
-    from tailor.refinement import refine_plots
-
     sequence = _sequence("scenario1")
     step, angle, speed = refine_plots.waypoint_pair(sequence, registry.get("kitchen"))
     assert (step, angle.id, speed.id) == (2, "w1.heading", "w1.v")

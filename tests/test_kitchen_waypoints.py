@@ -10,6 +10,7 @@ from collections import Counter
 
 import numpy as np
 import pytest
+from tailor.errors import SimError
 from tailor.sims.episode import ActionCall
 from tailor.sims.kinematics import transfer_time
 from tailor.sims.kitchen import world as W
@@ -150,7 +151,9 @@ def test_observe_navigate_has_the_speed_grip_and_put_the_spot():
     assert len(navigate) == 7 and navigate[6] == 0.25
     assert len(grip) == len(put) == 6 and navigate[:6] == grip == put
     assert grip == pytest.approx((1.0, 1.0, 0.3, 0.0, 0.0, 0.0), abs=1e-12)
-    assert len(sim.scene()["robot"]) == 6  # the scene: a spot (reset places the base at rest)
+    assert sim.scene()["robot"] == pytest.approx((*grip, 0.25))  # the scene: the spot and the speed, as reset takes
+    sim.reset(sim.scene())
+    assert sim.v == pytest.approx(0.25)  # reset(scene()) places the base driving as it was
 
 
 # --- the "route" space --------------------------------------------------------------------------------------
@@ -292,3 +295,22 @@ def test_a_navigate_subgoal_episode_starts_at_its_speed():
     assert tuple(episode.params[:3]) == frame
     assert episode.params[3:6] == pytest.approx((0.1, 0.0, 0.2), abs=0.05)  # up to the believed pose's noise
     assert episode.outcome == "success"
+
+
+@pytest.mark.parametrize(("start", "goal"), [
+    ((7.0, 3.0, 0.0), (7.0, 3.0, 0.0, 0.0, 0.0, 0.0, 0.4)),  # standing on the way-point, facing along it
+    ((2.0, 2.0, -math.pi / 2), (2.0, 0.6, math.pi / 2, 0.0, 0.0, 0.0, 0.4)),  # beyond its line, lead-in in a wall
+])
+def test_a_way_point_reached_from_on_or_beyond_its_line_ends_without_timing_out(start, goal):
+    """Passing mode ends on the route's last leg past the goal's line even where the base never was behind it."""
+    sim = KitchenSim(0, Noise.off())
+    sim.place(start, {}, {})
+    episode = sim.run(ActionCall("navigate", goal))
+    assert episode.outcome in ("success", "off_course") and episode.duration < 20.0
+
+
+def test_a_negative_passing_speed_is_refused():
+    sim = KitchenSim(0, Noise.off())
+    sim.place((2.0, 2.0, 0.0), {}, {})
+    with pytest.raises(SimError, match=r"navigate: the speed to pass the goal at must be >= 0 m/s, got -0.1"):
+        sim.run(ActionCall("navigate", (4.0, 2.0, 0.0, 0.0, 0.0, 0.0, -0.1)))

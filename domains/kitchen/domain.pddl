@@ -21,8 +21,8 @@
     (handempty))                   ; the gripper is free
 
   (:action goto
-    :parameters (?from ?to - spot ?r - room)
-    :precondition (and (robot ?from) (in ?from ?r) (in ?to ?r))
+    :parameters (?from ?to - spot ?r - room ?t - furniture)
+    :precondition (and (robot ?from) (in ?from ?r) (in ?to ?r) (serves ?to ?t))
     :effect (and (robot ?to) (not (robot ?from))))
 
   (:action cross

@@ -173,6 +173,15 @@ class RouteMap:
         return self.path_points(s[0], g[0], int(first[0]), int(last[0]))
 
 
+def leg_distance(path: Sequence[tuple[float, float]], k: int, x: float, y: float) -> float:
+    """Distance from (x, y) to a route's leg k (the segment from path[k] to path[k + 1])."""
+    (ax, ay), (bx, by) = path[k], path[k + 1]
+    dx, dy = bx - ax, by - ay
+    square = dx * dx + dy * dy
+    t = 0.0 if square == 0.0 else max(0.0, min(1.0, ((x - ax) * dx + (y - ay) * dy) / square))
+    return math.hypot(x - ax - t * dx, y - ay - t * dy)
+
+
 def _wrap(a: np.ndarray) -> np.ndarray:
     return (a + np.pi) % (2 * np.pi) - np.pi
 

@@ -14,8 +14,9 @@ Experience scenarios (the instant environment modification of Sec. 4.1):
   the spot's frame and offsets (in_frame);
 - "grip": the base at a random pickup spot, gripping the cup there;
 - "put": the base at a random dropoff spot with a cup in the gripper, putting it at the put location.
-grip's and put's episodes write the base's start (and logged) pose as a plan writes it: the serving frame and
-the offsets from it (in_frame), so that what is learned from their parameters sees the offsets.
+Every episode writes the base's start (and logged) pose as a plan writes it: its spot's frame (the serving frame,
+the door's, or the start pose itself) and the offsets from it (in_frame), so that what is learned from the
+parameters sees the offsets.
 Situations "scenario1" and "scenario2" give the belief values of the problems of the same names.
 Every scenario's run and subgoal_episode take `variant` (None, or one of the kitchen's VARIANTS): the same
 episode on the changed robot, for experience of it.
@@ -143,7 +144,7 @@ def _at_table(seed: int, noise: Noise | None, action: str, table: str, places: s
 
 def in_frame(episode: Episode, frame: tuple[float, float, float]) -> Episode:
     """The episode with its start and logged base poses written as spots of `frame` (the serving frame), as a
-    plan writes grip's and put's start: the simulator logs a pose as a spot with zero offsets, with which a
+    plan writes an action's start: the simulator logs a pose as a spot with zero offsets, with which a
     model on the parameters alone would never see the offsets that refinement chooses. Same poses, same run."""
     state = episode.state.copy()
     state[:, :3] = frame
@@ -211,16 +212,16 @@ def belief_text(name: str) -> str:
              "# Regenerate: python -c \"from tailor.sims.kitchen.scenarios import write_belief_files; write_belief_files()\""]
     for obj, values in objects.items():
         lines.append(f"[objects.{obj}]")
-        lines += [f"{key} = {_rounded(value)!r}" for key, value in values.items()]
+        lines += [f"{key} = {_rounded(value, key in ('ophi', 'heading'))!r}" for key, value in values.items()]
         lines.append("")
     return "\n".join(lines)
 
 
-def _rounded(value: float) -> float:
-    """The value to 4 decimals, toward zero where rounding would carry an angle in [-pi, pi] out of it (a door
+def _rounded(value: float, angle: bool) -> float:
+    """The value to 4 decimals; an angle toward zero where rounding would carry it out of [-pi, pi] (a door
     facing west, ophi = pi)."""
     rounded = round(value, 4)
-    return math.trunc(value * 1e4) / 1e4 if abs(rounded) > math.pi >= abs(value) else rounded
+    return math.trunc(value * 1e4) / 1e4 if angle and abs(rounded) > math.pi >= abs(value) else rounded
 
 
 def write_belief_files(folder: str | Path = PROBLEMS_DIR) -> list[Path]:

@@ -11,8 +11,8 @@ furniture), follows it by pure pursuit (turning in place where the route bends s
 whatever speed it starts with), and either (v = 0) brakes to stop at the goal position and turns in place to
 the goal heading, or (v > 0, a way-point: Sec. 5.5, Fig. 5.9) routes to a point LEAD_IN behind the goal on the
 goal heading's line, drives down that line braking to v and ends where it crosses the goal (the next action
-starts at that speed: it overshoots where it has to turn sharply). `grip` (goal: the cup's x, y) and `put` (goal: the put location's x, y) pan and extend the
-arm to the point (for grip, the cup the arm's camera finds within CUP_SEARCH of it, seen relative to the base
+starts at that speed: it overshoots where it has to turn sharply). `grip` (goal: the cup's x, y) and `put`
+(goal: the put location's x, y) pan and extend the arm to the point (for grip, the cup the arm's camera finds within CUP_SEARCH of it, seen relative to the base
 with the position noise; for put, the point relative to the believed base pose) (each joint a velocity ramp within its speed and acceleration limits), close (grip) or open
 (put) the gripper in GRIPPER_TIME, and tuck the arm back (pan 0, extension EXT_REST).
 
@@ -66,7 +66,7 @@ from tailor.sims.kitchen import world as W
 from tailor.sims.kitchen.disturbances import (DISTURBANCE_STREAM, DISTURBANCES, NOMINAL_LIMITS,
                                               SENSING_STREAM, SLOW_LIMITS, VARIANTS, CupDisplacement,
                                               cup_moment, displace, on_slow_floor, standing_cups)
-from tailor.sims.kitchen.navigation import RouteMap
+from tailor.sims.kitchen.navigation import RouteMap, leg_distance
 from tailor.sims.noise import NormalRows
 
 PHYSICS_HZ = 100  # Hz
@@ -212,7 +212,7 @@ class KitchenSim:
             if key == "robot":
                 if len(values) not in (6, 7):
                     raise SimError("the kitchen scene's robot is a spot (ox, oy, ophi, along, dist, heading) and "
-                                   f"optionally its speed v, got {values}")
+                                   f"optionally its speed v (m/s, straight ahead), got {values}")
             elif kind == "table" and name and len(values) == 3:
                 tables[name] = values
             elif kind == "cup" and name and len(values) == 2:
@@ -285,13 +285,13 @@ class KitchenSim:
         return (*spot, self.v) if action == "navigate" else spot
 
     def scene(self) -> dict[str, tuple[float, ...]]:
-        """Every scene object measured now, in reset's form: the robot as observe() measures it, each table
-        as placed (x, y, phi: the map, known exactly), each cup (x, y) with the position noise, and
-        "held NAME": () for a cup in the gripper (the cup at the gripper). The cups' noise comes from the
-        generator (seed, SENSING_STREAM), two draws per cup and call, never from the motor and sensor noise; the
-        simulation does not advance. Not in the scene: the arm's pose (reset tucks it) and the base's residual
-        speed (reset places it at rest)."""
-        out: dict[str, tuple[float, ...]] = {"robot": self.observe("grip")}
+        """Every scene object measured now, in reset's form: the robot as observe("navigate") measures it (a spot
+        and its speed straight ahead), each table as placed (x, y, phi: the map, known exactly), each cup (x, y)
+        with the position noise, and "held NAME": () for a cup in the gripper (the cup at the gripper). The cups'
+        noise comes from the generator (seed, SENSING_STREAM), two draws per cup and call, never from the motor and
+        sensor noise; the simulation does not advance. Not in the scene: the arm's pose (reset tucks it) and the
+        base's turn rate (reset places it turning at none)."""
+        out: dict[str, tuple[float, ...]] = {"robot": self.observe("navigate")}
         out.update({f"table {name}": (box.cx, box.cy, box.angle) for name, box in self.tables.items()})
         for name, body in self.cups.items():
             e = self._sensing.standard_normal(2)
@@ -459,10 +459,11 @@ class KitchenSim:
                 cup_moves = None
             if self.collides():
                 return "collision"
-            ahead = (x - gx) * cg + (y - gy) * sg  # believed, along the goal heading's line, and across it
-            behind = behind or (ahead < 0.0 and abs((y - gy) * cg - (x - gx) * sg) <= LEAD_IN)
-            if passing and behind and ahead >= 0.0:
-                # crossed the way-point's line near it, coming from behind; judged on the true state
+            past = (x - gx) * cg + (y - gy) * sg  # believed, along the goal heading's line from the goal
+            behind = behind or (past < 0.0 and abs((y - gy) * cg - (x - gx) * sg) <= LEAD_IN)  # ... and across
+            if passing and past >= 0.0 and (behind or k == len(lengths) - 1):
+                # crossed the way-point's line near it coming from behind, or beyond it on the route's last leg (a
+                # start past it): judged on the true state
                 if (math.hypot(true[0] - gx, true[1] - gy) <= PASS_TOL
                         and abs(W.wrap(true[2] - gphi)) <= PASS_HEADING_TOL):
                     return "success"
@@ -487,18 +488,18 @@ class KitchenSim:
                     (ax, ay), (bx, by) = path[k], path[k + 1]
                     length = lengths[k]
                     s = ((x - ax) * (bx - ax) + (y - ay) * (by - ay)) / length if length > 0 else length
-                    if k < len(lengths) - 1 and (s >= length or _leg_distance(path, k + 1, x, y)
-                                                 <= _leg_distance(path, k, x, y)):
+                    if k < len(lengths) - 1 and (s >= length or leg_distance(path, k + 1, x, y)
+                                                 <= leg_distance(path, k, x, y)):
                         k += 1
                         continue
                     break
                 s = max(0.0, min(length, s))
-                ahead, j = s + LOOKAHEAD, k
-                while ahead > lengths[j] and j < len(lengths) - 1:
-                    ahead -= lengths[j]
+                carrot, j = s + LOOKAHEAD, k  # the carrot's distance along leg j
+                while carrot > lengths[j] and j < len(lengths) - 1:
+                    carrot -= lengths[j]
                     j += 1
                 (ax, ay), (bx, by) = path[j], path[j + 1]
-                f = min(1.0, ahead / lengths[j]) if lengths[j] > 0 else 1.0
+                f = min(1.0, carrot / lengths[j]) if lengths[j] > 0 else 1.0
                 cx, cy = ax + f * (bx - ax), ay + f * (by - ay)
                 err = W.wrap(math.atan2(cy - y, cx - x) - phi)
                 rate = max(-w_max, min(w_max, K_TURN * err))
@@ -632,15 +633,6 @@ class KitchenSim:
         return GRIPPER_MASS + (W.CUP_MASS if self.held is not None else 0.0)
 
 
-def _leg_distance(path: Sequence[tuple[float, float]], k: int, x: float, y: float) -> float:
-    """Distance from (x, y) to the route's leg k (the segment from path[k] to path[k + 1])."""
-    (ax, ay), (bx, by) = path[k], path[k + 1]
-    dx, dy = bx - ax, by - ay
-    square = dx * dx + dy * dy
-    t = 0.0 if square == 0.0 else max(0.0, min(1.0, ((x - ax) * dx + (y - ay) * dy) / square))
-    return math.hypot(x - ax - t * dx, y - ay - t * dy)
-
-
 def _ramp_work(before: float, after: float) -> float:
     """2/m times the work of changing a speed from `before` to `after` at constant acceleration (braking to
     rest and speeding up again where it reverses: nothing is recovered); `_advance` inlines it, per step."""
@@ -662,6 +654,8 @@ def _check_call(call: ActionCall) -> tuple[float, ...]:
     goal = tuple(float(g) for g in call.goal)
     if len(goal) != GOAL_SIZES[call.action] or not all(math.isfinite(g) for g in goal):
         raise SimError(f"{call.action}: goal must be {GOAL_SIZES[call.action]} finite numbers, got {call.goal}")
+    if call.action == "navigate" and goal[6] < 0.0:
+        raise SimError(f"navigate: the speed to pass the goal at must be >= 0 m/s, got {goal[6]:g}")
     return goal
 
 
