@@ -394,9 +394,10 @@ def draw_waypoint(path: Path, prepared, pair: tuple[int, object, object], chosen
     fig = waypoint_figure(angle, speed, (angles, speeds), panels, marks, entry)
     others = len({p.id for a in both for p in a.free_parameters()} - {angle.id, speed.id})
     if others:
-        fig.supxlabel(f"{angle.id} and {speed.id} varied, the {others} other free parameter{'s' if others != 1 else ''} "
-                      "of these actions at their refined values: a mark is where a choice of both lies on this slice, "
-                      "not that choice's own predicted total", fontsize=8)
+        plural = "s" if others != 1 else ""
+        fig.supxlabel(f"{angle.id} and {speed.id} varied, the {others} other free parameter{plural} of these actions "
+                      "at their refined values: a mark is where a choice of both lies on this slice, not that "
+                      "choice's own predicted total", fontsize=8)
     _save(fig, path)
     plt.close(fig)
     return path

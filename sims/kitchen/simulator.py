@@ -12,8 +12,9 @@ whatever speed it starts with), and either (v = 0) brakes to stop at the goal po
 the goal heading, or (v > 0, a way-point: Sec. 5.5, Fig. 5.9) routes to a point LEAD_IN behind the goal on the
 goal heading's line, drives down that line braking to v and ends where it crosses the goal (the next action
 starts at that speed: it overshoots where it has to turn sharply). `grip` (goal: the cup's x, y) and `put`
-(goal: the put location's x, y) pan and extend the arm to the point (for grip, the cup the arm's camera finds within CUP_SEARCH of it, seen relative to the base
-with the position noise; for put, the point relative to the believed base pose) (each joint a velocity ramp within its speed and acceleration limits), close (grip) or open
+(goal: the put location's x, y) pan and extend the arm to the point (for grip, the cup the arm's camera finds
+within CUP_SEARCH of it, seen relative to the base with the position noise; for put, the point relative to the
+believed base pose) (each joint a velocity ramp within its speed and acceleration limits), close (grip) or open
 (put) the gripper in GRIPPER_TIME, and tuck the arm back (pan 0, extension EXT_REST).
 
 Outcomes (Episode.outcome), judged on the true state:
@@ -276,9 +277,9 @@ class KitchenSim:
     def observe(self, action: str) -> tuple[float, ...]:
         """The observed parameters of `action` (the base pose as a spot with zero offsets: ox, oy, ophi,
         along, dist, heading; for navigate also the speed v) measured now: exactly what `run` of it logs first
-        in Episode.params. It draws the
-        noise row that run will measure its start with and keeps it for run (consuming nothing: a closed loop
-        that observes stays on the open loop's noise stream); the simulation does not advance."""
+        in Episode.params. It draws the noise row that run will measure its start with and keeps it for run
+        (consuming nothing: a closed loop that observes stays on the open loop's noise stream); the simulation
+        does not advance."""
         if action not in ACTIONS:
             raise SimError(f"unknown kitchen action {action!r}; known: {', '.join(ACTIONS)}")
         spot = (*self._believe(self.true_state(), self._noise.peek()), 0.0, 0.0, 0.0)
