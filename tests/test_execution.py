@@ -125,6 +125,23 @@ def test_the_next_window_is_re_refined_from_the_measured_state():
     assert any(a.goal != b.goal for a, b in zip(on.calls[1:], open_loop.calls[1:]))
 
 
+def test_a_re_refinement_that_changes_nothing_the_next_window_reads_leaves_it_alone(monkeypatch):
+    """The cup moves while the kitchen's base drives to it: the grip's window is re-refined (grip itself has
+    nothing left to choose: the base stands where it stopped), so the cross's window reads what it read when it
+    was refined, and only a measured reason re-refines it. Re-refining it whatever happened (the rule
+    switched off) costs a window the run does not need."""
+    from tailor.refinement.execution import loop
+
+    def reasons(**kwargs):
+        return [e.reason for e in execute("kitchen", "scenario1", seed=3, disturbance="cup", **kwargs)
+                if e.kind == "re-refined"]
+
+    kept = reasons()
+    assert len(kept) == 1 and kept[0].startswith("cup cup1 moved")
+    monkeypatch.setattr(loop._Verdict, "changed", property(lambda self: self.re_refined, lambda self, v: None))
+    assert "the window after a re-refined one" in reasons()
+
+
 def _goto_model():
     from tailor.refinement.models.action_models import load_action_models
 

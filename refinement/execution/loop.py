@@ -12,8 +12,9 @@ Before each action (after the first), the executor's measurements are compared w
 - the success classifiers of the window's guarded actions at the measured state.
 A change of the predicted time beyond `time_tolerance`, an object moved beyond `object_tolerance` (a share of
 its quantity's range) or a guard predicting failure re-refines the window from the measured state (receding
-horizon: the observed parameters bound to the measurement, the moved objects' values replaced) and marks the
-next window stale, so it is re-refined in its turn. A guard no choice satisfies, or a failed action, replans:
+horizon: the observed parameters bound to the measurement, the moved objects' values replaced) and, where that
+changes a choice of the action (beyond `object_tolerance` of its range) or moves an object a later action
+reads, marks the next window stale, so it is re-refined in its turn. A guard no choice satisfies, or a failed action, replans:
 the facts that hold are those after the plan steps completed (the failed step's effects not applied; a fact
 whose predicate the binding marks `lost_on_failure` that the failed step needed is false, and what its producer
 deleted holds again), the belief takes the measured scene objects and the subgoals executed so far, and the
@@ -255,7 +256,7 @@ class ClosedLoop:
                     continue
                 sequence, choices = verdict.sequence, verdict.choices
                 if verdict.re_refined:
-                    stale = True
+                    stale = verdict.changed
                     yield Event("re-refined", step=action.step, pddl=action.pddl, action=action.action,
                                 reason=verdict.reason, overhead=overhead)
                     overhead = 0.0
@@ -355,6 +356,10 @@ class ClosedLoop:
             return _Verdict(sequence=substituted, choices=choices)
         sequence = substituted
         choices = dict(choices)
+        # the next window is re-refined in its turn where this one changes what it reads: a choice of action i
+        # (beyond object_tolerance) or a moved object a later action reads
+        later = {p.id.rpartition(".")[0].lower() for a in sequence.actions[i + 1:] for p in a.params}
+        changed = any(obj.lower() in later for obj, _, _ in moved.values())
         assignment = {pid: v for pid, v in choices.items() if pid in self._fixed_ids(sequence, i)}
         o = self.resolved
         window = optimize_window(sequence.actions, i, o.horizon, assignment, self.models, o.optimizer, o.seed,
@@ -371,9 +376,14 @@ class ClosedLoop:
             chosen = dict(zip((p.id for p in objective.free), result.values))
             for p in sequence.actions[i].params:
                 if p.id in chosen:
+                    before = choices.get(p.id)
                     choices[p.id] = float(chosen[p.id])
+                    changed = changed or before is None or self._differs(
+                        choices[p.id], before, p.high - p.low, self.entry.quantity(p.id).angle,
+                        self.settings.object_tolerance)
         reason = ", ".join(reasons) if reasons else "the window after a re-refined one"
-        return _Verdict(sequence=sequence, choices=choices, re_refined=window is not None or bool(moved), reason=reason)
+        return _Verdict(sequence=sequence, choices=choices, re_refined=window is not None or bool(moved), reason=reason,
+                        changed=changed)
 
     def _failing_guards(self, sequence: ActionSequence, choices: Mapping[str, float], i: int) -> list[str]:
         """The guarded actions of the window from action i whose success classifier predicts failure at the
@@ -567,3 +577,4 @@ class _Verdict:
     sequence: ActionSequence | None = None
     choices: dict | None = None
     re_refined: bool = False
+    changed: bool = False  # the re-refinement changed what the next window reads (it is re-refined in its turn)
