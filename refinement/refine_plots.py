@@ -221,7 +221,7 @@ def costs_figure(parameter, values: np.ndarray, curves: list[tuple[str, np.ndarr
             ax.grid(alpha=0.3)
         for label, value in marks:
             k = int(np.argmin(np.abs(values - value)))
-            shown = f"{round(np.degrees(value))}°" if polar else f"{value + 0.0:.3g}"  # (an int, a +0.0: never "-0")
+            shown = _degrees(value) if polar else f"{value + 0.0:.3g}"  # (a +0.0: never "-0")
             marker, color = MARK_STYLES.get(label, ("o", "tab:red"))
             ax.plot([value], [predicted[k]], marker, color=color, ms=11 if marker == "*" else 8, mec="black",
                     mew=0.6, zorder=4, clip_on=False, linestyle="none",

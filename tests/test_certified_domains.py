@@ -31,18 +31,14 @@ def test_the_bundled_problems_windows_are_certified(domain, problem, certifies):
 def test_every_kitchen_window_bounds_the_genetic_algorithm_on_the_same_window():
     """The windows after the first see the choices made before them: `compare` runs the genetic algorithm on
     each window as the certified optimizer saw it, the one it does not certify included."""
-    from tailor.planner_bridge import plan_files, resolve_problem
-    from tailor.refinement.belief import load_belief
-    from tailor.refinement.binding import load_domain_binding
-    from tailor.refinement.instantiate import instantiate
+    from tailor.planner_bridge import resolve_problem
     from tailor.refinement.models.action_models import load_action_models
     from tailor.refinement.refine import refine
+    from test_picture_labels import _sequence
 
-    domain, path = resolve_problem("kitchen", "scenario1")
-    sequence = instantiate(plan_files(domain, path), load_domain_binding(domain.parent),
-                           load_belief(path.with_suffix(".toml")))
-    refined = refine(sequence, load_action_models(domain.parent / "models"), horizon=2, method="certified",
-                     risk=1.0, compare="ga")
+    models = load_action_models(resolve_problem("kitchen", "scenario1")[0].parent / "models")
+    refined = refine(_sequence("kitchen", "scenario1"), models, horizon=2, method="certified", risk=1.0,
+                     compare="ga")
     assert len(refined.windows) == len(refined.compared) == 3
     for window, ga in zip(refined.windows, refined.compared):
         assert ga.method == "ga" and window.lower_bound <= ga.cost + SLACK * (1 + abs(ga.cost))

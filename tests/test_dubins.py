@@ -99,8 +99,13 @@ def _sampled(low: np.ndarray, high: np.ndarray, rng: np.random.Generator, m: int
 def test_the_enclosure_holds_every_sampled_value(width):
     rng = np.random.default_rng(int(width * 1000) + 7)
     low, high = _boxes(rng, 150, width)
-    (l_lo, l_hi), (a_lo, a_hi) = D.shortest_bounds(pose_boxes(low, high, 0), pose_boxes(low, high, 3), RADIUS)
-    length, arcs = _sampled(low, high, rng, 300)
+    bounds = D.shortest_bounds(pose_boxes(low, high, 0), pose_boxes(low, high, 3), RADIUS)
+    assert_encloses(bounds, *_sampled(low, high, rng, 300))
+
+
+def assert_encloses(bounds, length: np.ndarray, arcs: np.ndarray) -> None:
+    """Each box's (length, arcs) enclosure holds every value sampled in it (a row per box), finite, lengths >= 0."""
+    (l_lo, l_hi), (a_lo, a_hi) = bounds
     assert np.all(l_lo[:, None] <= length) and np.all(length <= l_hi[:, None])
     assert np.all(a_lo[:, None] <= arcs) and np.all(arcs <= a_hi[:, None])
     assert np.all(np.isfinite(l_hi)) and np.all(l_lo >= 0.0)

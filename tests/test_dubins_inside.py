@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from tailor.sims import dubins as D
 from tailor.sims import dubins_inside as DI
-from test_dubins import pose_boxes, sampled
+from test_dubins import assert_encloses, pose_boxes, sampled
 
 RADIUS = 0.4
 REGION = (-3.0, 3.0, -2.0, 2.0)
@@ -95,12 +95,8 @@ def _sampled(low: np.ndarray, high: np.ndarray, rng: np.random.Generator, m: int
 def test_the_enclosure_holds_every_sampled_value(width):
     rng = np.random.default_rng(int(width * 1000) + 11)
     low, high = _boxes(rng, 150, width)
-    (l_lo, l_hi), (a_lo, a_hi) = DI.shortest_inside_bounds(pose_boxes(low, high, 0), pose_boxes(low, high, 3),
-                                                           RADIUS, REGION)
-    length, arcs = _sampled(low, high, rng, 300)
-    assert np.all(l_lo[:, None] <= length) and np.all(length <= l_hi[:, None])
-    assert np.all(a_lo[:, None] <= arcs) and np.all(arcs <= a_hi[:, None])
-    assert np.all(np.isfinite(l_hi)) and np.all(l_lo >= 0.0)
+    bounds = DI.shortest_inside_bounds(pose_boxes(low, high, 0), pose_boxes(low, high, 3), RADIUS, REGION)
+    assert_encloses(bounds, *_sampled(low, high, rng, 300))
 
 
 def test_the_enclosure_shrinks_to_the_value_and_is_the_free_one_far_inside():

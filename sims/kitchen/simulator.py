@@ -206,7 +206,7 @@ class KitchenSim:
         gripper empty unless a cup is held."""
         if not isinstance(scene, Mapping) or "robot" not in scene:
             raise SimError("the kitchen scene needs a robot (ox, oy, ophi, along, dist, heading)")
-        tables, cups, held = {}, {}, None
+        robot, tables, cups, held = (), {}, {}, None
         for key, values in scene.items():
             values = tuple(float(v) for v in values)
             kind, _, name = key.partition(" ")
@@ -214,6 +214,7 @@ class KitchenSim:
                 if len(values) not in (6, 7):
                     raise SimError("the kitchen scene's robot is a spot (ox, oy, ophi, along, dist, heading) and "
                                    f"optionally its speed v (m/s, straight ahead), got {values}")
+                robot = values
             elif kind == "table" and name and len(values) == 3:
                 tables[name] = values
             elif kind == "cup" and name and len(values) == 2:
@@ -223,7 +224,6 @@ class KitchenSim:
             else:
                 raise SimError(f"unknown kitchen scene object {key!r} with {len(values)} values (expected robot, "
                                "'table NAME' (x, y, phi), 'cup NAME' (x, y), one 'held NAME' ())")
-        robot = tuple(float(v) for v in scene["robot"])
         self.place(W.spot_pose(*robot[:6]), tables, cups, held, robot[6] if len(robot) == 7 else 0.0)
 
     def place(self, pose: tuple[float, float, float], tables: Mapping[str, Sequence[float]],
@@ -441,8 +441,8 @@ class KitchenSim:
 
     def _go_to_pose(self, goal: Sequence[float]) -> str:
         gx, gy, gphi = W.spot_pose(*goal[:6])
-        passing = goal[6] > 0.0
-        v_goal = goal[6] if passing else 0.0
+        v_goal = goal[6]  # (>= 0: _check_call)
+        passing = v_goal > 0.0
         x0, y0 = self._xy
         path = self._route((x0, y0), (gx, gy, gphi), passing)
         lengths = [math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in pairwise(path)]
