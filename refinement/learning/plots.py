@@ -15,6 +15,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.ticker import FormatStrFormatter  # noqa: E402
 import numpy as np  # noqa: E402
 
 from tailor.refinement.models.action_models import ActionModel, CollisionModel  # noqa: E402
@@ -211,9 +212,11 @@ def plot_feature_spaces(reports: Mapping[str, dict], path: Target) -> None:
     ax.axhline(1.0, color="0.3", linestyle="--", lw=1, label="gradient boosting, raw")
     ax.set_xticks(range(len(rows)), list(rows))
     ax.set(ylabel="held-out MAE / HGB on raw parameters", yscale="log",
-           title="Feature spaces (Fig. 4.3): the model tree on each, relative to gradient boosting on raw "
+           title="Feature spaces (Fig. 4.3): the model tree on each,\nrelative to gradient boosting on the raw "
                  "parameters")
     ax.grid(True, axis="y", which="both", alpha=0.3)
+    for axis in (ax.yaxis.set_major_formatter, ax.yaxis.set_minor_formatter):  # 0.6, not 6 x 10^-1
+        axis(FormatStrFormatter("%g"))
     ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
     ax.title.set_fontsize("medium")
     _save(fig, path)

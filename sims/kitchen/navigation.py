@@ -34,25 +34,30 @@ def _inside(points: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     return (np.abs(u) < boxes[:, 2] - EPS) & (np.abs(w) < boxes[:, 3] - EPS)
 
 
+def _rotated(dx: np.ndarray, dy: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """(2, ..., b): the vectors (dx, dy) (broadcast against the last axis, one per box) along each box's axes."""
+    c, s = np.cos(boxes[:, 4]), np.sin(boxes[:, 4])
+    return np.stack([c * dx + s * dy, -s * dx + c * dy])
+
+
+def _crosses(origin: np.ndarray, delta: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """(..., b) bool: the segment from `origin` by `delta` (in each box's frame, from _rotated) passes through the
+    box's interior (slab test, both slabs at once)."""
+    h = (boxes[:, 2:4] - EPS).T.reshape((2,) + (1,) * (origin.ndim - 2) + (len(boxes),))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1, t2 = (-h - origin) / delta, (h - origin) / delta
+    flat, inside = np.abs(delta) < 1e-12, np.abs(origin) < h
+    t_lo = np.where(flat, np.where(inside, -np.inf, np.inf), np.minimum(t1, t2))
+    t_hi = np.where(flat, np.where(inside, np.inf, -np.inf), np.maximum(t1, t2))
+    return np.maximum(t_lo.max(axis=0), 0.0) < np.minimum(t_hi.min(axis=0), 1.0) - 1e-9
+
+
 def blocked(p: np.ndarray, q: np.ndarray, boxes: np.ndarray, ignore: np.ndarray | None = None) -> np.ndarray:
     """(n,) bool: segment p->q passes through the interior of a box (slab test in each box's frame);
     `ignore` (n, b) bool masks boxes out per segment."""
-    dx0 = p[:, None, 0] - boxes[None, :, 0]
-    dy0 = p[:, None, 1] - boxes[None, :, 1]
-    ddx = (q[:, 0] - p[:, 0])[:, None]
-    ddy = (q[:, 1] - p[:, 1])[:, None]
-    c, s = np.cos(boxes[:, 4]), np.sin(boxes[:, 4])
-    lo, hi = np.zeros(dx0.shape), np.ones(dx0.shape)
-    for origin, delta, half in ((c * dx0 + s * dy0, c * ddx + s * ddy, boxes[:, 2]),
-                                (-s * dx0 + c * dy0, -s * ddx + c * ddy, boxes[:, 3])):
-        h = half - EPS
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t1, t2 = (-h - origin) / delta, (h - origin) / delta
-        flat = np.abs(delta) < 1e-12
-        t_lo = np.where(flat, np.where(np.abs(origin) < h, -np.inf, np.inf), np.minimum(t1, t2))
-        t_hi = np.where(flat, np.where(np.abs(origin) < h, np.inf, -np.inf), np.maximum(t1, t2))
-        lo, hi = np.maximum(lo, t_lo), np.minimum(hi, t_hi)
-    hit = lo < hi - 1e-9
+    origin = _rotated(p[:, None, 0] - boxes[None, :, 0], p[:, None, 1] - boxes[None, :, 1], boxes)
+    delta = _rotated((q[:, 0] - p[:, 0])[:, None], (q[:, 1] - p[:, 1])[:, None], boxes)
+    hit = _crosses(origin, delta, boxes)
     if ignore is not None:
         hit &= ~ignore
     return hit.any(axis=1)
@@ -85,37 +90,47 @@ class RouteMap:
             nxt = np.where(better, nxt[:, k:k + 1], nxt)
         self.dist, self.next = dist, nxt
 
-    def _visible(self, points: np.ndarray) -> np.ndarray:
-        """(n, v) bool: node visible from each point (boxes the point lies in are ignored); each distinct
-        point is tested once (an optimizer's population often shares one end of a route)."""
-        unique, inverse = np.unique(points, axis=0, return_inverse=True)
-        if len(unique) < len(points):
-            return self._visible(unique)[inverse.reshape(-1)]
-        n, v = len(points), len(self.nodes)
-        p = np.repeat(points, v, axis=0)
-        q = np.tile(self.nodes, (n, 1))
-        ignore = np.repeat(_inside(points, self.boxes), v, axis=0)
-        return ~blocked(p, q, self.boxes, ignore).reshape(n, v)
+    def _visible(self, points: np.ndarray, inside: np.ndarray | None = None) -> np.ndarray:
+        """(n, v) bool: node visible from each point (boxes the point lies in, `inside` where known, are
+        ignored): blocked() of every point-node segment, each point's offsets to the boxes computed once."""
+        boxes = self.boxes
+        origin = _rotated(points[:, None, 0] - boxes[None, :, 0], points[:, None, 1] - boxes[None, :, 1], boxes)
+        ddx = self.nodes[None, :, 0] - points[:, None, 0]  # (n, v)
+        ddy = self.nodes[None, :, 1] - points[:, None, 1]
+        hit = _crosses(origin[:, :, None, :], _rotated(ddx[..., None], ddy[..., None], boxes), boxes)  # (n, v, b)
+        hit &= ~(_inside(points, boxes) if inside is None else inside)[:, None, :]
+        return ~hit.any(axis=2)
 
     def routes(self, start: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Vectorized shortest routes: (length, first node index or -1 if direct, last node index or -1,
-        turning at the inner nodes in rad) for each start/goal row (n, 2)."""
+        turning at the inner nodes in rad) for each start/goal row (n, 2). The graph is searched only for the
+        rows whose straight segment is blocked."""
         start, goal = np.atleast_2d(start), np.atleast_2d(goal)
         n = len(start)
-        ignore = _inside(start, self.boxes) | _inside(goal, self.boxes)
+        inside = _inside(np.concatenate([start, goal]), self.boxes)
+        ignore = inside[:n] | inside[n:]
         direct = ~blocked(start, goal, self.boxes, ignore)
-        d_direct = np.hypot(*(goal - start).T)
-        vs, vg = self._visible(start), self._visible(goal)
-        ds = np.where(vs, np.hypot(start[:, None, 0] - self.nodes[None, :, 0], start[:, None, 1] - self.nodes[None, :, 1]), np.inf)
-        dg = np.where(vg, np.hypot(goal[:, None, 0] - self.nodes[None, :, 0], goal[:, None, 1] - self.nodes[None, :, 1]), np.inf)
-        total = ds[:, :, None] + self.dist[None, :, :] + dg[:, None, :]  # (n, v, v)
-        flat = total.reshape(n, -1).argmin(axis=1)
-        first, last = np.divmod(flat, len(self.nodes))
-        length = total.reshape(n, -1)[np.arange(n), flat]
-        first = np.where(direct, -1, first)
-        last = np.where(direct, -1, last)
-        length = np.where(direct, d_direct, length)
-        turning = self._turning(start, goal, first, last, direct)
+        length = np.hypot(*(goal - start).T)
+        first, last, turning = np.full(n, -1), np.full(n, -1), np.zeros(n)
+        around = np.flatnonzero(~direct)
+        if len(around):
+            s, g = start[around], goal[around]
+            # each end tested once where every row shares it (an optimizer's population shares the start of the
+            # window's first action), both ends in one call
+            points = np.concatenate([start, goal])
+            ends = [rows[:1] if len(rows) > 1 and (points[rows] == points[rows[0]]).all() else rows
+                    for rows in (around, n + around)]
+            vs, vg = np.split(self._visible(points[np.concatenate(ends)], inside[np.concatenate(ends)]),
+                              [len(ends[0])])  # (1, v) for a shared end: broadcast below
+            ds = np.where(vs, np.hypot(s[:, None, 0] - self.nodes[None, :, 0], s[:, None, 1] - self.nodes[None, :, 1]),
+                          np.inf)
+            dg = np.where(vg, np.hypot(g[:, None, 0] - self.nodes[None, :, 0], g[:, None, 1] - self.nodes[None, :, 1]),
+                          np.inf)
+            total = (ds[:, :, None] + self.dist[None, :, :] + dg[:, None, :]).reshape(len(around), -1)  # (m, v * v)
+            flat = total.argmin(axis=1)
+            first[around], last[around] = np.divmod(flat, len(self.nodes))
+            length[around] = total[np.arange(len(around)), flat]
+            turning[around] = self._turning(s, g, first[around], last[around], np.zeros(len(around), dtype=bool))
         return length, first, last, turning
 
     def _pair_tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
