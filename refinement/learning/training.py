@@ -221,7 +221,7 @@ def train_action(recipe: TrainingRecipe, action: str, feature_space: str, episod
         timings[action] = {"selection": selection.report["seconds"] if selection is not None else 0.0,
                            "selection_for": feature_space if feature_space == AUTO else "comparison",
                            "protocol": durations - selected,  # the duration model's
-                           "measures": trained - durations}  # the further measures' models (0 without)
+                           "measures": trained - durations if further else 0.0}  # the further measures' models
     if compare:
         spaces = {}
         generic = generic_space(spec, entry)
