@@ -120,8 +120,8 @@ class RouteMap:
             points = np.concatenate([start, goal])
             ends = [rows[:1] if len(rows) > 1 and (points[rows] == points[rows[0]]).all() else rows
                     for rows in (around, n + around)]
-            vs, vg = np.split(self._visible(points[np.concatenate(ends)], inside[np.concatenate(ends)]),
-                              [len(ends[0])])  # (1, v) for a shared end: broadcast below
+            tested = np.concatenate(ends)
+            vs, vg = np.split(self._visible(points[tested], inside[tested]), [len(ends[0])])  # (1, v): broadcast
             ds = np.where(vs, np.hypot(s[:, None, 0] - self.nodes[None, :, 0], s[:, None, 1] - self.nodes[None, :, 1]),
                           np.inf)
             dg = np.where(vg, np.hypot(g[:, None, 0] - self.nodes[None, :, 0], g[:, None, 1] - self.nodes[None, :, 1]),
@@ -130,7 +130,7 @@ class RouteMap:
             flat = total.argmin(axis=1)
             first[around], last[around] = np.divmod(flat, len(self.nodes))
             length[around] = total[np.arange(len(around)), flat]
-            turning[around] = self._turning(s, g, first[around], last[around], np.zeros(len(around), dtype=bool))
+            turning[around] = self._turning(s, g, first[around], last[around])
         return length, first, last, turning
 
     def _pair_tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -150,18 +150,18 @@ class RouteMap:
             self._pairs = (inner, out_dir, in_dir)
         return self._pairs
 
-    def _turning(self, start, goal, first, last, direct) -> np.ndarray:
-        """Turning (rad) at the route's corners, vectorized with the pair tables."""
+    def _turning(self, start, goal, first, last) -> np.ndarray:
+        """Turning (rad) at the corners of routes through the graph from node `first` to node `last`, vectorized
+        with the pair tables."""
         inner, out_dir, in_dir = self._pair_tables()
-        i, j = np.maximum(first, 0), np.maximum(last, 0)
+        i, j = first, last
         vi, vj = self.nodes[i], self.nodes[j]
         into_i = np.arctan2(vi[:, 1] - start[:, 1], vi[:, 0] - start[:, 0])
         out_j = np.arctan2(goal[:, 1] - vj[:, 1], goal[:, 0] - vj[:, 0])
         same = i == j
         at_i = np.where(same, out_j, out_dir[i, j])
         at_j = np.where(same, 0.0, np.abs(_wrap(out_j - in_dir[i, j])))
-        total = np.abs(_wrap(at_i - into_i)) + np.where(same, 0.0, inner[i, j]) + at_j
-        return np.where(direct, 0.0, total)
+        return np.abs(_wrap(at_i - into_i)) + np.where(same, 0.0, inner[i, j]) + at_j
 
     def path_points(self, start, goal, first: int, last: int) -> list[tuple[float, float]]:
         pts = [(float(start[0]), float(start[1]))]
