@@ -325,15 +325,16 @@ def draw_refinement(path, prepared, outcomes, views) -> list[Path]:
     panels = [(panel_title(key, o), o.simulated) for key, o in outcomes.items()]
     entry = registry.get(prepared.sequence.simulator) if prepared.sequence.simulator else None
     draw_scene = entry.draw_scene if entry is not None else None
-    chosen_values = [{p.id: p.value for a in o.refined.sequence.actions for p in a.params} for o in outcomes.values()]
+    values_of = {key: {p.id: p.value for a in o.refined.sequence.actions for p in a.params}
+                 for key, o in outcomes.items()}
+    chosen_values = list(values_of.values())
     background = (None if draw_scene is None
                   else (lambda ax, col: draw_scene(ax, prepared.sequence, chosen_values[col])))
     plot_executions(path, views, panels, background, entry)
     written = [path]
     if "greedy" not in outcomes:  # nothing to choose: no predicted time over a choice
         return written
-    chosen = {p.id: p.value for a in outcomes["refined"].refined.sequence.actions for p in a.params}
-    greedy = {p.id: p.value for a in outcomes["greedy"].refined.sequence.actions for p in a.params}
+    chosen, greedy = values_of["refined"], values_of["greedy"]
     if prepared.sequence.actions[0].free_parameters():
         written.append(draw_costs(path, prepared, outcomes["refined"].refined.horizon, chosen, greedy, entry))
     pair = waypoint_pair(prepared.sequence, entry)

@@ -206,7 +206,7 @@ def train_action(recipe: TrainingRecipe, action: str, feature_space: str, episod
         space = selection.space if selection.space is not None else selection.named
     selected = time.perf_counter()  # the selection's own time is its report's "seconds"
     model = train_duration_model(action, episodes, seed, space, spec.observed, jobs=jobs, **protocol).model
-    durations = time.perf_counter()
+    duration_trained = time.perf_counter()
     further = next((m.further_measures for m in recipe.models if m.action == action), ())
     if further:
         model = replace(model, measures=measure_models(action, further, space, episodes, seed, spec.observed, entry,
@@ -220,8 +220,8 @@ def train_action(recipe: TrainingRecipe, action: str, feature_space: str, episod
     if timings is not None:  # beside the models, not in them: a model file is the same for the same seed
         timings[action] = {"selection": selection.report["seconds"] if selection is not None else 0.0,
                            "selection_for": feature_space if feature_space == AUTO else "comparison",
-                           "protocol": durations - selected,  # the duration model's
-                           "measures": trained - durations if further else 0.0}  # the further measures' models
+                           "protocol": duration_trained - selected,  # the duration model's
+                           "measures": trained - duration_trained if further else 0.0}  # the further measures' models
     if compare:
         spaces = {}
         generic = generic_space(spec, entry)

@@ -90,15 +90,15 @@ class RouteMap:
             nxt = np.where(better, nxt[:, k:k + 1], nxt)
         self.dist, self.next = dist, nxt
 
-    def _visible(self, points: np.ndarray, inside: np.ndarray | None = None) -> np.ndarray:
-        """(n, v) bool: node visible from each point (boxes the point lies in, `inside` where known, are
-        ignored): blocked() of every point-node segment, each point's offsets to the boxes computed once."""
+    def _visible(self, points: np.ndarray, inside: np.ndarray) -> np.ndarray:
+        """(n, v) bool: node visible from each point, the boxes it lies in (`inside`, (n, b)) ignored: blocked() of
+        every point-node segment, each point's offsets to the boxes computed once."""
         boxes = self.boxes
         origin = _rotated(points[:, None, 0] - boxes[None, :, 0], points[:, None, 1] - boxes[None, :, 1], boxes)
         ddx = self.nodes[None, :, 0] - points[:, None, 0]  # (n, v)
         ddy = self.nodes[None, :, 1] - points[:, None, 1]
         hit = _crosses(origin[:, :, None, :], _rotated(ddx[..., None], ddy[..., None], boxes), boxes)  # (n, v, b)
-        hit &= ~(_inside(points, boxes) if inside is None else inside)[:, None, :]
+        hit &= ~inside[:, None, :]
         return ~hit.any(axis=2)
 
     def routes(self, start: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
