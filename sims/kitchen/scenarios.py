@@ -202,8 +202,6 @@ BELIEF_SEEDS = {"scenario1": 1, "scenario2": 2}  # the layouts of the bundled be
 
 def belief_text(name: str) -> str:
     """The belief file (TOML) of a bundled problem: one random layout (seed BELIEF_SEEDS[name])."""
-    from tailor.sims.kitchen import UNITS  # (the package imports this module: which values are angles)
-
     seed = BELIEF_SEEDS[name]
     _, objects = SITUATIONS[name](np.random.default_rng(seed))
     lines = [f"# Belief state of problem `{name}`: one random layout of the kitchen (tailor.sims.kitchen.scenarios,",
@@ -214,7 +212,7 @@ def belief_text(name: str) -> str:
              "# Regenerate: python -c \"from tailor.sims.kitchen.scenarios import write_belief_files; write_belief_files()\""]
     for obj, values in objects.items():
         lines.append(f"[objects.{obj}]")
-        lines += [f"{key} = {_rounded(value, key in UNITS and UNITS[key].angle)!r}" for key, value in values.items()]
+        lines += [f"{key} = {_rounded(value, key in ('ophi', 'heading'))!r}" for key, value in values.items()]
         lines.append("")
     return "\n".join(lines)
 
