@@ -78,15 +78,24 @@ def cv_mae(X: np.ndarray, y: np.ndarray, folds: list[np.ndarray], leaf: int) -> 
     return float(np.mean(np.abs(predicted - y))), predicted
 
 
-def screen(columns: np.ndarray, residual: np.ndarray) -> np.ndarray:
-    """Per candidate column: the share of the residual's spread explained by its quantile bins' means."""
-    total = float(np.sum((residual - residual.mean()) ** 2)) or 1.0
-    scores = np.empty(columns.shape[1])
+def quantile_bins(columns: np.ndarray) -> np.ndarray:
+    """Per row and candidate column: the row's bin among the column's BINS quantile bins (what `screen` groups the
+    residuals by; computed once, as the columns stay while the residuals change from step to step)."""
+    bins = np.empty(columns.shape, dtype=np.intp)
     for k in range(columns.shape[1]):
         edges = np.unique(np.quantile(columns[:, k], np.linspace(0, 1, BINS + 1)[1:-1]))
-        bins = np.searchsorted(edges, columns[:, k])
-        counts = np.bincount(bins)
-        sums = np.bincount(bins, weights=residual)
+        bins[:, k] = np.searchsorted(edges, columns[:, k])
+    return bins
+
+
+def screen(bins: np.ndarray, residual: np.ndarray) -> np.ndarray:
+    """Per candidate column (its `quantile_bins`): the share of the residual's spread explained by its quantile
+    bins' means."""
+    total = float(np.sum((residual - residual.mean()) ** 2)) or 1.0
+    scores = np.empty(bins.shape[1])
+    for k in range(bins.shape[1]):
+        counts = np.bincount(bins[:, k])
+        sums = np.bincount(bins[:, k], weights=residual)
         explained = float(np.sum(sums[counts > 0] ** 2 / counts[counts > 0])) - residual.sum() ** 2 / len(residual)
         scores[k] = explained / total
     return scores
@@ -137,14 +146,15 @@ def race(sets: list[np.ndarray], y: np.ndarray, folds: list[np.ndarray], leaf: i
 
 
 def forward_select(candidates: list[Candidate], columns: np.ndarray, y: np.ndarray, folds: list[np.ndarray],
-                   leaf: int, jobs: int = 1) -> tuple[list[int], list[dict], np.ndarray]:
+                   leaf: int, jobs: int = 1, bins: np.ndarray | None = None) -> tuple[list[int], list[dict], np.ndarray]:
     """Indices of the chosen candidates in order, each step's record, and the chosen set's out-of-fold
-    predictions; a step's trials are raced (`race`) in `jobs` workers."""
+    predictions; a step's trials are raced (`race`) in `jobs` workers. `bins`: the columns' quantile_bins."""
+    bins = quantile_bins(columns) if bins is None else bins
     chosen: list[int] = []
     best, predicted = cv_mae(columns[:, []], y, folds, leaf)
     steps = [{"feature": None, "cv_mae": best}]
     while len(chosen) < min(MAX_FEATURES, len(candidates)):
-        scores = screen(columns, y - predicted)
+        scores = screen(bins, y - predicted)
         scores[chosen] = -np.inf
         shortlist = [int(k) for k in np.argsort(-scores, kind="stable")[:SHORTLIST] if np.isfinite(scores[k])]
         if not shortlist:
@@ -196,12 +206,13 @@ def select_features(spec: ActionSpec, entry: SimulatorEntry, episodes: list[Epis
     order = np.random.default_rng(seed).permutation(len(y))
     folds = np.array_split(order, FOLDS)
     leaf = _leaf(len(y))
-    chosen, steps, predicted = forward_select(candidates, columns, y, folds, leaf, jobs)
+    bins = quantile_bins(columns)
+    chosen, steps, predicted = forward_select(candidates, columns, y, folds, leaf, jobs, bins)
     known = {}  # the candidate sets whose K-fold MAE is known already: the forward selection's
     if chosen:
         known["forward"] = (steps[-1]["cv_mae"], predicted)
     else:  # nothing beats the median: keep the single best-screened candidate, a model needs one
-        chosen = [int(np.argmax(screen(columns, y - np.median(y))))]
+        chosen = [int(np.argmax(screen(bins, y - np.median(y))))]
     # Table 4.1's generic row, where the structure has one, is a candidate set too, alone and joined to the
     # forward selection's (a step that gains little on the sample may still gain on all the data)
     row = generic_row(spec, entry.quantity) or []

@@ -7,6 +7,7 @@ coefficients, so the result is a flat `TreeArrays`: a binary tree whose leaves a
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -60,7 +61,7 @@ def grow_tree(X: np.ndarray, y: np.ndarray, p: GrowParams) -> TreeArrays:
         tested = np.ones((len(nodes), X.shape[1]), dtype=bool)
     else:
         tested = _features_tested_below(nodes, X.shape[1])
-    floor = RESIDUAL_FLOOR * float(np.std(y))
+    floor = RESIDUAL_FLOOR * _sd(y)
     for node, used in zip(nodes, tested):
         idx = node["idx"]
         node["model"] = fit_node_model(X[idx], y[idx], used, floor, p.pruning_factor)
@@ -73,7 +74,7 @@ def _grow(X: np.ndarray, y: np.ndarray, p: GrowParams) -> list[dict]:
     """Grow depth-first by SDR; each node keeps its samples sorted along every feature (presorting)."""
     Xt = np.ascontiguousarray(X.T)
     order = np.ascontiguousarray(np.argsort(X, axis=0, kind="stable").T)  # (n_features, n_samples)
-    root_sd = float(np.std(y))
+    root_sd = _sd(y)
     nodes: list[dict] = []
     go_left = np.zeros(len(y), dtype=bool)
     stack = [(order, 0, -1, 0)]  # (sorted sample indices, depth, parent id, side)
@@ -107,7 +108,7 @@ def _may_split(S: np.ndarray, y: np.ndarray, depth: int, root_sd: float, p: Grow
     m = S.shape[1]
     if m < 2 * p.min_samples_leaf or (p.max_depth is not None and depth >= p.max_depth):
         return False
-    return float(np.std(y[S[0]])) > p.sd_fraction * root_sd
+    return _sd(y[S[0]]) > p.sd_fraction * root_sd
 
 
 def _linear_residuals(X: np.ndarray, y: np.ndarray, idx: np.ndarray) -> np.ndarray:
@@ -116,8 +117,9 @@ def _linear_residuals(X: np.ndarray, y: np.ndarray, idx: np.ndarray) -> np.ndarr
     Splitting on these instead of on y puts the splits where the node's linear model fails (kinks,
     steps) rather than along trends a leaf's hyperplane fits anyway; normal equations suffice here.
     """
-    Xc = X[idx] - X[idx].mean(axis=0)
-    yc = y[idx] - y[idx].mean()
+    Xn, yn = X[idx], y[idx]
+    Xc = Xn - Xn.sum(axis=0) / len(idx)
+    yc = yn - yn.sum() / len(idx)
     norm = np.sqrt(np.einsum("ij,ij->j", Xc, Xc))
     norm[norm == 0] = 1.0
     Z = Xc / norm
@@ -131,7 +133,7 @@ def _best_split(Xt: np.ndarray, target: np.ndarray, S: np.ndarray, min_leaf: int
     rank = np.empty(len(Xt[0]), dtype=np.intp)  # position of each sample in S[0]
     rank[S[0]] = np.arange(m)
     Ys = target[rank[S]]
-    Ys = Ys - Ys[0].mean()  # centring keeps the sums of squares accurate
+    Ys = Ys - Ys[0].sum() / m  # centring keeps the sums of squares accurate
     Xs = np.take_along_axis(Xt, S, axis=1)
     k = np.arange(min_leaf, m - min_leaf + 1)  # candidate sizes of the left part
     cs = np.cumsum(Ys, axis=1)
@@ -148,7 +150,7 @@ def _best_split(Xt: np.ndarray, target: np.ndarray, S: np.ndarray, min_leaf: int
     weighted_sd = np.where(valid, weighted_sd, np.inf)
     best = int(np.argmin(weighted_sd))  # first minimum: lowest feature index, then leftmost split
     feature, pos = divmod(best, len(k))
-    sd = float(np.std(Ys[0]))
+    sd = _sd(Ys[0])
     if sd - weighted_sd[feature, pos] <= MIN_RELATIVE_SDR * sd:
         return None
     a, b = float(Xs[feature, k[pos] - 1]), float(Xs[feature, k[pos]])
@@ -156,6 +158,12 @@ def _best_split(Xt: np.ndarray, target: np.ndarray, S: np.ndarray, min_leaf: int
     if not a <= threshold < b:  # adjacent floats: the midpoint rounds up to b
         threshold = a
     return feature, int(k[pos]), threshold
+
+
+def _sd(a: np.ndarray) -> float:
+    """np.std of a 1-D array by the same operations, without its dispatch (called once or twice per node)."""
+    d = a - a.sum() / len(a)
+    return math.sqrt((d * d).sum() / len(a))
 
 
 def _features_tested_below(nodes: list[dict], n_features: int) -> np.ndarray:

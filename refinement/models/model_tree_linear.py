@@ -8,6 +8,7 @@ pruning keeps far too many leaves.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,7 +44,11 @@ def fit_node_model(X: np.ndarray, y: np.ndarray, used: np.ndarray, floor: float,
     perfect fits go to the simpler model instead of to rounding noise.
     """
     n = len(y)
-    mu_x, mu_y = X.mean(axis=0), float(y.mean())
+    if not used.any():  # the node's mean (what the general path below gives without features, done cheaply)
+        mu_y = float(y.sum() / n)
+        mae = max(float(np.abs(y - mu_y).sum() / n), floor)
+        return NodeModel(np.zeros(X.shape[1]), mu_y, mae, 1, m5_factor(n, 1, pruning_factor) * mae)
+    mu_x, mu_y = X.sum(axis=0) / n, float(y.sum() / n)  # np.mean's operations, without its overhead
     Xc, yc = X - mu_x, y - mu_y
     norm = np.sqrt(np.einsum("ij,ij->j", Xc, Xc))
     # A feature constant in the node (up to rounding) cannot be fitted; it is not a parameter either.
@@ -59,7 +64,7 @@ def fit_node_model(X: np.ndarray, y: np.ndarray, used: np.ndarray, floor: float,
     if len(keep):
         beta = np.linalg.lstsq(Xc[:, keep] / norm[keep], yc, rcond=LSTSQ_RCOND)[0]
         coef[keep] = beta / norm[keep]
-    mae = max(float(np.mean(np.abs(yc - Xc[:, keep] @ coef[keep]))), floor)
+    mae = max(float(np.abs(yc - Xc[:, keep] @ coef[keep]).sum() / n), floor)
     v = len(keep) + 1
     return NodeModel(coef, mu_y - float(mu_x @ coef), mae, v, m5_factor(n, v, pruning_factor) * mae)
 
@@ -70,24 +75,37 @@ def _eliminate(Z: np.ndarray, yc: np.ndarray, keep: np.ndarray, error) -> np.nda
     G = Z.T @ Z + SELECTION_RIDGE * np.eye(len(keep))
     r = Z.T @ yc
     full = np.linalg.solve(G, r)
-    best = float(error(float(np.mean(np.abs(yc - Z @ full))), len(cols) + 1))
+    n = len(yc)
+    best = float(error(float(np.abs(yc - Z @ full).sum() / n), len(cols) + 1))
     while len(cols):
         k = len(cols)
         # Candidate j drops column j: its Gram row/column become the unit vector and its right side 0,
         # so one batched solve gives all k reduced fits (coefficient j comes out exactly 0).
-        Gs = np.broadcast_to(G[np.ix_(cols, cols)], (k, k, k)).copy()
-        rs = np.broadcast_to(r[cols], (k, k)).copy()
-        diag = np.arange(k)
-        Gs[diag, diag, :] = 0.0
-        Gs[diag, :, diag] = 0.0
-        Gs[diag, diag, diag] = 1.0
-        rs[diag, diag] = 0.0
+        keep_j, unit_j, others = _drop_masks(k)
+        Gs = G.take(cols, 0).take(cols, 1) * keep_j + unit_j
+        rs = r[cols] * others
         B = np.linalg.solve(Gs, rs[..., None])[..., 0]  # (k candidates, k coefficients)
-        mae = np.mean(np.abs(yc[:, None] - Z[:, cols] @ B.T), axis=0)
+        mae = np.abs(yc[:, None] - Z[:, cols] @ B.T).sum(axis=0) / n
         errors = error(mae, k)  # k - 1 features + intercept
         j = int(np.argmin(errors))
         if errors[j] > best:
             break
         best = float(errors[j])
-        cols = np.delete(cols, j)
+        cols = np.concatenate([cols[:j], cols[j + 1:]])
     return keep[cols]
+
+
+@functools.cache
+def _drop_masks(k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Masks for dropping each of k columns: candidate j's Gram matrix is G * keep[j] + unit[j] (row and column j
+    zero, 1 at j, j), its right side r * others[j] (0 at j)."""
+    keep = np.ones((k, k, k))
+    diag = np.arange(k)
+    keep[diag, diag, :] = 0.0
+    keep[diag, :, diag] = 0.0
+    unit = np.zeros((k, k, k))
+    unit[diag, diag, diag] = 1.0
+    others = 1.0 - np.eye(k)
+    for mask in (keep, unit, others):
+        mask.flags.writeable = False
+    return keep, unit, others
