@@ -147,10 +147,12 @@ def remembered_interrupts():
         signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
-def ordered_results(function: Callable, calls: Sequence[tuple], jobs: int = 1) -> Iterator:
+def ordered_results(function: Callable, calls: Sequence[tuple], jobs: int = 1, one_by_one: bool = False) -> Iterator:
     """Yield `function(*args)` for each `args` in `calls`, in that order. On loky with jobs = 1, in this process;
     otherwise in the workers of the session's backend (loky: `jobs` processes; a cluster: all its workers).
-    Closing the iterator (as a `finally` does on Ctrl-C) stops the workers' pending calls."""
+    `one_by_one` hands the workers one call at a time (for a few calls of tens of milliseconds, which joblib's
+    automatic batching would otherwise bundle onto one worker). Closing the iterator (as a `finally` does on
+    Ctrl-C) stops the workers' pending calls."""
     calls = list(calls)
     if _session is None or _session.backend == "loky":
         if jobs <= 1:
@@ -169,13 +171,14 @@ def ordered_results(function: Callable, calls: Sequence[tuple], jobs: int = 1) -
 
     backend, _ = get_active_backend()
     if getattr(backend, "supports_return_generator", False):
-        results = Parallel(n_jobs=n_jobs, return_as="generator")(delayed(function)(*args) for args in calls)
+        results = Parallel(n_jobs=n_jobs, return_as="generator", batch_size=1 if one_by_one else "auto")(
+            delayed(function)(*args) for args in calls)
         try:
             yield from results
         finally:
             results.close()  # on Ctrl-C this stops the workers before KeyboardInterrupt propagates
         return
-    with Parallel(n_jobs=n_jobs) as parallel:  # one pool for every wave
+    with Parallel(n_jobs=n_jobs, batch_size=1 if one_by_one else "auto") as parallel:  # one pool for every wave
         wave = WAVE_PER_WORKER * max(1, effective_n_jobs(n_jobs))
         for start in range(0, len(calls), wave):
             yield from parallel(delayed(function)(*args) for args in calls[start:start + wave])

@@ -253,6 +253,16 @@ def test_the_turning_radius_and_the_points_it_turns_about_are_found_from_the_dat
                        candidate_columns(path, PLANAR.parameters, _rigid(p, rng)), atol=1e-6)
 
 
+def test_the_families_discovered_in_workers_are_those_discovered_here():
+    """generate's discovery (transfer limits, approach lengths, paths, via points) runs in workers with jobs > 1:
+    the same candidates, in the same order, with the same constants."""
+    params, durations = _first(_walled_episodes(300, 5))
+    here = generate(PLANAR, quantity, params, durations)
+    there = generate(PLANAR, quantity, params, durations, jobs=2)
+    assert [(c.name, c.expression.formula()) for c in there] == [(c.name, c.expression.formula()) for c in here]
+    assert any(c.name.startswith("dubins_inside") for c in here) and any(c.name.startswith("transfer") for c in here)
+
+
 def _first(episodes: list[Episode]) -> tuple[np.ndarray, np.ndarray]:
     from tailor.refinement.models.features import first_examples
 

@@ -24,6 +24,24 @@ def test_ordered_results_come_from_workers_in_the_order_of_the_calls():
     assert {pid for pid, _ in ordered_results(pid_and_square, [(1,), (2,)], jobs=1)} == {os.getpid()}
 
 
+def test_one_by_one_hands_the_workers_single_calls_and_keeps_the_order(monkeypatch):
+    import joblib
+
+    sizes = []
+    init = joblib.Parallel.__init__
+
+    def spy(self, *args, **kwargs):
+        sizes.append(kwargs.get("batch_size", "auto"))
+        init(self, *args, **kwargs)
+
+    monkeypatch.setattr(joblib.Parallel, "__init__", spy)
+    results = list(ordered_results(pid_and_square, [(k,) for k in range(12)], jobs=2, one_by_one=True))
+    assert [square for _, square in results] == [k * k for k in range(12)]
+    assert os.getpid() not in {pid for pid, _ in results}
+    list(ordered_results(pid_and_square, [(k,) for k in range(3)], jobs=2))
+    assert sizes == [1, "auto"]
+
+
 def test_a_duration_model_fitted_by_two_workers_is_the_serial_one(monkeypatch):
     episodes = synthetic_episodes.gather("soccer", "goToPose", 60, seed=4)
     batches = []

@@ -126,7 +126,7 @@ def race(sets: list[np.ndarray], y: np.ndarray, folds: list[np.ndarray], leaf: i
     first-fold MAE (theirs, or `best`, a set's raced before) and, with a `bar`, of it; and the best of each of
     `groups` in any case. Those get their cv_mae to the last bit, at a fraction of the fits. The fits run in
     `jobs` workers, results in order (the same for any number of workers)."""
-    first = list(ordered_results(_fold_fit, [(X, y, folds[0], leaf) for X in sets], jobs))
+    first = list(ordered_results(_fold_fit, [(X, y, folds[0], leaf) for X in sets], jobs, one_by_one=True))
     errors = [float(np.mean(np.abs(p - y[folds[0]]))) for p in first]
     best = min([best, *errors])
     on = {k for k, e in enumerate(errors) if e <= (1.0 + RACE_MARGIN) * best and
@@ -134,7 +134,7 @@ def race(sets: list[np.ndarray], y: np.ndarray, folds: list[np.ndarray], leaf: i
     on |= {min(group, key=lambda k: (errors[k], k)) for group in groups if group}
     on = sorted(on)
     rest = list(ordered_results(_fold_fit, [(sets[k], y, folds[f], leaf) for k in on for f in range(1, len(folds))],
-                                jobs))
+                                jobs, one_by_one=True))
     results: list[tuple[float, np.ndarray] | None] = [None] * len(sets)
     for j, k in enumerate(on):
         predicted = np.empty_like(y)
@@ -199,7 +199,7 @@ def select_features(spec: ActionSpec, entry: SimulatorEntry, episodes: list[Epis
     started = time.perf_counter()
     sample = [e for e in _sample(episodes, seed) if e.succeeded]
     params, y = first_examples(sample)
-    candidates = generate(spec, entry.quantity, params, y)
+    candidates = generate(spec, entry.quantity, params, y, jobs)
     space_of = lambda chosen: ExpressionSpace(tuple(spec.parameters), tuple(c.name for c in chosen),  # noqa: E731
                                               tuple(c.expression for c in chosen))
     columns = candidate_columns(candidates, tuple(spec.parameters), params)

@@ -42,6 +42,7 @@ from tailor.refinement.models.expression_maths import evaluate, transfer
 from tailor.refinement.models.model_tree import ModelTree
 from tailor.refinement.models.expressions import (CONSTANT_ARGUMENTS, MAX_DEPTH, MAX_NODES, Expr, const, node, param,
                                                   parse_unit)
+from tailor.sims.parallel import ordered_results
 from tailor.sims.protocol import ActionSpec, Quantity
 
 MAX_CANDIDATES = 160
@@ -154,9 +155,10 @@ def _toward(speed: Expr, direction: Expr) -> Expr:
 
 
 def generate(spec: ActionSpec, quantity: Callable[[str], Quantity], params: np.ndarray | None = None,
-             durations: np.ndarray | None = None) -> list[Candidate]:
+             durations: np.ndarray | None = None, jobs: int = 1) -> list[Candidate]:
     """Every candidate feature of `spec`'s action (deduplicated where `params`, rows of the action's parameters,
-    are given; transfer limits discovered from them and their `durations`)."""
+    are given; transfer limits, approach lengths, paths and via points discovered from them and their `durations`,
+    those four families in `jobs` workers)."""
     ps = parameters_of(spec, quantity)
     values = None if params is None else {name: params[:, k] for k, name in enumerate(spec.parameters)}
     axes = axes_of(ps, values)
@@ -231,12 +233,18 @@ def generate(spec: ActionSpec, quantity: Callable[[str], Quantity], params: np.n
             if g is not None:
                 add(f"{g.name}_toward_{label}", _toward(param(g.name), d), "speed toward the goal")
     if params is not None and durations is not None and len(params) >= 8:
-        out += _transfers(moves, spec, params, durations)
-        out += _composed(ps, spec, params, durations)
-        out += _approaches(planes, ps, spec, params, durations)
-        out += _paths(planes, ps, speeds, spec, params, durations)
-        out += _via_points(planes, ps, spec, params, durations, out)
+        composed = _composed(ps, spec, params, durations)  # (the offset points _via_points starts from)
+        calls = [(_transfers, moves, spec, params, durations), (_approaches, planes, ps, spec, params, durations),
+                 (_paths, planes, ps, speeds, spec, params, durations),
+                 (_via_points, planes, ps, spec, params, durations, out + composed)]
+        transfers, approaches, paths, via = ordered_results(_discovered, calls, jobs)
+        out += transfers + composed + approaches + paths + via
     return _distinct(out, spec, params)
+
+
+def _discovered(family: Callable[..., list[Candidate]], *args) -> list[Candidate]:
+    """The candidates of one family whose constants are discovered from the data (a call for the workers)."""
+    return family(*args)
 
 
 def _paths(planes, ps: list[Parameter], speeds, spec: ActionSpec, params: np.ndarray, durations: np.ndarray
