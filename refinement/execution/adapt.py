@@ -12,8 +12,9 @@ few executions tilted.) The
 result is again a model tree over the same features, so every optimizer (analytic, certified, genetic) refines
 with it as with the trained one; it predicts the trained model until executions say otherwise. Where a robot has
 changed in a way no such map follows, the executions say more than the trained tree: from RETRAIN_FROM successful
-executions of an action on (and every RETRAIN_EVERY more), a tree trained on them alone (the trained model's
-features, the training protocol) competes with the trained tree, both fitted on all but the most recent
+executions of an action on (and every RETRAIN_EVERY more), a tree trained on them alone (the training protocol, in
+features selected on them with the trained model's competing: a changed robot may break what its features take as
+known, such as an acceleration limit) competes with the trained tree, both fitted on all but the most recent
 RECENT_SHARE of them and recalibrated there; the one predicting those recent executions better is what
 recalibration starts from until the next judgement.
 
@@ -45,6 +46,11 @@ RETRAIN_EVERY = 100  # ... judged again after this many more
 RECENT_SHARE = 0.2  # ... on the most recent share of them, each candidate fitted on the rest
 MIN_LEAF_EXECUTIONS = 3  # executions reaching a classifier's leaf before they can change its verdict
 TRAINED_WEIGHT = 20.0  # at most this many executions' worth of a classifier leaf's training episodes
+# a retrained tree learns in generated features only where they predict the executions with at most this share of
+# the trained features' cross-validated error (measured: the arm with a payload, 260 reaches, 0.04 of `ramps`'; the
+# kitchen's slow floor, navigate's generated features against its obstacle-reading `route`, 0.79 on 200 executions
+# and 1.32 on 600, is no such case: switching there at 0.79 predicted the stream's last tasks 4 times worse)
+RESELECT_SHARE = 0.5
 
 
 class OnlineLearner:
@@ -220,20 +226,50 @@ def recalibrated_classifier(model: CollisionModel, episodes) -> CollisionModel:
 
 
 def retrained(model: ActionModel, episodes: list[Episode], entry: SimulatorEntry) -> ActionModel | None:
-    """A duration model of `model`'s action trained on the executed `episodes` alone, in `model`'s feature space,
-    by the training protocol (one sample per execution: its start); None where they are too few for it."""
+    """A duration model of `model`'s action trained on the executed `episodes` alone, by the training protocol (one
+    sample per execution: its start), in features selected on them (`reselected`): the robot may have changed in
+    what `model`'s features take as known (an acceleration limit a space bakes in). The further measures' models,
+    which share the features, are trained on the executions too where the features changed, and kept as trained
+    where not (where the executions do not report those measures, the features are kept); None where the executions
+    are too few."""
     from tailor.errors import DataError
     from tailor.refinement.learning.duration_protocol import train_duration_model
+    from tailor.refinement.learning.training import measure_models
 
     observed = tuple(entry.action(model.action).observed)
     starts = [Episode(e.action, np.asarray(e.params, dtype=float), np.zeros(1),
-                      np.asarray(e.params, dtype=float)[None, :len(observed)], observed, e.outcome, e.duration, e.seed)
+                      np.asarray(e.params, dtype=float)[None, :len(observed)], observed, e.outcome, e.duration, e.seed,
+                      measures=e.measures)
               for e in episodes]
-    space = model.expressions if model.expressions is not None else model.feature_space
+    own = model.expressions if model.expressions is not None else model.feature_space
+    # new features need the further measures' models anew: only where every execution reports those measures
+    measured = all(set(model.measures) <= set(e.measures) for e in starts if e.succeeded)
+    space = reselected(model, starts, entry) if measured else own
     try:
         fresh = train_duration_model(model.action, starts, 0, space, observed, n_i_candidates=(1,)).model
+        measures = model.measures
+        if space is not own and model.measures:
+            measures = measure_models(model.action, tuple(model.measures), space, starts, 0, observed, entry)
     except DataError:
         return None
-    # the duration tree and its leaves' uncertainty are the new ones; the further measures' models stay the trained
-    report = {**model.report, "retrained": {"executions": len(episodes)}}
-    return replace(model, duration=fresh.duration, n_i=fresh.n_i, uncertainty=fresh.uncertainty, report=report)
+    retraining = {"executions": len(episodes), "features": list(fresh.feature_names)}
+    if space is own:  # the duration tree and its leaves' uncertainty are the new ones
+        return replace(model, duration=fresh.duration, n_i=fresh.n_i, uncertainty=fresh.uncertainty,
+                       report={**model.report, "retrained": retraining})
+    return replace(fresh, measures=measures, report={**fresh.report, "retrained": retraining}, source=model.source)
+
+
+def reselected(model: ActionModel, episodes: list[Episode], entry: SimulatorEntry):
+    """The features to learn `episodes` (executions) in: `model`'s own, unless the features automatic selection
+    (Sec. 4.1.1) generates on them predict them with at most RESELECT_SHARE of the own space's cross-validated
+    error. A few hundred executions select noisily, and the own space has proven itself on the robot as trained."""
+    from tailor.refinement.learning.feature_selection import select_features
+    from tailor.refinement.models.features import feature_space
+
+    own = model.expressions if model.expressions is not None else model.feature_space
+    theirs = own.feature_space() if model.expressions is not None else feature_space(own)
+    selection = select_features(entry.action(model.action), entry, episodes, 0, others={"own": theirs})
+    errors = selection.report["candidate_sets"]  # cross-validated MAE on the executions (own's always finishes)
+    if selection.generated is None or not errors["generated"] <= RESELECT_SHARE * errors["own"]:
+        return own
+    return selection.generated
