@@ -223,7 +223,6 @@ def test_training_fits_a_tree_per_measure_and_the_report_lists_each_held_out_mae
     assert seconds["protocol"] > 0 and seconds["measures"] > 0
 
 
-# --- refinement: weights -------------------------------------------------------------------------------------
 def test_a_model_of_the_duration_alone_spends_no_time_on_measures(tmp_path):
     report = train_domain(_recipe(["duration"]), 160, seed=0, out=tmp_path, progress=False,
                           gather=synthetic_episodes.gather, n_i_candidates=(1,), episode_fractions=(1.0,))
@@ -231,6 +230,7 @@ def test_a_model_of_the_duration_alone_spends_no_time_on_measures(tmp_path):
     assert seconds["protocol"] > 0 and seconds["measures"] == 0.0
 
 
+# --- refinement: weights -------------------------------------------------------------------------------------
 def test_the_duration_alone_takes_the_fastest_arrival(models, score):
     refined = refine(score, models, horizon=2, method="analytic")
     assert _speed(refined) == pytest.approx(0.3, abs=0.005)

@@ -35,6 +35,7 @@ from dataclasses import replace
 import numpy as np
 
 from tailor.refinement.models.action_models import ActionModel, CollisionModel
+from tailor.refinement.models.expression_space import ExpressionSpace
 from tailor.sims.episode import Episode
 from tailor.sims.protocol import SimulatorEntry
 
@@ -241,35 +242,34 @@ def retrained(model: ActionModel, episodes: list[Episode], entry: SimulatorEntry
                       np.asarray(e.params, dtype=float)[None, :len(observed)], observed, e.outcome, e.duration, e.seed,
                       measures=e.measures)
               for e in episodes]
-    own = model.expressions if model.expressions is not None else model.feature_space
     # new features need the further measures' models anew: only where every execution reports those measures
     measured = all(set(model.measures) <= set(e.measures) for e in starts if e.succeeded)
-    space = reselected(model, starts, entry) if measured else own
+    generated = reselected(model, starts, entry) if measured else None
+    own = model.expressions if model.expressions is not None else model.feature_space
+    space = generated if generated is not None else own
     try:
         fresh = train_duration_model(model.action, starts, 0, space, observed, n_i_candidates=(1,)).model
         measures = model.measures
-        if space is not own and model.measures:
+        if generated is not None and model.measures:
             measures = measure_models(model.action, tuple(model.measures), space, starts, 0, observed, entry)
     except DataError:
         return None
     retraining = {"executions": len(episodes), "features": list(fresh.feature_names)}
-    if space is own:  # the duration tree and its leaves' uncertainty are the new ones
+    if generated is None:  # the duration tree and its leaves' uncertainty are the new ones
         return replace(model, duration=fresh.duration, n_i=fresh.n_i, uncertainty=fresh.uncertainty,
                        report={**model.report, "retrained": retraining})
     return replace(fresh, measures=measures, report={**fresh.report, "retrained": retraining}, source=model.source)
 
 
-def reselected(model: ActionModel, episodes: list[Episode], entry: SimulatorEntry):
-    """The features to learn `episodes` (executions) in: `model`'s own, unless the features automatic selection
-    (Sec. 4.1.1) generates on them predict them with at most RESELECT_SHARE of the own space's cross-validated
-    error. A few hundred executions select noisily, and the own space has proven itself on the robot as trained."""
+def reselected(model: ActionModel, episodes: list[Episode], entry: SimulatorEntry) -> ExpressionSpace | None:
+    """The generated features to learn `episodes` (executions) in, or None to keep `model`'s own: None unless the
+    features automatic selection (Sec. 4.1.1) generates on them predict them with at most RESELECT_SHARE of the own
+    space's cross-validated error. A few hundred executions select noisily, and the own space has proven itself on
+    the robot as trained."""
     from tailor.refinement.learning.feature_selection import select_features
-    from tailor.refinement.models.features import feature_space
 
-    own = model.expressions if model.expressions is not None else model.feature_space
-    theirs = own.feature_space() if model.expressions is not None else feature_space(own)
-    selection = select_features(entry.action(model.action), entry, episodes, 0, others={"own": theirs})
+    selection = select_features(entry.action(model.action), entry, episodes, 0, others={"own": model.space})
     errors = selection.report["candidate_sets"]  # cross-validated MAE on the executions (own's always finishes)
     if selection.generated is None or not errors["generated"] <= RESELECT_SHARE * errors["own"]:
-        return own
+        return None
     return selection.generated

@@ -145,11 +145,10 @@ def race(sets: list[np.ndarray], y: np.ndarray, folds: list[np.ndarray], leaf: i
     return Race(results, errors)
 
 
-def forward_select(candidates: list[Candidate], columns: np.ndarray, y: np.ndarray, folds: list[np.ndarray],
-                   leaf: int, jobs: int = 1, bins: np.ndarray | None = None) -> tuple[list[int], list[dict], np.ndarray]:
+def forward_select(candidates: list[Candidate], columns: np.ndarray, bins: np.ndarray, y: np.ndarray,
+                   folds: list[np.ndarray], leaf: int, jobs: int = 1) -> tuple[list[int], list[dict], np.ndarray]:
     """Indices of the chosen candidates in order, each step's record, and the chosen set's out-of-fold
-    predictions; a step's trials are raced (`race`) in `jobs` workers. `bins`: the columns' quantile_bins."""
-    bins = quantile_bins(columns) if bins is None else bins
+    predictions; a step's trials, screened by the columns' `quantile_bins`, are raced (`race`) in `jobs` workers."""
     chosen: list[int] = []
     best, predicted = cv_mae(columns[:, []], y, folds, leaf)
     steps = [{"feature": None, "cv_mae": best}]
@@ -207,7 +206,7 @@ def select_features(spec: ActionSpec, entry: SimulatorEntry, episodes: list[Epis
     folds = np.array_split(order, FOLDS)
     leaf = _leaf(len(y))
     bins = quantile_bins(columns)
-    chosen, steps, predicted = forward_select(candidates, columns, y, folds, leaf, jobs, bins)
+    chosen, steps, predicted = forward_select(candidates, columns, bins, y, folds, leaf, jobs)
     known = {}  # the candidate sets whose K-fold MAE is known already: the forward selection's
     if chosen:
         known["forward"] = (steps[-1]["cv_mae"], predicted)

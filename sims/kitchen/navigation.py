@@ -122,16 +122,18 @@ class RouteMap:
                     for rows in (around, n + around)]
             tested = np.concatenate(ends)
             vs, vg = np.split(self._visible(points[tested], inside[tested]), [len(ends[0])])  # (1, v): broadcast
-            ds = np.where(vs, np.hypot(s[:, None, 0] - self.nodes[None, :, 0], s[:, None, 1] - self.nodes[None, :, 1]),
-                          np.inf)
-            dg = np.where(vg, np.hypot(g[:, None, 0] - self.nodes[None, :, 0], g[:, None, 1] - self.nodes[None, :, 1]),
-                          np.inf)
+            ds, dg = self._to_nodes(s, vs), self._to_nodes(g, vg)
             total = (ds[:, :, None] + self.dist[None, :, :] + dg[:, None, :]).reshape(len(around), -1)  # (m, v * v)
             flat = total.argmin(axis=1)
             first[around], last[around] = np.divmod(flat, len(self.nodes))
             length[around] = total[np.arange(len(around)), flat]
             turning[around] = self._turning(s, g, first[around], last[around])
         return length, first, last, turning
+
+    def _to_nodes(self, points: np.ndarray, visible: np.ndarray) -> np.ndarray:
+        """(n, v): each point's straight distance to each node it sees (`visible`), inf to the others."""
+        dx, dy = points[:, None, 0] - self.nodes[None, :, 0], points[:, None, 1] - self.nodes[None, :, 1]
+        return np.where(visible, np.hypot(dx, dy), np.inf)
 
     def _pair_tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Per node pair (i, j) on a shortest path: the turning at its inner nodes, the direction of its first
@@ -154,14 +156,13 @@ class RouteMap:
         """Turning (rad) at the corners of routes through the graph from node `first` to node `last`, vectorized
         with the pair tables."""
         inner, out_dir, in_dir = self._pair_tables()
-        i, j = first, last
-        vi, vj = self.nodes[i], self.nodes[j]
+        vi, vj = self.nodes[first], self.nodes[last]
         into_i = np.arctan2(vi[:, 1] - start[:, 1], vi[:, 0] - start[:, 0])
         out_j = np.arctan2(goal[:, 1] - vj[:, 1], goal[:, 0] - vj[:, 0])
-        same = i == j
-        at_i = np.where(same, out_j, out_dir[i, j])
-        at_j = np.where(same, 0.0, np.abs(_wrap(out_j - in_dir[i, j])))
-        return np.abs(_wrap(at_i - into_i)) + np.where(same, 0.0, inner[i, j]) + at_j
+        same = first == last
+        at_i = np.where(same, out_j, out_dir[first, last])
+        at_j = np.where(same, 0.0, np.abs(_wrap(out_j - in_dir[first, last])))
+        return np.abs(_wrap(at_i - into_i)) + np.where(same, 0.0, inner[first, last]) + at_j
 
     def path_points(self, start, goal, first: int, last: int) -> list[tuple[float, float]]:
         pts = [(float(start[0]), float(start[1]))]
