@@ -134,6 +134,7 @@ def test_the_angle_enclosures_hold():
 ARM_RANGES = np.array([[*AW.THETA_A_LIMITS], [-1.2, 1.2], [*AW.THETA_B_LIMITS], [-1.2, 1.2]] * 2)
 KITCHEN_SPOT = np.array([[-1.0, 11.0], [-1.0, 7.0], [-np.pi, np.pi], [-0.5, 0.5], [0.0, 0.8], [-np.pi, np.pi]])
 KITCHEN_PASSING = np.vstack([KITCHEN_SPOT, [[0.0, KW.V_MAX]]])  # navigate's start and goal: a spot and a speed
+KITCHEN_NAVIGATE = np.vstack([KITCHEN_PASSING, KITCHEN_PASSING, [KW.CRUISE]])  # ... and the goal's cruise speed
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -157,14 +158,14 @@ def test_the_kitchen_grasp_bounds_with_the_frame_and_the_point_fixed():
 
 @pytest.mark.parametrize("seed", range(3))
 def test_the_kitchen_route_bounds_are_sound_and_tight(seed):
-    check_space(ROUTE, np.vstack([KITCHEN_PASSING, KITCHEN_PASSING]), seed, n=80)
+    check_space(ROUTE, KITCHEN_NAVIGATE, seed, n=80)
 
 
 def test_the_kitchen_route_bounds_with_the_frames_fixed_as_refinement_passes_them():
     """Start and goal spots at the tables' frames, their offsets and speeds free (and a start pose fixed
     whole)."""
-    check_space(ROUTE, np.vstack([KITCHEN_PASSING, KITCHEN_PASSING]), 13, fixed=(0, 1, 2, 7, 8, 9), n=80)
-    check_space(ROUTE, np.vstack([KITCHEN_PASSING, KITCHEN_PASSING]), 14, fixed=(0, 1, 2, 3, 4, 5, 7, 8, 9), n=80)
+    check_space(ROUTE, KITCHEN_NAVIGATE, 13, fixed=(0, 1, 2, 7, 8, 9), n=80)
+    check_space(ROUTE, KITCHEN_NAVIGATE, 14, fixed=(0, 1, 2, 3, 4, 5, 7, 8, 9), n=80)
 
 
 # the field with its run-off, any heading, the speeds

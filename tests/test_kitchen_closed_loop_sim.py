@@ -33,9 +33,9 @@ def _layout(seed: int, cups: int = 1) -> tuple[dict, dict]:
 def _plan(layout: dict) -> list[ActionCall]:
     """Fetch cup1 to the first put location: the open-loop plan of scenario 1 with fixed offsets."""
     cup, put = layout["cups"][0], layout["puts"][0]
-    return [ActionCall("navigate", (*W.serving_frame(layout["table1"], *cup), 0.1, 0.6, 0.0, 0.0)),
+    return [ActionCall("navigate", (*W.serving_frame(layout["table1"], *cup), 0.1, 0.6, 0.0, 0.0, 0.6)),
             ActionCall("grip", cup),
-            ActionCall("navigate", (*W.serving_frame(layout["table2"], *put), -0.1, 0.5, 0.2, 0.0)),
+            ActionCall("navigate", (*W.serving_frame(layout["table2"], *put), -0.1, 0.5, 0.2, 0.0, 0.6)),
             ActionCall("put", put)]
 
 
@@ -151,7 +151,7 @@ def test_cup_moves_on_its_table_while_the_base_drives(seed):
     assert event.window[0] <= event.elapsed < event.window[1] + 1.0 / CONTROL_HZ
     assert event.elapsed < b.duration and event.time == pytest.approx(event.elapsed)
     # once: the next navigate moves nothing
-    disturbed.run(ActionCall("navigate", (*layout["start"], 0.0, 0.0, 0.0, 0.0)))
+    disturbed.run(ActionCall("navigate", (*layout["start"], 0.0, 0.0, 0.0, 0.0, 0.6)))
     assert len(disturbed.events) == 1
 
 
@@ -183,7 +183,7 @@ def test_open_loop_grip_misses_the_displaced_cup_the_closed_loop_grips_it():
         episode = closed.run(ActionCall("grip", cup))
         if episode.outcome == "out_of_reach":  # from a new spot in front of the cup
             frame = W.serving_frame(layout["table1"], *cup)
-            assert closed.run(ActionCall("navigate", (*frame, 0.0, 0.6, 0.0, 0.0))).outcome == "success"
+            assert closed.run(ActionCall("navigate", (*frame, 0.0, 0.6, 0.0, 0.0, 0.6))).outcome == "success"
             episode = closed.run(ActionCall("grip", closed.scene()["cup cup1"]))
         assert episode.outcome == "success" and closed.held == "cup1"
         assert [closed.run(call).outcome for call in plan[2:]] == ["success", "success"]
@@ -214,7 +214,7 @@ def test_no_cup_on_a_table_no_displacement():
 def _drive(x0: float, distance: float, variant: str | None) -> float:
     sim = KitchenSim(0, QUIET, variant=variant)
     sim.place((x0, 1.5, 0.0), {}, {})
-    episode = sim.run(ActionCall("navigate", (x0 + distance, 1.5, 0.0, 0.0, 0.0, 0.0, 0.0)))
+    episode = sim.run(ActionCall("navigate", (x0 + distance, 1.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.6)))
     assert episode.outcome == "success"
     return episode.duration
 

@@ -30,7 +30,8 @@ def test_free_parameters_are_the_spots_at_the_tables_in_fig_5_12_ranges_and_the_
     tables = {f"{s}.{q}": r for s in ("p1", "d1")
               for q, r in (("along", (-0.5, 0.5)), ("dist", (0.4, 0.8)), ("heading", (-1.0, 1.0)))}
     door = {"w1.along": (-0.2, 0.2), "w1.heading": (-0.6, 0.6), "w1.v": (0.0, 0.6)}
-    assert free == {**tables, **door}
+    cruise = {f"{s}.cruise": (0.3, 0.6) for s in ("p1", "w1", "d1")}  # of each navigate, at the spot it goes to
+    assert free == {**tables, **door, **cruise}
     # the base stops at the tables (v bound to 0) and passes the door on the divider's line (dist bound to 0)
     bound = {p.id: p.value for a in sequence.actions for p in a.params if not p.free}
     assert bound["p1.v"] == bound["d1.v"] == bound["start.v"] == bound["w1.dist"] == 0.0
@@ -38,8 +39,9 @@ def test_free_parameters_are_the_spots_at_the_tables_in_fig_5_12_ranges_and_the_
     # reads the spot's speed); the navigate leaving the door starts from the door spot the crossing passes
     goto, grip, cross, leave = sequence.actions[:4]
     assert [p.id for p in goto.params[7:13]] == [p.id for p in grip.params[:6]]
-    assert [p.id for p in cross.params[7:]] == [p.id for p in leave.params[:7]] == [
+    assert [p.id for p in cross.params[7:14]] == [p.id for p in leave.params[:7]] == [
         f"w1.{q}" for q in ("ox", "oy", "ophi", "along", "dist", "heading", "v")]
+    assert [a.params[14].id for a in (goto, cross, leave)] == ["p1.cruise", "w1.cruise", "d1.cruise"]
 
 
 def test_every_table_and_cup_is_its_own_scene_object():
@@ -129,10 +131,11 @@ def test_the_door_is_passed_at_speed_and_that_is_faster_than_stopping_there(tmp_
     free = refine("kitchen", "scenario1", seed=3)
     held = refine(stopping, "scenario1", seed=3, models=stopping / "models")
     assert free.chosen["w1.v"] > 0.3 and "w1.v" not in held.chosen
-    assert free.predicted_total < held.predicted_total - 0.5
+    # stopping costs the braking to rest and the speeding up again (about 0.5 s net of the straighter route)
+    assert free.predicted_total < held.predicted_total - 0.4
     runs = [dispatch(r, seed=3) for r in (free, held)]
     assert all(run.succeeded for run in runs)
-    assert runs[0].duration < runs[1].duration - 0.5
+    assert runs[0].duration < runs[1].duration - 0.3
 
 
 def test_refine_plot_draws_fig_5_9_at_the_door(tmp_path):
@@ -144,3 +147,20 @@ def test_refine_plot_draws_fig_5_9_at_the_door(tmp_path):
     picture = tmp_path / "F.png"
     assert main(["refine", "kitchen", "scenario1", "--plot", str(picture)]) == 0
     assert (tmp_path / "F_waypoint.png").stat().st_size > 0
+
+
+def test_an_objective_that_weighs_energy_slows_the_base_below_its_top_speed():
+    """Ch. 8.1 on the kitchen's cruise speed: duration-only refinement drives every navigate at the top speed;
+    weighing energy governs the base below it, and both the predicted and the simulated energy fall by far more
+    than the time grows (driving governed, the base no longer follows its noisy command)."""
+    fast = refine("kitchen", "scenario1", seed=0)
+    frugal = refine("kitchen", "scenario1", seed=0, objective="duration + 0.03*energy")
+    cruise = [k for k in fast.chosen if k.endswith(".cruise")]
+    assert cruise == ["p1.cruise", "w1.cruise", "d1.cruise"]
+    assert all(fast.chosen[k] > 0.59 for k in cruise) and all(frugal.chosen[k] < 0.55 for k in cruise)
+    energy = [r.refined.measure_total("energy") for r in (fast, frugal)]
+    assert energy[1] < 0.6 * energy[0]
+    runs = [dispatch(r, seed=0) for r in (fast, frugal)]
+    assert all(run.succeeded for run in runs)
+    spent = [sum(r.measures["energy"] for r in run.results) for run in runs]
+    assert spent[1] < 0.6 * spent[0] and runs[1].duration < 1.1 * runs[0].duration

@@ -28,9 +28,9 @@ def _sim(pose, tables=None, cups=None, holding=None, noise=QUIET, seed=0):
     return sim
 
 
-def _drive(distance: float) -> float:
+def _drive(distance: float, cruise: float = W.V_MAX) -> float:
     sim = _sim((1.0, 1.0, 0.0))
-    episode = sim.run(ActionCall("navigate", (1.0 + distance, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0)))
+    episode = sim.run(ActionCall("navigate", (1.0 + distance, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, cruise)))
     assert episode.outcome == "success"
     assert sim.true_state()[0] == pytest.approx(1.0 + distance, abs=0.08)
     return episode.duration
@@ -44,6 +44,33 @@ def test_straight_drive_takes_the_trapezoid_time():
         assert _drive(d) == pytest.approx(expected, abs=0.2)
     # a longer straight costs exactly its extra length at cruise speed
     assert _drive(3.0) - _drive(2.0) == pytest.approx(1.0 / v, abs=0.06)
+
+
+@pytest.mark.parametrize("cruise", [0.3, 0.45])
+def test_a_governed_drive_takes_the_trapezoid_time_at_its_cruise_speed(cruise):
+    # the governor holds the base at the cruise speed c: t = d / c + c / (2 A) + c / (2 BRAKE A) (braking starts
+    # where the braking profile meets c, so it ramps down from c as from V_MAX above)
+    a = W.A_MAX
+    for d in (2.0, 3.0):
+        assert _drive(d, cruise) == pytest.approx(d / cruise + cruise / (2 * a) + cruise / (2 * BRAKE * a), abs=0.2)
+    assert _drive(3.0, cruise) - _drive(2.0, cruise) == pytest.approx(1.0 / cruise, abs=0.06)
+
+
+def test_the_governor_holds_the_speed_below_the_noisy_command():
+    # with the motors' noise on, the base never drives faster than its cruise speed, and for most of the way it
+    # drives exactly at it: the noisy command lies above the governor's limit
+    sim = KitchenSim(3, Noise())
+    sim.place((1.0, 1.0, 0.0), {}, {})
+    speeds = []
+    command = sim.command
+
+    def recorded(v_cmd, w_cmd, e=(0.0, 0.0)):
+        command(v_cmd, w_cmd, e)
+        speeds.append(sim.v_cmd)
+    sim.command = recorded
+    assert sim.run(ActionCall("navigate", (4.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5))).outcome == "success"
+    assert max(speeds) <= 0.5 and np.mean(np.array(speeds) == 0.5) > 0.5
+    assert sim.v == pytest.approx(0.0, abs=0.05)
 
 
 @pytest.mark.parametrize("dist", [0.4, 0.6, 0.8])
@@ -82,7 +109,7 @@ def test_put_carries_the_cup_to_the_put_location():
 
 def test_collision_with_a_table_is_an_outcome():
     sim = _sim((2.5, 4.0, math.pi / 2), {"table1": T1})
-    episode = sim.run(ActionCall("navigate", (2.5, 5.1, math.pi / 2, 0.0, 0.0, 0.0, 0.0)))  # a goal inside the table
+    episode = sim.run(ActionCall("navigate", (2.5, 5.1, math.pi / 2, 0.0, 0.0, 0.0, 0.0, 0.6)))  # a goal inside the table
     assert episode.outcome == "collision"
     edge = T1[1] - W.TABLE_DEPTH / 2
     assert sim.true_state()[1] == pytest.approx(edge - W.BASE_RADIUS, abs=0.04)  # stopped at first touch
@@ -109,7 +136,7 @@ def test_route_goes_through_the_door_round_the_jamb():
     corner = (W.DIVIDER_X - W.WALL_THICKNESS / 2 - grow, W.DOOR_Y - W.DOOR_WIDTH / 2 + grow)
     assert len(path) == 3
     assert path[1] == pytest.approx(corner)
-    features = ROUTE(np.array([[2.0, 1.0, 0.0, 0, 0, 0, 0, 8.5, 3.0, 0.0, 0, 0, 0, 0]]))[0]
+    features = ROUTE(np.array([[2.0, 1.0, 0.0, 0, 0, 0, 0, 8.5, 3.0, 0.0, 0, 0, 0, 0, 0.6]]))[0]
     expected = math.dist((2.0, 1.0), corner) + math.dist(corner, (8.5, 3.0))
     assert features[0] == pytest.approx(expected)
     assert features[1] == pytest.approx(math.atan2(corner[1] - 1.0, corner[0] - 2.0))  # turn to the first leg
@@ -117,7 +144,7 @@ def test_route_goes_through_the_door_round_the_jamb():
 
 def test_go_to_pose_reaches_the_other_room_without_touching_anything():
     sim = _sim((2.0, 1.0, math.pi), {"table1": T1, "table2": T2}, noise=Noise())
-    result = sim.run_sequence([ActionCall("navigate", (*W.serving_frame(T2, 9.5, 2.5), 0.2, 0.6, 0.3, 0.0))])
+    result = sim.run_sequence([ActionCall("navigate", (*W.serving_frame(T2, 9.5, 2.5), 0.2, 0.6, 0.3, 0.0, 0.6))])
     assert result.succeeded
     x, y = result.column("x"), result.column("y")
     gap = min(min(b.distance(px, py) for b in [*W.walls(), W.island()]) for px, py in zip(x, y))
@@ -142,5 +169,5 @@ def test_reset_takes_the_binding_scene_and_rejects_bad_input():
     assert set(sim.tables) == {"table1"} and set(sim.cups) == {"cup1"}
     with pytest.raises(SimError, match="unknown kitchen scene object"):
         sim.reset({"robot": (1.0, 1.0, 0.0, 0.0, 0.0, 0.0), "ball": (1.0, 2.0)})
-    with pytest.raises(SimError, match="goal must be 7"):
+    with pytest.raises(SimError, match="goal must be 8"):
         sim.run(ActionCall("navigate", (1.0, 2.0)))

@@ -82,11 +82,30 @@ def test_kitchen_energy_of_a_straight_drive_is_twice_the_kinetic_energy_at_top_s
     # (V_MAX^2 - v_end^2) braking (the speed profile rises, then falls: the sum telescopes, rounding only)
     sim = KitchenSim(0, Noise.off())
     sim.place((1.0, 1.0, 0.0), {}, {})
-    episode = sim.run(ActionCall("navigate", (3.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0)))
+    episode = sim.run(ActionCall("navigate", (3.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.6)))
     assert episode.succeeded and sim.w == 0.0 and 0.0 <= sim.v <= 0.05
     hand = 0.5 * BASE_MASS * (2 * W.V_MAX ** 2 - sim.v ** 2)  # about 43.1 J of a 120 kg base
     assert episode.measures[ENERGY] == pytest.approx(hand, rel=1e-9)
     assert episode.measures[HEADING_ERROR] == 0.0
+
+
+def test_kitchen_energy_of_a_governed_drive_is_twice_the_kinetic_energy_at_the_cruise_speed():
+    from tailor.sims.kitchen.simulator import BASE_MASS, KitchenSim, Noise
+
+    # the same drive at cruise speed 0.4: 1/2 M 0.4^2 speeding up, 1/2 M (0.4^2 - v_end^2) braking; and with
+    # the motors' noise the governed drive costs far less than the one at the top speed, which follows its noisy
+    # command (4/9 of the kinetic energy, and no jitter while it holds the cruise speed)
+    sim = KitchenSim(0, Noise.off())
+    sim.place((1.0, 1.0, 0.0), {}, {})
+    episode = sim.run(ActionCall("navigate", (3.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.4)))
+    assert episode.succeeded and 0.0 <= sim.v <= 0.05
+    assert episode.measures[ENERGY] == pytest.approx(0.5 * BASE_MASS * (2 * 0.4 ** 2 - sim.v ** 2), rel=1e-9)
+    noisy = {}
+    for cruise in (0.6, 0.5):
+        sim = KitchenSim(1, Noise())
+        sim.place((1.0, 1.0, 0.0), {}, {})
+        noisy[cruise] = sim.run(ActionCall("navigate", (5.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, cruise))).measures[ENERGY]
+    assert noisy[0.5] < 0.5 * noisy[0.6]
 
 
 @pytest.mark.parametrize("action", ["grip", "put"])

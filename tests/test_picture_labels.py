@@ -340,7 +340,8 @@ CHOICES = {
     "middle": lambda p: (p.low + p.high) / 2,
     "low": lambda p: p.low,
     "high": lambda p: p.high,
-    "near the table, at one side": lambda p: {"dist": p.low, "along": p.high}.get(p.id.partition(".")[2], 0.0),
+    "near the table, at one side": lambda p: {"dist": p.low, "along": p.high}.get(p.id.partition(".")[2],
+                                                                                   min(max(0.0, p.low), p.high)),
     "far, at the other side": lambda p: {"dist": p.high, "along": p.low}.get(p.id.partition(".")[2], min(1.0, p.high)),
 }
 

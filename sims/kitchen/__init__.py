@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 from tailor.sims.kitchen.disturbances import DISTURBANCES, VARIANTS
 from tailor.sims.kitchen.drawing import draw_scene
-from tailor.sims.kitchen.features import GRASP, PASSING, ROUTE, SPOT
+from tailor.sims.kitchen.features import GOAL, GRASP, PASSING, ROUTE, SPOT
 from tailor.sims.kitchen.scenarios import SITUATIONS, run_goto, run_grip, run_put, subgoal_episode
 from tailor.sims.registry import deferred_names
 from tailor.sims.protocol import ActionSpec, Quantity, Scenario, SimulatorEntry
@@ -28,7 +28,7 @@ _METRES, _ANGLE = Quantity("m"), Quantity("rad", angle=True)
 # a spot's frame and offsets, a cup's and a put location's position, and the logged and drawn state
 _LENGTHS = ("ox", "oy", "along", "dist", "x", "y", "tx", "ty", "ext", "gripper_x", "gripper_y")
 UNITS = {**{q: _METRES for q in _LENGTHS}, **{q: _ANGLE for q in ("ophi", "heading", "phi", "pan")},
-         "v": Quantity("m/s"),
+         "v": Quantity("m/s"), "cruise": Quantity("m/s"),
          # the measures of its actions besides the duration (sims.kitchen.simulator: what each one is)
          "energy": Quantity("J"), "error": _METRES, "heading_error": _ANGLE}
 
@@ -44,8 +44,8 @@ def _create(seed: int, noise: Noise | None = None, disturbance: str | None = Non
 SIMULATOR = SimulatorEntry(
     name="kitchen",
     actions={
-        "navigate": ActionSpec("navigate", "kitchen", observed=PASSING, internal=tuple(f"{q}g" for q in PASSING),
-                               observed_quantities=PASSING, internal_quantities=PASSING),
+        "navigate": ActionSpec("navigate", "kitchen", observed=PASSING, internal=tuple(f"{q}g" for q in GOAL),
+                               observed_quantities=PASSING, internal_quantities=GOAL),
         "grip": ActionSpec("grip", "kitchen", observed=SPOT, internal=("cx", "cy"),
                            observed_quantities=SPOT, internal_quantities=("x", "y")),
         "put": ActionSpec("put", "kitchen", observed=SPOT, internal=("tx", "ty"),

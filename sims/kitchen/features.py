@@ -6,7 +6,10 @@ length, the turn needed at the start to face the route's first leg, the turn at 
 the goal heading, and the turning at the route's corners; and the speeds the base starts with and passes the goal
 at (0: at rest), the time-optimal transfer over the route's length between them (kinematics.transfer_time at
 V_MAX, A_MAX), and the start speed times the start turn (the overshoot of a base that must turn while it still
-moves). Invariant to the frame a pose is written in (a spot with zero offsets is the pose itself).
+moves); and the goal's cruise speed c (at most V_MAX) with `slow`, the route's length times 1/c - 1/V_MAX (the
+time the governor adds where the base would cruise at V_MAX), and the scales of the kinetic energy spent at that
+speed: `drive`, the length times c^2, and `corners`, the turning at the corners times c^2. Invariant to the
+frame a pose is written in (a spot with zero offsets is the pose itself).
 
 "grasp" (grip, put): where the point to reach lies relative to the arm's shoulder: the pan angle |psi| and the
 extension r beyond the tucked EXT_REST, and the longer of the two joints' time-optimal ramps (the arm moves
@@ -29,6 +32,7 @@ from tailor.sims.protocol import FeatureSpace
 
 SPOT = ("ox", "oy", "ophi", "along", "dist", "heading")
 PASSING = SPOT + ("v",)  # navigate's start and goal: a spot and the speed the base has there
+GOAL = PASSING + ("cruise",)  # navigate's goal: and the cruise speed (world.CRUISE)
 
 
 def _wrap(a: np.ndarray) -> np.ndarray:
@@ -56,7 +60,16 @@ def _route(params: np.ndarray) -> np.ndarray:
     turn_start = np.where(short, 0.0, np.abs(_wrap(first_dir - start[:, 2])))
     turn_goal = np.where(short, np.abs(_wrap(goal[:, 2] - start[:, 2])), np.abs(_wrap(goal[:, 2] - last_dir)))
     transfer = transfer_time(length, v_start, v_goal, W.V_MAX, W.A_MAX)
-    return np.column_stack([length, turn_start, turn_goal, turning, v_start, v_goal, transfer, v_start * turn_start])
+    cruise = np.minimum(params[:, 14], W.V_MAX)
+    slow = _slow(length, cruise)
+    return np.column_stack([length, turn_start, turn_goal, turning, v_start, v_goal, transfer, v_start * turn_start,
+                            cruise, slow, length * cruise * cruise, turning * cruise * cruise])
+
+
+def _slow(length: np.ndarray, cruise: np.ndarray) -> np.ndarray:
+    """The route's length times 1/cruise - 1/V_MAX: 0 at the top cruise speed (also with no route, length inf)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(cruise >= W.V_MAX, 0.0, length * (1.0 / cruise - 1.0 / W.V_MAX))
 
 
 def ramp_time(distance: np.ndarray, v_max: float, a_max: float) -> np.ndarray:
@@ -110,7 +123,14 @@ def _route_bounds(low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.nda
     with np.errstate(invalid="ignore"):  # (a box with no route: length [inf, inf], its transfer time too)
         transfer = I.transfer_time_bounds((lo[:, 0], hi[:, 0]), v_start, v_goal, W.V_MAX, W.A_MAX)
     carry = I.product(v_start, (lo[:, 1], hi[:, 1]))
-    extra = (v_start, v_goal, transfer, carry)
+    cruise = (np.minimum(columns[14][0], W.V_MAX), np.minimum(columns[14][1], W.V_MAX))
+    # 1/cruise - 1/V_MAX >= 0 falls with the cruise speed, and the length is >= 0: the product's bounds are the
+    # corners', widened
+    slow = I.widen(_slow(lo[:, 0], cruise[1]), _slow(hi[:, 0], cruise[0]))
+    squared = I.square(*cruise)
+    drive = I.widen(*I.product((lo[:, 0], hi[:, 0]), squared))
+    corners = I.widen(*I.product((lo[:, 3], hi[:, 3]), squared))
+    extra = (v_start, v_goal, transfer, carry, cruise, slow, drive, corners)
     return (np.column_stack([lo, *(e[0] for e in extra)]), np.column_stack([hi, *(e[1] for e in extra)]))
 
 
@@ -152,7 +172,8 @@ def _reframe(spots: np.ndarray, rng: np.random.Generator) -> np.ndarray:
 
 
 def _route_reframe(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    return np.column_stack([_reframe(params[:, :6], rng), params[:, 6], _reframe(params[:, 7:13], rng), params[:, 13]])
+    return np.column_stack([_reframe(params[:, :6], rng), params[:, 6], _reframe(params[:, 7:13], rng),
+                            params[:, 13:15]])
 
 
 def _rigid_motion(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -168,8 +189,9 @@ def _rigid_motion(params: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return out
 
 
-ROUTE = FeatureSpace("route", PASSING + tuple(f"{q}g" for q in PASSING),
-                     ("length", "turn_start", "turn_goal", "turning", "v_start", "v_goal", "transfer", "carry"),
+ROUTE = FeatureSpace("route", PASSING + tuple(f"{q}g" for q in GOAL),
+                     ("length", "turn_start", "turn_goal", "turning", "v_start", "v_goal", "transfer", "carry",
+                      "cruise", "slow", "drive", "corners"),
                      _route, "the frame each pose is written in", _route_reframe, _route_bounds)
 GRASP = FeatureSpace("grasp", SPOT + ("px", "py"), ("pan", "extension", "ramp"), _grasp,
                      "rigid motions of base and point together", _rigid_motion, _grasp_bounds)

@@ -10,8 +10,9 @@ Experience scenarios (the instant environment modification of Sec. 4.1):
   pickup spot through the door (east), from the door to a dropoff spot, from a dropoff spot through the door
   (west) and from the door to a pickup spot, every free offset uniform in its Fig. 5.12 range and the door's
   in DOOR_ALONG, DOOR_HEADING, the speed of passing it uniform in PASS_SPEED (a fifth of the passes: 0, a
-  stop); a leg from the door starts there driving at that speed. Its start is written as the plan writes it,
-  the spot's frame and offsets (in_frame);
+  stop); a leg from the door starts there driving at that speed. The leg's cruise speed is uniform in
+  world.CRUISE (a quarter of the legs: its top, V_MAX, the fastest), drawn after the rest. Its start is written
+  as the plan writes it, the spot's frame and offsets (in_frame);
 - "grip": the base at a random pickup spot, gripping the cup there;
 - "put": the base at a random dropoff spot with a cup in the gripper, putting it at the put location.
 Every episode writes the base's start (and logged) pose as a plan writes it: its spot's frame (the serving frame,
@@ -40,6 +41,7 @@ if TYPE_CHECKING:
 
 SAMPLING_STREAM = 1  # second seed word: a scenario's draws are independent of the simulator's noise
 STOP_SHARE = 0.2  # of the door spots in experience, the share passed at speed 0 (a stop)
+TOP_CRUISE_SHARE = 0.25  # of the legs in experience, the share driven at the top cruise speed (V_MAX)
 PROBLEMS_DIR = Path(__file__).resolve().parents[2] / "domains" / "kitchen" / "problems"
 
 
@@ -102,7 +104,8 @@ def _sim(seed: int, layout: dict, pose, holding: str | None = None, noise: Noise
 
 
 def sample_goto(rng: np.random.Generator) -> tuple[dict, tuple[float, ...], tuple[float, ...]]:
-    """A layout, a start spot and a goal spot (each ox, oy, ophi, along, dist, heading, v) of one leg."""
+    """A layout, a start spot (ox, oy, ophi, along, dist, heading, v) and the goal of one leg: a spot and the
+    cruise speed."""
     layout = random_layout(rng, 1)
     pickup = (*W.serving_frame(layout["table1"], *layout["cups"][0]), *_offsets(rng), 0.0)
     dropoff = (*W.serving_frame(layout["table2"], *layout["puts"][0]), *_offsets(rng), 0.0)
@@ -110,7 +113,9 @@ def sample_goto(rng: np.random.Generator) -> tuple[dict, tuple[float, ...], tupl
     start = (*layout["start"], 0.0, 0.0, 0.0, 0.0)
     kind = int(rng.integers(5))  # start -> pickup, pickup -> door, door -> dropoff, dropoff -> door, door -> pickup
     legs = ((start, pickup), (pickup, east), (east, dropoff), (dropoff, west), (west, pickup))
-    return layout, *legs[kind]
+    cruise = W.CRUISE[1] if rng.uniform() < TOP_CRUISE_SHARE else float(rng.uniform(*W.CRUISE))
+    start, goal = legs[kind]
+    return layout, start, (*goal, cruise)
 
 
 def run_goto(seed: int, noise: Noise | None = None, *, variant: str | None = None) -> Episode:
@@ -156,14 +161,15 @@ def in_frame(episode: Episode, frame: tuple[float, float, float]) -> Episode:
 
 def subgoal_episode(action: str, params: np.ndarray, seed: int, variant: str | None = None) -> Episode:
     """An episode of `action` from a refined subgoal: params = start spot (6; navigate: and its speed), then the
-    action's goal. The layout around it is drawn from the seed (only the furniture near the path matters)."""
+    action's goal (navigate: a spot, its speed and the cruise speed). The layout around it is drawn from the seed
+    (only the furniture near the path matters)."""
     p = [float(v) for v in params]
     rng = np.random.default_rng((seed, SAMPLING_STREAM))
     layout = random_layout(rng, 1)
     pose = W.spot_pose(*p[:6])
     if action == "navigate":
         sim = _sim(seed, layout, pose, variant=variant, speed=p[6])
-        return in_frame(sim.run(ActionCall(action, tuple(p[7:14]))), (p[0], p[1], p[2]))
+        return in_frame(sim.run(ActionCall(action, tuple(p[7:15]))), (p[0], p[1], p[2]))
     point = (p[6], p[7])
     table = "table1" if action == "grip" else "table2"
     layout[table] = _table_under(point, layout[table])

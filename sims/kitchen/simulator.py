@@ -5,9 +5,9 @@ A_MAX / ALPHA_MAX per second within V_MAX / W_MAX (unicycle model). Walls, the i
 boxes; cups are small dynamic bodies standing on the tables (they do not collide with the table tops) that a
 closed gripper carries. The arm's two joints (pan, extension) are integrated at the control rate.
 
-Actions (Table 2.1): `navigate` (goal: a spot, ox, oy, ophi, along, dist, heading, and the speed v to pass it
-at; world.spot_pose) plans the shortest route round the furniture (navigation.RouteMap on the scene's
-furniture), follows it by pure pursuit (turning in place where the route bends sharply, slowing as it goes
+Actions (Table 2.1): `navigate` (goal: a spot, ox, oy, ophi, along, dist, heading, the speed v to pass it at
+(world.spot_pose), and the cruise speed: the drive's governor holds the base at most at it, world.CRUISE) plans
+the shortest route round the furniture (navigation.RouteMap on the scene's furniture), follows it by pure pursuit (turning in place where the route bends sharply, slowing as it goes
 whatever speed it starts with), and either (v = 0) brakes to stop at the goal position and turns in place to
 the goal heading, or (v > 0, a way-point: Sec. 5.5, Fig. 5.9) routes to a point LEAD_IN behind the goal on the
 goal heading's line, drives down that line braking to v and ends where it crosses the goal (the next action
@@ -34,7 +34,7 @@ Measures (Episode.measures, sims.episode), on the true state, none of them chang
   - the base, BASE_MASS m and BASE_MOMENT I about its centre: each physics step changes v from v0 to v1 (and
     phidot from w0 to w1) at constant acceleration, which takes the integral of |F v| = m/2 |v1^2 - v0^2|
     (m/2 (v0^2 + v1^2) where v reverses within the step), and likewise I/2 for phidot (no friction: driving at
-    constant speed costs nothing);
+    constant speed costs nothing, so following the noisy command costs, and driving governed below it does not);
   - the arm, a point mass m = GRIPPER_MASS (plus CUP_MASS while it holds a cup) at the gripper, r = ext
     from the shoulder, pan psi: each control period the joint rates jump from (psi'0, r'0) to (psi'1, r'1)
     (taken as a ramp at constant r: m r^2/2 |psi'1^2 - psi'0^2| for the pan, m/2 |r'1^2 - r'0^2| for the
@@ -105,7 +105,7 @@ BASE_MOMENT = 0.5 * BASE_MASS * W.BASE_RADIUS ** 2  # kg m^2, a uniform disc of 
 GRIPPER_MASS = 1.0  # kg, the gripper with the extension's moving tube, a point mass at the arm's end
 
 ACTIONS = ("navigate", "grip", "put")
-GOAL_SIZES = {"navigate": 7, "grip": 2, "put": 2}
+GOAL_SIZES = {"navigate": 8, "grip": 2, "put": 2}
 STATE_COLUMNS = ("ox", "oy", "ophi", "along", "dist", "heading", "v", "pan", "ext")  # believed; pose as a spot
 TRAJECTORY_COLUMNS = ("t", "x", "y", "phi", "v", "pan", "ext", "gripper_x", "gripper_y")  # true state
 
@@ -185,6 +185,7 @@ class KitchenSim:
         self._xy = (0.0, 0.0)  # true base position (mirrored into the body)
         self.v = self.w = self.phi = 0.0
         self.v_cmd = self.w_cmd = 0.0
+        self._cruise = math.inf  # the running navigate's cruise speed: the governor's limit on |v| (world.CRUISE)
         self.pan, self.ext = 0.0, W.EXT_REST
         self._next_sample = 0.0
         # the energy measure (module doc) of the running action: the base's sums over physics steps of
@@ -318,8 +319,11 @@ class KitchenSim:
         return SLOW_LIMITS if self._slow_floor and on_slow_floor(*self._xy) else NOMINAL_LIMITS
 
     def command(self, v_cmd: float, w_cmd: float, e: Sequence[float] = (0.0, 0.0)) -> None:
+        """The motors' command: the controller's (v, phidot) with their relative noise, within the limits; the
+        governor holds |v| at most at the cruise speed after the noise (world.CRUISE)."""
         m = self.noise.motor
         v_max, w_max = self.limits()[:2]
+        v_max = min(v_max, self._cruise)
         self.v_cmd = max(-v_max, min(v_max, v_cmd * (1.0 + m * e[0])))
         self.w_cmd = max(-w_max, min(w_max, w_cmd * (1.0 + m * e[1])))
 
@@ -408,7 +412,11 @@ class KitchenSim:
         start = (*believed, 0.0, 0.0, 0.0, self.v) if call.action == "navigate" else (*believed, 0.0, 0.0, 0.0)
         params = np.array([*start, *goal], dtype=float)
         if call.action == "navigate":
-            outcome = self._go_to_pose(goal)
+            self._cruise = goal[7]
+            try:
+                outcome = self._go_to_pose(goal)
+            finally:
+                self._cruise = math.inf
         else:
             outcome = self._arm(call.action, goal, believed)
         return Episode(call.action, params, np.array(self._log_t),
@@ -657,6 +665,8 @@ def _check_call(call: ActionCall) -> tuple[float, ...]:
         raise SimError(f"{call.action}: goal must be {GOAL_SIZES[call.action]} finite numbers, got {call.goal}")
     if call.action == "navigate" and goal[6] < 0.0:
         raise SimError(f"navigate: the speed to pass the goal at must be >= 0 m/s, got {goal[6]:g}")
+    if call.action == "navigate" and goal[7] <= 0.0:
+        raise SimError(f"navigate: the cruise speed must be > 0 m/s, got {goal[7]:g}")
     return goal
 
 

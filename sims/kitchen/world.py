@@ -61,6 +61,10 @@ W_MAX = 1.0  # rad/s
 A_MAX = 0.5  # m/s^2
 ALPHA_MAX = 1.5  # rad/s^2
 CLEARANCE = 0.12  # m, the route planner keeps the base this far from furniture and walls
+# The cruise speed of a navigate (Ch. 8.1: a free parameter that trades time for energy): the drive's governor
+# holds the base at most at it, below the command's noise, while pure pursuit commands its usual speeds (up to
+# V_MAX). Governed below what pursuit asks for, the base runs smooth; at V_MAX it follows the noisy command.
+CRUISE = (0.3, V_MAX)  # m/s
 
 # --- arm ---------------------------------------------------------------------------------------------------
 SHOULDER_OFFSET = 0.15  # m, shoulder ahead of the base centre
