@@ -170,15 +170,16 @@ def ordered_results(function: Callable, calls: Sequence[tuple], jobs: int = 1, o
     from joblib.parallel import get_active_backend
 
     backend, _ = get_active_backend()
+    batch_size = 1 if one_by_one else "auto"
     if getattr(backend, "supports_return_generator", False):
-        results = Parallel(n_jobs=n_jobs, return_as="generator", batch_size=1 if one_by_one else "auto")(
+        results = Parallel(n_jobs=n_jobs, return_as="generator", batch_size=batch_size)(
             delayed(function)(*args) for args in calls)
         try:
             yield from results
         finally:
             results.close()  # on Ctrl-C this stops the workers before KeyboardInterrupt propagates
         return
-    with Parallel(n_jobs=n_jobs, batch_size=1 if one_by_one else "auto") as parallel:  # one pool for every wave
+    with Parallel(n_jobs=n_jobs, batch_size=batch_size) as parallel:  # one pool for every wave
         wave = WAVE_PER_WORKER * max(1, effective_n_jobs(n_jobs))
         for start in range(0, len(calls), wave):
             yield from parallel(delayed(function)(*args) for args in calls[start:start + wave])

@@ -64,8 +64,8 @@ def test_the_governor_holds_the_speed_below_the_noisy_command():
     speeds = []
     command = sim.command
 
-    def recorded(v_cmd, w_cmd, e=(0.0, 0.0)):
-        command(v_cmd, w_cmd, e)
+    def recorded(v_cmd, w_cmd, e=(0.0, 0.0), cruise=math.inf):
+        command(v_cmd, w_cmd, e, cruise)
         speeds.append(sim.v_cmd)
     sim.command = recorded
     assert sim.run(ActionCall("navigate", (4.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5))).outcome == "success"

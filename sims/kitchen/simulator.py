@@ -185,7 +185,6 @@ class KitchenSim:
         self._xy = (0.0, 0.0)  # true base position (mirrored into the body)
         self.v = self.w = self.phi = 0.0
         self.v_cmd = self.w_cmd = 0.0
-        self._cruise = math.inf  # the running navigate's cruise speed: the governor's limit on |v| (world.CRUISE)
         self.pan, self.ext = 0.0, W.EXT_REST
         self._next_sample = 0.0
         # the energy measure (module doc) of the running action: the base's sums over physics steps of
@@ -318,12 +317,13 @@ class KitchenSim:
         A_MAX, ALPHA_MAX, or SLOW_FACTOR of them on the carpet of variant "slow_floor"."""
         return SLOW_LIMITS if self._slow_floor and on_slow_floor(*self._xy) else NOMINAL_LIMITS
 
-    def command(self, v_cmd: float, w_cmd: float, e: Sequence[float] = (0.0, 0.0)) -> None:
+    def command(self, v_cmd: float, w_cmd: float, e: Sequence[float] = (0.0, 0.0),
+                cruise: float = math.inf) -> None:
         """The motors' command: the controller's (v, phidot) with their relative noise, within the limits; the
-        governor holds |v| at most at the cruise speed after the noise (world.CRUISE)."""
+        governor holds |v| at most at the running navigate's `cruise` speed after the noise (world.CRUISE)."""
         m = self.noise.motor
         v_max, w_max = self.limits()[:2]
-        v_max = min(v_max, self._cruise)
+        v_max = min(v_max, cruise)
         self.v_cmd = max(-v_max, min(v_max, v_cmd * (1.0 + m * e[0])))
         self.w_cmd = max(-w_max, min(w_max, w_cmd * (1.0 + m * e[1])))
 
@@ -412,11 +412,7 @@ class KitchenSim:
         start = (*believed, 0.0, 0.0, 0.0, self.v) if call.action == "navigate" else (*believed, 0.0, 0.0, 0.0)
         params = np.array([*start, *goal], dtype=float)
         if call.action == "navigate":
-            self._cruise = goal[7]
-            try:
-                outcome = self._go_to_pose(goal)
-            finally:
-                self._cruise = math.inf
+            outcome = self._go_to_pose(goal)
         else:
             outcome = self._arm(call.action, goal, believed)
         return Episode(call.action, params, np.array(self._log_t),
@@ -449,7 +445,7 @@ class KitchenSim:
 
     def _go_to_pose(self, goal: Sequence[float]) -> str:
         gx, gy, gphi = W.spot_pose(*goal[:6])
-        v_goal = goal[6]  # (>= 0: _check_call)
+        v_goal, cruise = goal[6], goal[7]  # (>= 0, > 0: _check_call)
         passing = v_goal > 0.0
         x0, y0 = self._xy
         path = self._route((x0, y0), (gx, gy, gphi), passing)
@@ -489,7 +485,7 @@ class KitchenSim:
             if arrived:
                 err = W.wrap(gphi - phi)
                 rate = min(w_max, K_TURN * abs(err), math.sqrt(2.0 * BRAKE * alpha_max * abs(err)))
-                self.command(0.0, math.copysign(rate, err), e[3:5])
+                self.command(0.0, math.copysign(rate, err), e[3:5], cruise)
             else:
                 # project onto the current leg, move on to the next leg once past this one's end or nearer the next
                 # leg than this one (a corner cut short: its projection can fall back along this leg)
@@ -515,7 +511,7 @@ class KitchenSim:
                 speed = v_max * max(0.0, 1.0 - abs(err) / TURN_IN_PLACE)
                 brake = math.sqrt(v_goal * v_goal + 2.0 * BRAKE * a_max * math.hypot(gx - x, gy - y))
                 speed = min(speed, max(V_CREEP, brake))
-                self.command(speed, rate, e[3:5])
+                self.command(speed, rate, e[3:5], cruise)
             self._advance()
             self._ticks += 1
 
